@@ -1,0 +1,141 @@
+"""Closed-form analysis of a manipulators design: pitch, periodic handover, margins, approach."""
+
+from __future__ import annotations
+
+import math
+
+from ..physics import manipulators as phys
+from ..scenes import ManipulatorsDesign, ManipulatorsScene
+from .result import Analysis, margin
+
+APPROACH_STAGES = 6
+
+
+def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign) -> Analysis:
+    g, l = scene.gravity, design.link_length
+    a, b, q = design.alpha, design.beta, design.mass_ratio
+    body, palm = scene.body, scene.palm
+    problems: list[str] = []
+    margins: dict[str, float] = {}
+
+    pitch_x, pitch_y = phys.pitch(a, b, l)
+    geometry = {"pitch_x": float(pitch_x), "pitch_y": float(pitch_y), "palm_mass": body.mass / q}
+    if palm.front_stop <= b:
+        problems.append(f"the front stop at {palm.front_stop:g} rad stops the palm before the "
+                        f"handover angle beta = {b:g} rad")
+
+    # First approach: ballistic flight onto the first palm resting at -alpha.
+    first = _first_landing(scene, design, problems)
+    offset = first["landing_offset"] if first else 0.0
+    geometry["landing_offset"] = offset
+    margins["landing"] = margin(palm.width / 2, abs(offset) + body.width / 2)
+
+    # Periodic orbit: fixed point of the handover-speed map.
+    s2 = phys.handover_speed_squared(a, b, q, gravity=g, link_length=l)
+    periodic: dict[str, float | None] = {
+        "handover_speed": None, "landing_speed": None,
+        "contraction": float(phys.contraction(a, b, q)),
+    }
+    if s2 <= 0.0:
+        problems.append(f"beta = {b:g} rad is not beyond alpha = {a:g} rad: the carry gains no "
+                        "height, so there is no periodic handover speed")
+    else:
+        s = math.sqrt(s2)
+        u = float(phys.landing_speed(s * math.cos(b), -s * math.sin(b), a, q))
+        periodic.update(handover_speed=s, landing_speed=u, drop_per_stage=float(pitch_y))
+        margins.update(_stage_margins(scene, design, (s * math.cos(b), -s * math.sin(b)), offset))
+
+    approach: dict[str, object] = {}
+    if first:
+        first_margins = _stage_margins(scene, design, first["velocity"], offset)
+        margins.update({f"first_{k}": v for k, v in first_margins.items()})
+        approach = {
+            "landing_point": first["point"],
+            "landing_velocity": first["velocity"],
+            "handover_speeds": _predicted_handover_speeds(scene, design, first["velocity"]),
+        }
+    return Analysis(
+        kind="manipulators",
+        design={name: float(getattr(design, name)) for name in design.VARIABLES},
+        geometry=geometry,
+        periodic=periodic,
+        margins=margins,
+        approach=approach,
+        problems=tuple(problems),
+    )
+
+
+def _first_landing(scene, design, problems):
+    """Where and how fast the object first meets palm 1's top surface (None if it cannot)."""
+    g, l = scene.gravity, design.link_length
+    (x0, y0), (vx, vy) = scene.initial.position, scene.initial.velocity
+    px, py = phys.palm_centre(design.first_pivot_x, design.first_pivot_y, -design.alpha, l)
+    drop = y0 - float(py)
+    if drop < 0.0:
+        problems.append(f"the object starts {-drop:.4g} m below the first palm's top surface")
+        return None
+    t = (vy + math.sqrt(vy**2 + 2.0 * g * drop)) / g
+    x = x0 + vx * t
+    return {"point": (x, float(py)), "velocity": (vx, vy - g * t), "landing_offset": x - float(px)}
+
+
+def _stage_margins(scene, design, velocity, offset) -> dict[str, float]:
+    """Margins of one stage: landing with `velocity` at `offset` from the palm centre, carry to beta."""
+    g, l = scene.gravity, design.link_length
+    a, b, q = design.alpha, design.beta, design.mass_ratio
+    body, palm = scene.body, scene.palm
+    vx, vy = velocity
+    u = float(phys.landing_speed(vx, vy, a, q))
+    px, py = (float(p) for p in phys.landing_impulse(vx, vy, a, q))
+    v_beta2 = float(phys.carry_speed_squared(u, a, b, gravity=g, link_length=l))
+    support = _support(body.width, palm.width, offset)
+    half_h = body.height / 2
+
+    out = {
+        "over_the_top": margin(u**2 if u > 0 else 0.0,
+                               float(phys.top_speed_squared_needed(a, gravity=g, link_length=l))),
+        "lift_off": min(
+            margin(g * l * math.cos(a), u**2),
+            margin(g * l * math.cos(b), v_beta2),
+        ),
+        "slip_carry": margin(palm.friction, float(phys.friction_demand(max(a, b)))),
+        "tip_carry": min(
+            _tip_margin(support, -half_h * math.tan(-a)),
+            _tip_margin(support, -half_h * math.tan(b)),
+        ),
+    }
+    if py > 0.0:
+        out["slip_impact"] = margin(palm.friction * py, abs(px))
+        out["tip_impact"] = _tip_margin(support, -half_h * px / py)
+    else:  # the palm would have to pull the object down: it is not landing on the palm
+        out["slip_impact"] = out["tip_impact"] = -1.0
+    return out
+
+
+def _support(object_width, palm_width, offset):
+    """Interval of the object's base (relative to its centre) that rests on the palm."""
+    return (max(-object_width / 2, -palm_width / 2 - offset),
+            min(object_width / 2, palm_width / 2 - offset))
+
+
+def _tip_margin(support, force_point):
+    """Slack of the contact force's point of application within the supported base."""
+    low, high = support
+    if force_point >= 0.0:
+        return margin(max(high, 0.0), force_point)
+    return margin(max(-low, 0.0), -force_point)
+
+
+def _predicted_handover_speeds(scene, design, velocity, stages=APPROACH_STAGES):
+    """Handover speeds of the first stages by the closed-form map (nominal geometry)."""
+    g, l = scene.gravity, design.link_length
+    a, b, q = design.alpha, design.beta, design.mass_ratio
+    u = float(phys.landing_speed(*velocity, a, q))
+    speed2 = float(phys.carry_speed_squared(u, a, b, gravity=g, link_length=l))
+    speeds = []
+    for _ in range(stages):
+        if speed2 <= 0.0:
+            break
+        speeds.append(math.sqrt(speed2))
+        speed2 = float(phys.next_handover_speed(speeds[-1], a, b, q, gravity=g, link_length=l)) ** 2
+    return speeds

@@ -1,0 +1,124 @@
+"""The typed form of a spec file. Only `loader.py` reads TOML; everything else takes a Spec."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Annotated, Literal
+
+from pydantic import Field, Strict
+from pydantic.dataclasses import dataclass as checked
+
+from ..scenes import ManipulatorsDesign, Scene, StairsDesign
+from ..scenes.common import CONFIG, Number
+
+Count = Annotated[int, Strict(), Field(ge=1, le=10_000_000)]
+SampleCount = Annotated[int, Strict(), Field(ge=0, le=1_000_000)]
+Weight = Annotated[float, Strict(), Field(ge=0)]
+
+OBJECTIVES = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence")
+ACCURACIES = ("fast", "default", "precise")
+
+MANIPULATOR_MARGINS = (
+    "landing", "over_the_top", "lift_off", "slip_carry", "tip_carry", "slip_impact", "tip_impact",
+    "first_over_the_top", "first_lift_off", "first_slip_impact", "first_tip_impact",
+)
+STAIRS_MARGINS = ("first_impact_friction", "nose_clearance", "riser_clearance")
+
+
+@checked(frozen=True, config=CONFIG)
+class Bounds:
+    """A free design variable: lower and upper bound and an optional initial guess."""
+
+    min: Number
+    max: Number
+    initial: Number | None = None
+
+    def __post_init__(self):
+        if self.min > self.max:
+            raise ValueError(f"min ({self.min:g}) must not exceed max ({self.max:g})")
+        if self.initial is not None and not self.min <= self.initial <= self.max:
+            raise ValueError(f"initial ({self.initial:g}) must lie in [min, max]")
+
+    @property
+    def guess(self) -> float:
+        return self.initial if self.initial is not None else 0.5 * (self.min + self.max)
+
+
+@checked(frozen=True, config=CONFIG)
+class ManipulatorOffset:
+    """Assembly offset of one manipulator's pivot (numbered from 1), in m, y up."""
+
+    manipulator: Annotated[int, Strict(), Field(ge=1)]
+    dx: Number = 0.0
+    dy: Number = 0.0
+
+
+@checked(frozen=True, config=CONFIG)
+class StepError:
+    """Construction error of one step (numbered from 1): rise and tread errors in m."""
+
+    step: Annotated[int, Strict(), Field(ge=1)]
+    rise: Number = 0.0
+    tread: Number = 0.0
+
+
+@checked(frozen=True, config=CONFIG)
+class Verification:
+    """How designs are verified in the simulator. stages: manipulators passed or bounces made."""
+
+    stages: Count = 6
+    accuracy: Literal["fast", "default", "precise"] = "default"
+    samples: SampleCount = 16
+    offsets: tuple[ManipulatorOffset, ...] = ()
+    step_errors: tuple[StepError, ...] = ()
+
+
+@checked(frozen=True, config=CONFIG)
+class Expectations:
+    """What CI expects of a spec (`pdm-design check`); None means not checked."""
+
+    feasible: Annotated[bool, Strict()] | None = None
+    verified: Annotated[bool, Strict()] | None = None
+    min_objective: Number | None = None
+    min_tolerance: Annotated[float, Strict(), Field(ge=0)] | None = None
+    min_margin: Number | None = None
+
+
+@dataclass(frozen=True)
+class Spec:
+    """A whole spec: the scene, the design space and what is asked of the design.
+
+    design maps each design variable (by its spec name) to a fixed value or to Bounds;
+    variables left out take the scene's defaults (see docs/spec.md).
+    """
+
+    source: str
+    scene: Scene
+    design: dict[str, float | Bounds]
+    objective: dict[str, float] = field(default_factory=dict)
+    requirements: dict[str, float] = field(default_factory=dict)
+    verification: Verification = Verification()
+    expect: Expectations = Expectations()
+    name: str = ""
+    description: str = ""
+
+    @property
+    def kind(self) -> str:
+        return self.scene.kind
+
+    @property
+    def design_class(self):
+        return StairsDesign if self.kind == "stairs" else ManipulatorsDesign
+
+    @property
+    def free_variables(self) -> tuple[str, ...]:
+        return tuple(k for k, v in self.design.items() if isinstance(v, Bounds))
+
+    def design_at(self, values: dict[str, float] | None = None):
+        """The design point with the free variables set from `values` (default: their guesses)."""
+        values = values or {}
+        resolved = {
+            k: (float(values.get(k, v.guess)) if isinstance(v, Bounds) else v)
+            for k, v in self.design.items()
+        }
+        return self.design_class(**resolved)
