@@ -1,0 +1,1 @@
+"""The event simulator: hybrid runs of each scene, judged phase by phase."""
