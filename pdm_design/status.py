@@ -34,8 +34,8 @@ _MESSAGES = {
     Status.EVALUATED: "The design is fixed; it was evaluated and meets every requirement.",
     Status.ACCEPTABLE: "IPOPT stopped at its 'acceptable' tolerance, not at optimality: "
     "tighten nothing, but re-run with more iterations or a better initial guess before building.",
-    Status.ITERATION_LIMIT: "IPOPT hit its iteration limit: raise the limit or give an initial guess "
-    "closer to the answer.",
+    Status.ITERATION_LIMIT: "IPOPT hit its iteration limit: raise the limit or give an initial "
+    "guess closer to the answer.",
     Status.INFEASIBLE: "No design meets every requirement: relax the requirements listed as "
     "violated, widen the bounds, or change the scene.",
     Status.SOLVER_ERROR: "The solver failed (numerical trouble): check the scene for degenerate "

@@ -9,6 +9,8 @@ from ..scenes import ManipulatorsDesign, ManipulatorsScene
 from .result import Analysis, margin
 
 APPROACH_STAGES = 6
+# Margins that depend on the landing velocity (the others are the same at every stage).
+_SPEED_DEPENDENT = ("over_the_top", "lift_off", "slip_impact", "tip_impact")
 
 
 def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign) -> Analysis:
@@ -48,7 +50,7 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign) -
     approach: dict[str, object] = {}
     if first:
         first_margins = _stage_margins(scene, design, first["velocity"], offset)
-        margins.update({f"first_{k}": v for k, v in first_margins.items()})
+        margins.update({f"first_{k}": first_margins[k] for k in _SPEED_DEPENDENT})
         approach = {
             "landing_point": first["point"],
             "landing_velocity": first["velocity"],
@@ -80,7 +82,8 @@ def _first_landing(scene, design, problems):
 
 
 def _stage_margins(scene, design, velocity, offset) -> dict[str, float]:
-    """Margins of one stage: landing with `velocity` at `offset` from the palm centre, carry to beta."""
+    """Margins of one stage: landing with `velocity` at `offset` from the palm centre, then the
+    carry to beta."""
     g, l = scene.gravity, design.link_length
     a, b, q = design.alpha, design.beta, design.mass_ratio
     body, palm = scene.body, scene.palm
@@ -132,10 +135,12 @@ def _predicted_handover_speeds(scene, design, velocity, stages=APPROACH_STAGES):
     a, b, q = design.alpha, design.beta, design.mass_ratio
     u = float(phys.landing_speed(*velocity, a, q))
     speed2 = float(phys.carry_speed_squared(u, a, b, gravity=g, link_length=l))
+    c = float(phys.contraction(a, b, q))
+    gain = float(phys.energy_gain_squared(a, b, gravity=g, link_length=l))
     speeds = []
     for _ in range(stages):
         if speed2 <= 0.0:
             break
         speeds.append(math.sqrt(speed2))
-        speed2 = float(phys.next_handover_speed(speeds[-1], a, b, q, gravity=g, link_length=l)) ** 2
+        speed2 = c * speed2 + gain
     return speeds

@@ -41,14 +41,19 @@ def landing_impulse(vx, vy, alpha, mass_ratio):
     return u * cos(alpha) - vx, u * sin(alpha) - vy
 
 
+def cos_difference(a, b):
+    """cos a - cos b = 2 sin((a+b)/2) sin((b-a)/2), exact to rounding even for tiny angles."""
+    return 2.0 * sin(0.5 * (a + b)) * sin(0.5 * (b - a))
+
+
 def carry_speed_squared(u, alpha, theta, *, gravity, link_length):
     """v(theta)^2 on the carry arc after leaving -alpha at speed u (energy conservation)."""
-    return u**2 + 2.0 * gravity * link_length * (cos(alpha) - cos(theta))
+    return u**2 + 2.0 * gravity * link_length * cos_difference(alpha, theta)
 
 
 def top_speed_squared_needed(alpha, *, gravity, link_length):
     """u^2 needed to carry the object from -alpha over the top (theta = 0): 2 g l (1 - cos a)."""
-    return 2.0 * gravity * link_length * (1.0 - cos(alpha))
+    return 4.0 * gravity * link_length * sin(0.5 * alpha) ** 2
 
 
 def contraction(alpha, beta, mass_ratio):
@@ -58,13 +63,21 @@ def contraction(alpha, beta, mass_ratio):
 
 def energy_gain_squared(alpha, beta, *, gravity, link_length):
     """D = 2 g l (cos a - cos b): what one carry adds to the squared speed."""
-    return 2.0 * gravity * link_length * (cos(alpha) - cos(beta))
+    return 2.0 * gravity * link_length * cos_difference(alpha, beta)
+
+
+def contraction_complement(alpha, beta, mass_ratio):
+    """1 - c without cancellation: (1 - k cos x)(1 + k cos x), k = m/(m+M), x = a + b, using
+    1 - k cos x = 1/(1+q) + 2 k sin^2(x/2) (exact when k -> 1 and x -> 0)."""
+    k = momentum_fraction(mass_ratio)
+    x = alpha + beta
+    return (1.0 / (1.0 + mass_ratio) + 2.0 * k * sin(0.5 * x) ** 2) * (1.0 + k * cos(x))
 
 
 def handover_speed_squared(alpha, beta, mass_ratio, *, gravity, link_length):
     """Squared fixed-point handover speed s*^2 = D / (1 - c); not positive when beta <= alpha."""
-    c = contraction(alpha, beta, mass_ratio)
-    return energy_gain_squared(alpha, beta, gravity=gravity, link_length=link_length) / (1.0 - c)
+    gain = energy_gain_squared(alpha, beta, gravity=gravity, link_length=link_length)
+    return gain / contraction_complement(alpha, beta, mass_ratio)
 
 
 def next_handover_speed(speed, alpha, beta, mass_ratio, *, gravity, link_length):
@@ -85,7 +98,7 @@ def pitch(alpha, beta, link_length):
     """(x, y) from one pivot to the next: l (sin a + sin b) along, l (cos a - cos b) down."""
     return (
         link_length * (sin(alpha) + sin(beta)),
-        link_length * (cos(alpha) - cos(beta)),
+        link_length * cos_difference(alpha, beta),
     )
 
 

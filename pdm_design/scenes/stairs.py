@@ -53,7 +53,7 @@ class StairsDesign:
     landing_offset is measured from the back (riser) of a tread to where the ball lands."""
 
     restitution: Fraction
-    launch_speed: NonNegative
+    launch_speed: Positive
     rise: NonNegative | None = None
     tread: Positive | None = None
     landing_offset: NonNegative | None = None

@@ -1,0 +1,173 @@
+"""The `pdm-design` command line: a thin layer over pdm_design.api.
+
+Heavy modules (the spec loader, scipy, casadi, matplotlib) are imported inside the commands so
+that `pdm-design --help` starts fast. Exit codes: 0 success, 1 infeasible / verification failed /
+expectation not met, 2 bad input. Errors are one clear message, never a traceback (set
+PDM_DESIGN_DEBUG=1 to see one for an internal error).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import os
+import sys
+
+import click
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _guarded(command):
+    """Map every error to a message on stderr and the documented exit code."""
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        from .errors import PdmError, SpecError
+
+        try:
+            code = command(*args, **kwargs)
+        except SpecError as error:
+            click.echo(f"error: {error}", err=True)
+            sys.exit(EXIT_BAD_INPUT)
+        except PdmError as error:
+            click.echo(f"error: {error}", err=True)
+            sys.exit(EXIT_FAILED)
+        except (click.exceptions.Exit, click.ClickException, SystemExit, KeyboardInterrupt):
+            raise
+        except Exception as error:
+            if os.environ.get("PDM_DESIGN_DEBUG"):
+                raise
+            click.echo(f"internal error ({type(error).__name__}): {error}. "
+                       "Please report it with the spec that caused it.", err=True)
+            sys.exit(EXIT_FAILED)
+        sys.exit(code or EXIT_OK)
+
+    return wrapper
+
+
+FORMAT = click.option("--format", "fmt", type=click.Choice(["text", "json"]), default="text",
+                      show_default=True, help="Readable report, or one JSON document on stdout.")
+SPEC = click.argument("spec", type=click.Path(dir_okay=False, path_type=str))
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="pdm-design")
+def main():
+    """Design passive dynamic object manipulation systems (stairs, passive manipulator rows)."""
+
+
+@main.command()
+@SPEC
+@FORMAT
+@_guarded
+def optimize(spec, fmt):
+    """Solve SPEC: choose the free design variables (or evaluate a fixed design), verify, report."""
+    from .api import design
+    from .spec import load_spec
+
+    outcome = design(load_spec(spec))
+    if fmt == "json":
+        from .report.document import optimize_document
+
+        click.echo(json.dumps(optimize_document(outcome), indent=2))
+    else:
+        from .report.text import optimize_text
+
+        click.echo(optimize_text(outcome), nl=False)
+    return outcome.exit_code
+
+
+def _not_yet(name: str):
+    click.echo(f"pdm-design {name}: not available yet in this version.", err=True)
+    return EXIT_FAILED
+
+
+def _parse_pairs(values, label, what):
+    """Parse 'K:A,B' options into (K, A, B) with a clear error naming the option."""
+    from .errors import SpecError
+
+    parsed = []
+    for text in values:
+        try:
+            index, pair = text.split(":", 1)
+            first, second = (float(v) for v in pair.split(","))
+            index = int(index)
+            if index < 1 or not all(math.isfinite(v) for v in (first, second)):
+                raise ValueError
+        except ValueError:
+            raise SpecError("command line", label, f"{what}, e.g. 2:0.1,-0.2",
+                            repr(text)) from None
+        parsed.append((index, first, second))
+    return parsed
+
+
+ACCURACY = click.option("--accuracy", type=click.Choice(["fast", "default", "precise"]),
+                        default=None, help="Simulator accuracy preset (default: the spec's).")
+
+
+@main.command()
+@SPEC
+@click.option("--stages", type=click.IntRange(1, 10_000_000), default=None,
+              help="Manipulators in the row, or bounces (default: the spec's verification.stages).")
+@click.option("--offset", "offsets", multiple=True, metavar="K:DX,DY",
+              help="Offset manipulator K (from 1) by DX, DY metres (y up). Repeatable.")
+@click.option("--step-error", "step_errors", multiple=True, metavar="K:DRISE,DTREAD",
+              help="Add DRISE, DTREAD metres to step K's rise and tread. Repeatable.")
+@click.option("--plot", type=click.Path(dir_okay=False), default=None,
+              help="Write figures like the paper's (PNG) to this file.")
+@ACCURACY
+@FORMAT
+@_guarded
+def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
+    """Run the event simulator on SPEC's design (optimised first if it has free variables)."""
+    from .api import design
+    from .report.simulation import simulation_text
+    from .spec import load_spec
+    from .spec.model import ManipulatorOffset, StepError
+    from .verify import simulate_spec
+
+    loaded = load_spec(spec)
+    point = loaded.design_at(design(loaded).analysis.design) if loaded.free_variables else (
+        loaded.design_at())
+    kwargs = {}
+    if offsets:
+        kwargs["offsets"] = tuple(ManipulatorOffset(manipulator=k, dx=a, dy=b)
+                                  for k, a, b in _parse_pairs(offsets, "--offset", "K:DX,DY"))
+    if step_errors:
+        kwargs["step_errors"] = tuple(StepError(step=k, rise=a, tread=b) for k, a, b in
+                                      _parse_pairs(step_errors, "--step-error", "K:DRISE,DTREAD"))
+    result = simulate_spec(loaded, point, stages=stages, accuracy=accuracy,
+                           record_trajectory=plot is not None, **kwargs)
+    if plot:
+        from .report.plots import plot_simulation
+
+        plot_simulation(loaded, point, result, plot)
+    if fmt == "json":
+        from .report.jsonable import jsonable
+
+        click.echo(json.dumps(jsonable(result.to_json()), indent=2))
+    else:
+        click.echo(simulation_text(loaded, result), nl=False)
+    return EXIT_OK if result.outcome.completed else EXIT_FAILED
+
+
+@main.command(context_settings={"ignore_unknown_options": True})
+@click.argument("args", nargs=-1, type=click.UNPROCESSED)
+@_guarded
+def table(args):
+    """Design tables over parameter sweeps (not available yet)."""
+    return _not_yet("table")
+
+
+@main.command(context_settings={"ignore_unknown_options": True})
+@click.argument("args", nargs=-1, type=click.UNPROCESSED)
+@_guarded
+def check(args):
+    """CI gate on specs' expectations (not available yet)."""
+    return _not_yet("check")
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

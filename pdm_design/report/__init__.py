@@ -1,0 +1,1 @@
+"""Reports: the JSON document (docs/json-schema.md) and the human-readable text."""

@@ -1,0 +1,46 @@
+"""The human-readable report of `pdm-design simulate`."""
+
+from __future__ import annotations
+
+_STAGE_COLUMNS = {
+    "manipulators": ("manipulator", "landing_time", "landing_offset", "landing_speed",
+                     "handover_speed", "handover_angle"),
+    "stairs": ("step", "impact_time", "landing_x", "impact_speed", "vx", "spin_after"),
+}
+_SHOWN_STAGES = 20
+
+
+def _cell(value) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, (int, float)) or hasattr(value, "__float__"):
+        return f"{float(value):.6g}"
+    return str(value)
+
+
+def simulation_text(spec, result) -> str:
+    outcome = result.outcome
+    verdict = "completed" if outcome.completed else "FAILED"
+    lines = [f"{spec.name or spec.source} ({spec.kind}): {verdict}, "
+             f"{outcome.stages_passed} stages passed (accuracy {result.accuracy.name})"]
+    if outcome.failure is not None:
+        f = outcome.failure
+        lines.append(f"failure: {f.kind} at stage {f.stage}, t = {f.time:.6g} s: {f.detail}")
+    columns = _STAGE_COLUMNS[spec.kind]
+    rows = [[_cell(stage.get(c)) for c in columns] for stage in result.stages[:_SHOWN_STAGES]]
+    widths = [max(len(c), *(len(r[i]) for r in rows)) if rows else len(c)
+              for i, c in enumerate(columns)]
+    lines += ["", "  ".join(c.rjust(w) for c, w in zip(columns, widths))]
+    lines += ["  ".join(v.rjust(w) for v, w in zip(row, widths)) for row in rows]
+    if len(result.stages) > _SHOWN_STAGES:
+        lines.append(f"... {len(result.stages) - _SHOWN_STAGES} more stages (--format json)")
+    lines += ["", f"events ({len(result.events)}):"]
+    for event in result.events[:40]:
+        mark = "  FAILURE" if event.failure else ""
+        lines.append(f"  t={event.time:10.6f}  stage {event.stage:>3}  {event.kind}{mark}"
+                     + (f"  {event.detail}" if event.detail else ""))
+    if len(result.events) > 40:
+        lines.append(f"  ... {len(result.events) - 40} more (--format json)")
+    return "\n".join(lines) + "\n"

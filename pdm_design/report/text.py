@@ -1,0 +1,57 @@
+"""The human-readable report of `pdm-design optimize`."""
+
+from __future__ import annotations
+
+from ..api import DesignOutcome
+
+_UNITS = {
+    "alpha": "rad", "beta": "rad", "link_length": "m", "mass_ratio": "", "first_pivot_x": "m",
+    "first_pivot_y": "m", "restitution": "", "launch_speed": "m/s", "rise": "m", "tread": "m",
+    "landing_offset": "m", "pitch_x": "m", "pitch_y": "m", "palm_mass": "kg",
+    "nose_clearance": "m", "handover_speed": "m/s", "landing_speed": "m/s", "contraction": "",
+    "drop_per_stage": "m", "impact_speed": "m/s", "vertical_impact_speed": "m/s",
+    "horizontal_speed": "m/s", "spin": "rad/s", "flight_time": "s", "drift_per_bounce": "m",
+}
+
+
+def _rows(values: dict) -> list[str]:
+    width = max((len(k) for k in values), default=0)
+    out = []
+    for name, value in values.items():
+        if value is None:
+            shown = "-"
+        elif isinstance(value, float) or hasattr(value, "__float__"):
+            shown = f"{float(value):.6g} {_UNITS.get(name, '')}".rstrip()
+        else:
+            shown = str(value)
+        out.append(f"  {name:<{width}}  {shown}")
+    return out
+
+
+def optimize_text(outcome: DesignOutcome) -> str:
+    spec, analysis = outcome.spec, outcome.analysis
+    free = set(spec.free_variables)
+    lines = [f"{spec.name or spec.source} ({spec.kind})",
+             f"status: {outcome.status.value} - {outcome.status.message}", "", "design:"]
+    design = {k: v for k, v in analysis.design.items() if v is not None}
+    lines += [row + ("   (optimised)" if name in free else "")
+              for name, row in zip(design, _rows(design))]
+    lines += ["", "geometry:", *_rows(analysis.geometry)]
+    lines += ["", "periodic orbit:", *_rows(analysis.periodic)]
+    lines += ["", "margins (>= 0 holds; 1 - demand/capacity):"]
+    width = max((len(k) for k in analysis.margins), default=0)
+    for name, value in analysis.margins.items():
+        need = spec.requirements.get(name, 0.0)
+        flag = "ok" if value >= need else f"VIOLATED (needs >= {need:g})"
+        lines.append(f"  {name:<{width}}  {value:+.4f}  {flag}")
+    if outcome.tolerance:
+        lines += ["", "tolerance:", *_rows(outcome.tolerance)]
+    if outcome.verification is not None:
+        v = outcome.verification
+        lines += ["", f"verification: {'passed' if v.get('passed') else 'FAILED'}"
+                  f" - {v.get('summary', '')}"]
+    if outcome.solver:
+        lines += ["", "solver:", *_rows(outcome.solver)]
+    if outcome.violations:
+        lines += ["", "why it does not work:", *(f"  - {v}" for v in outcome.violations)]
+    return "\n".join(lines) + "\n"
