@@ -161,12 +161,27 @@ def table(args):
     return _not_yet("table")
 
 
-@main.command(context_settings={"ignore_unknown_options": True})
-@click.argument("args", nargs=-1, type=click.UNPROCESSED)
+@main.command()
+@click.argument("targets", nargs=-1, required=True, type=click.Path(path_type=str))
+@click.option("--junit", type=click.Path(dir_okay=False), default=None,
+              help="Also write a JUnit XML report to this file.")
 @_guarded
-def check(args):
-    """CI gate on specs' expectations (not available yet)."""
-    return _not_yet("check")
+def check(targets, junit):
+    """CI gate: solve and verify each spec (or every *.toml in a directory) and test its
+    [expect] table. One line per spec; exit 1 if any expectation fails, 2 on bad input."""
+    from .check import check_spec, junit_xml, spec_paths
+
+    results = []
+    for path in spec_paths(list(targets)):
+        results.append(check_spec(path))
+        click.echo(results[-1].line())
+    if junit:
+        from .io import write_atomic
+
+        write_atomic(junit, junit_xml(results))
+    if any(r.error for r in results):
+        return EXIT_BAD_INPUT
+    return EXIT_OK if all(r.passed for r in results) else EXIT_FAILED
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,115 @@
+"""The CI gate: solve each spec, verify it, and test its [expect] table."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from .api import DesignOutcome, design
+from .errors import SpecError
+from .spec import load_spec
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """One spec's verdict. failures: one reason per expectation not met; error: bad input."""
+
+    source: str
+    failures: tuple[str, ...] = ()
+    error: str | None = None
+    seconds: float = 0.0
+
+    @property
+    def passed(self) -> bool:
+        return not self.failures and self.error is None
+
+    def line(self) -> str:
+        if self.error:
+            return f"ERROR {self.source}: {self.error}"
+        if self.failures:
+            return f"FAIL  {self.source}: {'; '.join(self.failures)}"
+        return f"PASS  {self.source}"
+
+
+def spec_paths(targets: list[str]) -> list[Path]:
+    """The spec files named, with each directory expanded to its *.toml files (sorted)."""
+    paths: list[Path] = []
+    for target in targets:
+        path = Path(target)
+        paths.extend(sorted(path.glob("*.toml")) if path.is_dir() else [path])
+    return paths
+
+
+def check_spec(path: Path) -> CheckResult:
+    import time
+
+    start = time.perf_counter()
+    try:
+        spec = load_spec(path)
+    except SpecError as error:
+        return CheckResult(str(path), error=str(error))
+    outcome = design(spec)
+    failures = tuple(unmet_expectations(outcome))
+    return CheckResult(str(path), failures=failures, seconds=time.perf_counter() - start)
+
+
+def unmet_expectations(outcome: DesignOutcome) -> list[str]:
+    """Each expectation of the spec that the outcome does not meet, in words."""
+    expect, out = outcome.spec.expect, []
+    feasible = outcome.status.is_success
+    if expect.feasible is not None and feasible != expect.feasible:
+        why = f" ({outcome.violations[0]})" if outcome.violations else ""
+        out.append(f"expected {'feasible' if expect.feasible else 'infeasible'}, "
+                   f"got {outcome.status.value}{why}")
+    verification = outcome.verification or {}
+    verified = bool(verification.get("passed"))
+    if expect.verified is not None and verified != expect.verified:
+        out.append(f"expected verified = {expect.verified}, got {verified}"
+                   + (f" ({verification.get('summary')})" if verification else
+                      " (not verified)"))
+    if expect.min_objective is not None:
+        value = (outcome.objective or {}).get("value")
+        if value is None or value < expect.min_objective:
+            out.append(f"objective {_show(value)} is below the expected minimum "
+                       f"{expect.min_objective:g}")
+    if expect.min_tolerance is not None:
+        smallest = _smallest_side(outcome.tolerance)
+        if smallest is None or smallest < expect.min_tolerance:
+            out.append(f"tolerance {_show(smallest)} m is below the expected minimum "
+                       f"{expect.min_tolerance:g} m")
+    if expect.min_margin is not None:
+        margins = outcome.analysis.margins
+        name = min(margins, key=margins.get) if margins else None
+        if name is None or margins[name] < expect.min_margin:
+            out.append(f"smallest margin {name} = {_show(margins.get(name))} is below the "
+                       f"expected minimum {expect.min_margin:g}")
+    return out
+
+
+def _smallest_side(tolerance: dict | None) -> float | None:
+    """Smallest half-width of the tolerance box (m), over its numeric sides."""
+    if not tolerance:
+        return None
+    sides = [v for k, v in tolerance.items() if isinstance(v, (int, float)) and k != "volume"]
+    return min(sides) if sides else None
+
+
+def _show(value) -> str:
+    return "none" if value is None else f"{value:.4g}"
+
+
+def junit_xml(results: list[CheckResult]) -> str:
+    """A JUnit XML report: one test case per spec."""
+    import xml.etree.ElementTree as ET
+
+    suite = ET.Element("testsuite", name="pdm-design check", tests=str(len(results)),
+                       failures=str(sum(bool(r.failures) for r in results)),
+                       errors=str(sum(r.error is not None for r in results)))
+    for result in results:
+        case = ET.SubElement(suite, "testcase", classname="pdm-design.check",
+                             name=result.source, time=f"{result.seconds:.3f}")
+        if result.error:
+            ET.SubElement(case, "error", message=result.error)
+        for failure in result.failures:
+            ET.SubElement(case, "failure", message=failure)
+    return ET.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"

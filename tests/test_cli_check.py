@@ -1,0 +1,68 @@
+"""`pdm-design check`: the CI gate on specs' expectations."""
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from pdm_design.cli import main
+
+PAPER = Path(__file__).resolve().parents[1] / "problems" / "paper_manipulators.toml"
+
+
+def run(*args):
+    result = CliRunner().invoke(main, ["check", *map(str, args)])
+    return result.exit_code, result.stdout, result.stderr
+
+
+def _spec_with_expect(tmp_path, expect: str, name="spec.toml"):
+    text = PAPER.read_text().split("[expect]")[0] + "[expect]\n" + expect + "\n"
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_met_expectation_passes(tmp_path):
+    code, out, _ = run(_spec_with_expect(tmp_path, "feasible = true"))
+    assert code == 0
+    assert out.startswith("PASS")
+
+
+def test_margin_expectation_above_achievable_fails_with_reason(tmp_path):
+    # The landing margin of the paper design is 1 - (0.5615 + 0.2) / 0.8 = 0.048 (by hand).
+    code, out, _ = run(_spec_with_expect(tmp_path, "min_margin = 0.5"))
+    assert code == 1
+    assert out.startswith("FAIL") and "smallest margin landing" in out
+
+
+def test_wrong_feasibility_expectation_fails(tmp_path):
+    code, out, _ = run(_spec_with_expect(tmp_path, "feasible = false"))
+    assert code == 1
+    assert "expected infeasible, got evaluated" in out
+
+
+def test_directory_is_expanded_one_line_per_spec(tmp_path):
+    _spec_with_expect(tmp_path, "feasible = true", "a.toml")
+    _spec_with_expect(tmp_path, "min_margin = 0.9", "b.toml")
+    code, out, _ = run(tmp_path)
+    assert code == 1
+    assert [line.split()[0] for line in out.splitlines()] == ["PASS", "FAIL"]
+
+
+def test_bad_spec_is_reported_and_exits_2(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[scene]\nkind = 'teapot'\n")
+    code, out, _ = run(bad)
+    assert code == 2
+    assert out.startswith("ERROR") and "scene.kind" in out
+
+
+def test_junit_report_lists_each_spec(tmp_path):
+    good = _spec_with_expect(tmp_path, "feasible = true", "good.toml")
+    failing = _spec_with_expect(tmp_path, "min_margin = 0.9", "failing.toml")
+    report = tmp_path / "junit.xml"
+    run(good, failing, "--junit", report)
+    suite = ET.parse(report).getroot()
+    assert suite.get("tests") == "2" and suite.get("failures") == "1"
+    failed = [c.get("name") for c in suite if c.find("failure") is not None]
+    assert failed == [str(failing)]
