@@ -30,18 +30,26 @@ class DesignOutcome:
         return 0 if self.status.is_success and verified else 1
 
 
-def evaluate(spec: Spec) -> DesignOutcome:
-    """Evaluate a spec whose design is fully fixed, by the closed forms."""
+def evaluate(spec: Spec, *, verify: bool = True, accuracy: str | None = None) -> DesignOutcome:
+    """Evaluate a spec whose design is fully fixed: closed forms, then (unless verify=False)
+    the event simulator from the spec's initial state."""
     if spec.free_variables:
-        raise ValueError("evaluate() needs a fixed design; use optimize() for free variables")
-    analysis = analyse(spec.scene, spec.design_at())
+        raise ValueError("evaluate() needs a fixed design; use design() for free variables")
+    point = spec.design_at()
+    analysis = analyse(spec.scene, point)
     violations = tuple(analysis.problems) + tuple(analysis.violations(spec.requirements))
     status = Status.EVALUATED if not violations else Status.INFEASIBLE
-    return DesignOutcome(spec=spec, status=status, analysis=analysis, violations=violations)
+    verification = None
+    if verify and not analysis.problems:
+        from .verify import verify_nominal
+
+        verification = verify_nominal(spec, point, analysis, accuracy=accuracy)
+    return DesignOutcome(spec=spec, status=status, analysis=analysis, violations=violations,
+                         verification=verification)
 
 
-def design(spec: Spec) -> DesignOutcome:
-    """Solve the spec: evaluate a fixed design, or optimise the free variables."""
+def design(spec: Spec, *, verify: bool = True, accuracy: str | None = None) -> DesignOutcome:
+    """Solve the spec: evaluate a fixed design, or optimise the free variables; verify."""
     if not spec.free_variables:
-        return evaluate(spec)
+        return evaluate(spec, verify=verify, accuracy=accuracy)
     raise NotImplementedError("optimising free design variables is not available yet")

@@ -58,16 +58,22 @@ def main():
     """Design passive dynamic object manipulation systems (stairs, passive manipulator rows)."""
 
 
+ACCURACY = click.option("--accuracy", type=click.Choice(["fast", "default", "precise"]),
+                        default=None, help="Simulator accuracy preset (default: the spec's).")
+
+
 @main.command()
 @SPEC
 @FORMAT
+@ACCURACY
+@click.option("--no-verify", is_flag=True, help="Skip the simulator's verification.")
 @_guarded
-def optimize(spec, fmt):
+def optimize(spec, fmt, accuracy, no_verify):
     """Solve SPEC: choose the free design variables (or evaluate a fixed design), verify, report."""
     from .api import design
     from .spec import load_spec
 
-    outcome = design(load_spec(spec))
+    outcome = design(load_spec(spec), verify=not no_verify, accuracy=accuracy)
     if fmt == "json":
         from .report.document import optimize_document
 
@@ -101,10 +107,6 @@ def _parse_pairs(values, label, what):
                             repr(text)) from None
         parsed.append((index, first, second))
     return parsed
-
-
-ACCURACY = click.option("--accuracy", type=click.Choice(["fast", "default", "precise"]),
-                        default=None, help="Simulator accuracy preset (default: the spec's).")
 
 
 @main.command()
@@ -143,7 +145,8 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
     if plot:
         from .report.plots import plot_simulation
 
-        plot_simulation(loaded, point, result, plot)
+        plot_simulation(loaded, point, result, plot, stages=stages,
+                        offsets=kwargs.get("offsets", loaded.verification.offsets))
     if fmt == "json":
         from .report.jsonable import jsonable
 
@@ -153,12 +156,88 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
     return EXIT_OK if result.outcome.completed else EXIT_FAILED
 
 
-@main.command(context_settings={"ignore_unknown_options": True})
-@click.argument("args", nargs=-1, type=click.UNPROCESSED)
+@main.command()
+@SPEC
+@click.option("--sweep", "sweeps", multiple=True, required=True,
+              metavar="NAME=START:STOP:COUNT",
+              help="Sweep a numeric parameter of the spec (by key name, e.g. mass_ratio, "
+              "friction, or dotted path, e.g. scene.body.width) over COUNT evenly spaced values "
+              "from START to STOP. Repeat for a grid.")
+@click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
+              help="Folder for table.csv, table.md and the plots (default: SPEC's name "
+              "followed by -table).")
+@click.option("--resume", is_flag=True,
+              help="Keep the rows an interrupted run left in --out and solve only the rest.")
+@click.option("--workers", type=click.IntRange(1, 4096), default=None,
+              help="Local worker processes (default: the machine's cores; 1: in this process).")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Run on an existing Dask distributed cluster (scheduler address, e.g. "
+              "tcp://10.0.0.5:8786) instead of local workers.")
+@click.option("--chain", type=click.IntRange(1, 1_000_000), default=4, show_default=True,
+              help="Grid points solved in sequence, each warm-started from the one before.")
+@click.option("--no-plots", is_flag=True, help="Write the tables only.")
 @_guarded
-def table(args):
-    """Design tables over parameter sweeps (not available yet)."""
-    return _not_yet("table")
+def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
+    """Design table: solve SPEC at every point of a parameter grid; write CSV (row by row, as
+    points finish), Markdown and plots. Exit 0 when every point was solved (infeasible points
+    are rows with their reason), 1 if a point failed to solve or the run was interrupted."""
+    from pathlib import Path
+
+    from .sweep.run import run_sweep
+
+    folder = out or f"{Path(spec).stem}-table"
+    try:
+        result = run_sweep(spec, sweeps, folder, workers=workers, scheduler=scheduler,
+                           resume=resume, chain=chain, plots=not no_plots)
+    except KeyboardInterrupt:
+        click.echo(f"interrupted: the rows solved so far are in {Path(folder) / 'table.csv'}; "
+                   "run the same command with --resume to continue", err=True)
+        return EXIT_FAILED
+    statuses = {}
+    for row in result.rows:
+        statuses[row["status"]] = statuses.get(row["status"], 0) + 1
+    counts = ", ".join(f"{n} {s}" for s, n in sorted(statuses.items()))
+    click.echo(f"{len(result.rows)} points ({counts}); {result.computed} solved now, "
+               f"{result.reused} kept from before")
+    for path in result.files:
+        click.echo(f"  {path}")
+    return EXIT_FAILED if result.errors else EXIT_OK
+
+
+@main.command()
+@click.argument("source", metavar="SPEC_OR_JSON",
+                type=click.Path(dir_okay=False, path_type=str))
+@click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
+              help="Folder for sheet.md, sheet.csv, sheet.png and sheet.svg (default: the "
+              "source's name followed by -sheet).")
+@click.option("--count", type=click.IntRange(1, 10_000_000), default=None,
+              help="Manipulators or steps listed (default: the spec's verification.stages).")
+@click.option("--no-tolerance", is_flag=True,
+              help="Do not solve for the placement tolerance when the design carries none.")
+@click.option("--no-drawing", is_flag=True, help="Write the Markdown and CSV only.")
+@_guarded
+def sheet(source, out, count, no_tolerance, no_drawing):
+    """Build sheet of a design: a spec (solved first) or a saved `optimize --format json`
+    document. Pivot coordinates, stop angles, link length and palm mass of every manipulator,
+    or every step's rise and tread, each with its tolerance; Markdown, CSV and a dimensioned
+    drawing. Exit 1 (sheet still written) when the design does not work."""
+    from pathlib import Path
+
+    from .sheet import sheet_for, write_sheet
+
+    folder = out or f"{Path(source).stem}-sheet"
+    built = sheet_for(source, count=count, tolerance=not no_tolerance)
+    files = write_sheet(built, folder, drawing=not no_drawing)
+    what = "manipulators" if built.kind == "manipulators" else "steps"
+    click.echo(f"build sheet of {built.count} {what} (status {built.status}; tolerance: "
+               f"{built.tolerance_note})")
+    for path in files:
+        click.echo(f"  {path}")
+    if built.status not in ("optimal", "evaluated"):
+        click.echo(f"warning: the design's status is {built.status}: it does not work as "
+                   "built; see the problems in the sheet", err=True)
+        return EXIT_FAILED
+    return EXIT_OK
 
 
 @main.command()

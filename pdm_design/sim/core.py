@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 
 from scipy.optimize import brentq
 
+_BRENT_RTOL = 4 * 2.220446049250313e-16  # brentq's smallest accepted rtol: 4 machine epsilons
+
 
 @dataclass(frozen=True)
 class Accuracy:
@@ -107,4 +109,4 @@ class SimulationResult:
 
 def locate(fun, a: float, b: float, tol: float) -> float:
     """Root of a guard that changes sign on [a, b], to absolute tolerance tol (Brent's method)."""
-    return brentq(fun, a, b, xtol=tol, rtol=4 * 2.2e-16, maxiter=200)
+    return brentq(fun, a, b, xtol=tol, rtol=_BRENT_RTOL, maxiter=200)

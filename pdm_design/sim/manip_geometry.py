@@ -1,0 +1,270 @@
+"""Geometry of the manipulators row: pivots, palm slabs, and where a moving object first meets one.
+
+Frame: origin at the first pivot's nominal place, x along the row, y up. The object is a
+translating rectangle of width w and height h whose reference point is its bottom centre (x, y).
+A palm is a horizontal slab of width W and thickness T whose top-surface centre is (cx, cy).
+
+The interiors of object and palm intersect iff the object's reference point is inside the open
+*contact box* of that palm
+
+    |x - cx| < (w + W) / 2,      cy - T - h < y < cy,
+
+so "the object meets a palm" is "its reference point enters the palm's contact box". Entering
+through the top face (y falls through cy while |x - cx| < (w + W)/2) is a landing on the palm;
+entering through any other face (the object's side hits the slab's end, or the object's top
+hits the slab's underside) is a collision the model does not carry on from: `blocked`.
+
+Along a ballistic flight x is linear and y quadratic in time, and along a carry arc x and y are
+l sin(theta) and l cos(theta) plus constants, so every face crossing is a closed-form root; the
+first entry into a box is found exactly by splitting the path at those roots.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..physics import manipulators as phys
+
+
+@dataclass(frozen=True)
+class Row:
+    """The row of manipulators and the sizes that matter for contact (all SI, 0-based palms)."""
+
+    pivots: tuple[tuple[float, float], ...]
+    link_length: float
+    alpha: float
+    beta: float
+    front_stop: float
+    palm_width: float
+    palm_thickness: float
+    body_width: float
+    body_height: float
+
+    def __len__(self) -> int:
+        return len(self.pivots)
+
+    def palm_top(self, k: int, theta: float) -> tuple[float, float]:
+        """Top-surface centre of palm k (0-based) at angle theta."""
+        px, py = self.pivots[k]
+        return px + self.link_length * math.sin(theta), py + self.link_length * math.cos(theta)
+
+    def box(self, k: int, theta: float) -> Box:
+        """Contact box of palm k at angle theta (see the module docstring)."""
+        cx, cy = self.palm_top(k, theta)
+        return Box(k, cx, 0.5 * (self.body_width + self.palm_width),
+                   cy - self.palm_thickness - self.body_height, cy)
+
+    def support(self, offset: float) -> tuple[float, float]:
+        """Part of the object's base (relative to its centre) resting on a palm when the object's
+        centre is `offset` ahead of the palm's centre."""
+        w, W = self.body_width, self.palm_width
+        return max(-0.5 * w, -0.5 * W - offset), min(0.5 * w, 0.5 * W - offset)
+
+
+def build_row(scene, design, stages: int, offsets=()) -> Row:
+    """Pivots of `stages` manipulators: pivot_k = pivot_1 + (k-1) (pitch_x, -pitch_y) + offset_k.
+
+    offsets: objects with .manipulator (1-based), .dx, .dy (m, y up). Offsets of manipulators
+    beyond the row are an error (they would silently do nothing)."""
+    if stages < 1:
+        raise ValueError(f"stages must be at least 1, not {stages}")
+    l = design.link_length
+    pitch_x, pitch_y = (float(p) for p in phys.pitch(design.alpha, design.beta, l))
+    shift = [[0.0, 0.0] for _ in range(stages)]
+    for off in offsets:
+        k = int(off.manipulator)
+        if not 1 <= k <= stages:
+            raise ValueError(f"offset for manipulator {k} but the row has {stages} manipulators")
+        shift[k - 1][0] += float(off.dx)
+        shift[k - 1][1] += float(off.dy)
+    pivots = tuple(
+        (design.first_pivot_x + i * pitch_x + shift[i][0],
+         design.first_pivot_y - i * pitch_y + shift[i][1])
+        for i in range(stages)
+    )
+    return Row(pivots=pivots, link_length=l, alpha=design.alpha, beta=design.beta,
+               front_stop=scene.palm.front_stop, palm_width=scene.palm.width,
+               palm_thickness=scene.palm.thickness, body_width=scene.body.width,
+               body_height=scene.body.height)
+
+
+@dataclass(frozen=True)
+class Box:
+    """Open contact box of one palm for the object's reference point."""
+
+    palm: int
+    cx: float
+    half_width: float
+    y_low: float
+    y_high: float
+
+    def inside(self, x: float, y: float) -> bool:
+        return abs(x - self.cx) < self.half_width and self.y_low < y < self.y_high
+
+    def penetration(self, x: float, y: float) -> float:
+        """Positive inside the box, negative outside, zero on its boundary (continuous)."""
+        return min(self.half_width - abs(x - self.cx), y - self.y_low, self.y_high - y)
+
+
+@dataclass(frozen=True)
+class Entry:
+    """First entry of a path into a contact box: parameter (time or angle), palm, and how."""
+
+    tau: float
+    palm: int
+    kind: str  # "top" (a landing), "side" (blocked), "start" (already inside at the start)
+
+
+class Ballistic:
+    """Free flight from (x0, y0) with (vx, vy) at time t0; the path parameter is time."""
+
+    def __init__(self, t0, x0, y0, vx, vy, gravity):
+        self.t0, self.x0, self.y0, self.vx, self.vy, self.g = t0, x0, y0, vx, vy, gravity
+
+    def at(self, t):
+        d = t - self.t0
+        return (self.x0 + self.vx * d, self.y0 + self.vy * d - 0.5 * self.g * d * d,
+                self.vx, self.vy - self.g * d)
+
+    def point(self, t):
+        x, y, _, _ = self.at(t)
+        return x, y
+
+    def roots_x(self, c, a, b):
+        if self.vx == 0.0:
+            return []
+        t = self.t0 + (c - self.x0) / self.vx
+        return [t] if a < t < b else []
+
+    def roots_y(self, c, a, b):
+        # y0 + vy d - g d^2 / 2 = c  ->  (g/2) d^2 - vy d + (c - y0) = 0
+        qa, qb, qc = 0.5 * self.g, -self.vy, c - self.y0
+        disc = qb * qb - 4.0 * qa * qc
+        if disc < 0.0:
+            return []
+        sq = math.sqrt(disc)
+        q = -0.5 * (qb + math.copysign(sq, qb)) if qb != 0.0 else -0.5 * sq
+        roots = {q / qa}
+        if q != 0.0:
+            roots.add(qc / q)
+        else:
+            roots.add(-q / qa)
+        return sorted(self.t0 + d for d in roots if a < self.t0 + d < b)
+
+
+class Arc:
+    """The object carried on a palm: reference point (X0 + l sin th, Y0 + l cos th), by th."""
+
+    def __init__(self, x0, y0, link_length):
+        self.x0, self.y0, self.l = x0, y0, link_length
+
+    def point(self, th):
+        return self.x0 + self.l * math.sin(th), self.y0 + self.l * math.cos(th)
+
+    @staticmethod
+    def _in(values, a, b):
+        return sorted({v for v in values if a < v < b})
+
+    def roots_x(self, c, a, b):
+        q = (c - self.x0) / self.l
+        if not -1.0 <= q <= 1.0:
+            return []
+        s = math.asin(q)
+        return self._in([s, math.pi - s, -math.pi - s, s - 2 * math.pi, s + 2 * math.pi], a, b)
+
+    def roots_y(self, c, a, b):
+        q = (c - self.y0) / self.l
+        if not -1.0 <= q <= 1.0:
+            return []
+        s = math.acos(q)
+        return self._in([s, -s, s - 2 * math.pi, 2 * math.pi - s], a, b)
+
+
+def first_entry(path, box: Box, a: float, b: float) -> Entry | None:
+    """First parameter in [a, b) where `path` enters `box` (exact: splits at face crossings)."""
+    kinds: dict[float, set[str]] = {a: {"start"}, b: {"end"}}
+    for c in (box.cx - box.half_width, box.cx + box.half_width):
+        for t in path.roots_x(c, a, b):
+            kinds.setdefault(t, set()).add("side")
+    for t in path.roots_y(box.y_low, a, b):
+        kinds.setdefault(t, set()).add("side")
+    for t in path.roots_y(box.y_high, a, b):
+        kinds.setdefault(t, set()).add("top")
+    cuts = sorted(kinds)
+    for p, q in zip(cuts, cuts[1:]):
+        if p == a and q - p <= 1e-12 * (1.0 + abs(p)):
+            continue  # a start on a face line, rounded to its inner side
+        if box.inside(*path.point(0.5 * (p + q))):
+            found = kinds[p]
+            if "start" in found:
+                kind = _start_kind(box, *path.point(a))
+            else:
+                kind = "side" if "side" in found else "top"
+            return Entry(p, box.palm, kind)
+    return None
+
+
+def _start_kind(box: Box, x: float, y: float) -> str:
+    """How a path that is inside the box right after its start entered it: from on the top face
+    (a landing at the start), from another face (a side hit), or it started inside."""
+    if box.inside(x, y):
+        return "start"
+    if abs(x - box.cx) < box.half_width and y >= box.y_high - 1e-12 * max(1.0, abs(y)):
+        return "top"
+    return "side"
+
+
+def first_contact(path, boxes, a: float, b: float) -> Entry | None:
+    """Earliest entry of `path` into any of `boxes` on [a, b)."""
+    best = None
+    for box in boxes:
+        e = first_entry(path, box, a, b)
+        if e is not None and (best is None or e.tau < best.tau):
+            best = e
+    return best
+
+
+def palm_outline(row: Row, k: int, theta: float) -> np.ndarray:
+    """Corners of palm k's slab at angle theta (closed polygon, for drawing)."""
+    cx, cy = row.palm_top(k, theta)
+    hw, t = 0.5 * row.palm_width, row.palm_thickness
+    return np.array([[cx - hw, cy], [cx + hw, cy], [cx + hw, cy - t], [cx - hw, cy - t],
+                     [cx - hw, cy]])
+
+
+def face_guards(box_of, point_of):
+    """Guards of the four faces of a contact box for a numerically integrated path.
+
+    box_of(z) gives the Box at state z (a moving palm's box moves), point_of(z) the object's
+    reference point. Each guard is (g(t, z), direction, valid(z), kind): g changes sign where the
+    point crosses the face's line, and the crossing is a contact only where valid(z) holds
+    (the point is within the face's extent). A face line cannot be passed between two steps
+    without a sign change, unlike a penetration depth, which a fast path can skip."""
+
+    def top(t, z):
+        return point_of(z)[1] - box_of(z).y_high
+
+    def bottom(t, z):
+        return point_of(z)[1] - box_of(z).y_low
+
+    def left(t, z):
+        b = box_of(z)
+        return point_of(z)[0] - (b.cx - b.half_width)
+
+    def right(t, z):
+        b = box_of(z)
+        return point_of(z)[0] - (b.cx + b.half_width)
+
+    def within_x(z):
+        b = box_of(z)
+        return abs(point_of(z)[0] - b.cx) < b.half_width
+
+    def within_y(z):
+        b = box_of(z)
+        return b.y_low < point_of(z)[1] < b.y_high
+
+    return [(top, -1, within_x, "top"), (bottom, 1, within_x, "side"),
+            (left, 1, within_y, "side"), (right, -1, within_y, "side")]

@@ -1,0 +1,202 @@
+"""The numerically integrated phases of a manipulators run: the sliding carry and, with
+restitution > 0, the object bouncing above its moving palm. Mixed into manip_run.Run.
+
+Guards are of two sorts. Physics guards (normal force, slip velocity, support, stops, ...) are
+written positive while the phase holds and end it when they fall through zero (terminal
+events, located by solve_ivp to the integration tolerance). Contact with another palm uses the
+four face lines of its contact box (manip_geometry.face_guards): crossing a face line is a
+contact only within the face's extent, so these events do not stop the integration; the
+earliest valid one, if it precedes the terminal event, ends the phase.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from . import manip_phases as ph
+from .manip_geometry import face_guards
+
+SLIP_START_ATOLS = 100.0  # initial slip speed of a slip from relative rest, in units of atol
+
+
+class OdePhases:
+    """Sliding carry and bouncing phases (expects the attributes and helpers of Run)."""
+
+    def _integrate(self, rhs, t0, z0, physics, faces, max_step=math.inf):
+        """Integrate from (t0, z0) until the first physics guard or valid face contact.
+
+        physics: [(g(t, z), kind)] positive while the phase holds; a guard already negative at
+        t0 fires at t0. faces: [(g, direction, valid, kind)] from face_guards.
+        Returns (t, z, kind, sol) with kind None if nothing happened within the phase time."""
+        for fun, kind in physics:
+            if fun(t0, z0) < 0.0:
+                return t0, np.asarray(z0, dtype=float), kind, None
+        events = [_event(fun, -1, True) for fun, _ in physics]
+        events += [_event(fun, direction, False) for fun, direction, _, _ in faces]
+        method = "DOP853" if self.acc.rtol < 1e-8 else "RK45"
+        sol = solve_ivp(rhs, (t0, t0 + self.phase_time), z0, method=method, rtol=self.acc.rtol,
+                        atol=self.acc.atol, events=events, dense_output=self.record,
+                        max_step=max_step)
+        best = (sol.t[-1], np.asarray(sol.y[:, -1]), None)
+        if sol.status == 1:
+            i = next(i for i in range(len(physics)) if len(sol.t_events[i]))
+            best = (sol.t_events[i][0], sol.y_events[i][0], physics[i][1])
+        for n, (_, _, valid, kind) in enumerate(faces):
+            i = len(physics) + n
+            for t, z in zip(sol.t_events[i], sol.y_events[i]):
+                if t < best[0] and valid(z):
+                    best = (t, z, kind)
+        return best[0], best[1], best[2], sol
+
+    # ------------------------------------------------------------ sliding carry
+    def _sliding(self, t0, k, theta0, omega0, s0, sd0):
+        """Object sliding on palm k, state (th, th', s, s'): manip_phases.slide_accelerations."""
+        base = ph.SlideParams(self.m, self.M, self.mu, self.g, self.l, 1.0)
+        sgn = math.copysign(1.0, sd0) if sd0 != 0.0 else ph.slide_direction(theta0, omega0, base)
+        p = ph.SlideParams(self.m, self.M, self.mu, self.g, self.l, sgn)
+        if sd0 == 0.0:
+            # A slip from relative rest starts with zero relative acceleration (tan th = mu), so
+            # integration noise would cross s' = 0 at once. Start strictly inside the slip-stop
+            # guard, at a slip speed 100 atol, far below the integration error of any speed.
+            sd0 = sgn * SLIP_START_ATOLS * self.acc.atol
+        rec = self._stage(k)
+        if rec is not None:
+            rec["slipped"] = True
+        if ph.slide_accelerations(theta0, omega0, p)[3] <= 0.0:
+            return self._jam(t0, k, theta0, omega0, s0, sd0)
+        px, py = self.row.pivots[k]
+        w, W = self.row.body_width, self.row.palm_width
+        xb = ph.slide_force_point(sgn, self.mu, self.h)
+
+        def point(z):
+            return px + self.l * math.sin(z[0]) + z[2], py + self.l * math.cos(z[0])
+
+        physics = [
+            (lambda t, z: sgn * z[3], "slip_stop"),
+            (lambda t, z: ph.slide_accelerations(z[0], z[1], p)[1], "lift_off"),
+            (lambda t, z: ph.slide_accelerations(z[0], z[1], p)[3], "jam"),
+            (lambda t, z: min(0.5 * w, 0.5 * W - z[2]) - xb, "tip"),
+            (lambda t, z: xb - max(-0.5 * w, -0.5 * W - z[2]), "tip"),
+            (lambda t, z: 0.5 * W - abs(z[2]), "slid_off"),
+            (lambda t, z: z[1], "stall"),
+            (lambda t, z: self.fs - z[0], "stranded"),
+        ]
+        if k == self.n - 1 and theta0 < self.beta:
+            physics.append((lambda t, z: self.beta - z[0], "complete"))
+        faces = []
+        for box in self._obstacles(t0, k, near=px):
+            faces += [(f, d, v, (kind, box.palm))
+                      for f, d, v, kind in face_guards(lambda z, b=box: b, point)]
+        z0 = [theta0, omega0, s0, sd0]
+        te, z, kind, sol = self._integrate(ph.slide_rhs(p), t0, z0, physics, faces)
+        if self.record and sol is not None:
+            for t in np.linspace(t0, te, 60):
+                zz = sol.sol(t)
+                st = self._on_palm(k, zz[0], zz[1], zz[2], zz[3])
+                self._rec(t, st["x"], st["y"], st["vx"], st["vy"], zz[0], k + 1)
+        theta, omega, s, sd = (float(v) for v in z)
+        state = self._on_palm(k, theta, omega, s, sd)
+        if kind is None:
+            msg = sol.message if sol is not None and sol.status < 0 else "no event"
+            return self._fail(te, "timeout", k + 1, state, f"sliding on palm {k + 1}: {msg}")
+        if isinstance(kind, tuple):
+            face, j = kind
+            if face == "top":
+                return self._handover(te, k, theta, omega, s, sd, j)
+            return self._fail(te, "blocked", k + 1, state,
+                              f"the sliding object hits the side of palm {j + 1}")
+        if kind == "slip_stop":
+            if abs(math.tan(theta)) <= self.mu and self.g * math.cos(theta) > self.l * omega ** 2:
+                self._log(te, "stick", k + 1, state, state, f"sticks again at th = {theta:.6g}")
+                return lambda: self._stuck(te, k, theta, self.l * omega, s)
+            self._log(te, "slip", k + 1, state, state, "the slip reverses")
+            return lambda: self._sliding(te, k, theta, omega, s, 0.0)
+        if kind == "jam":
+            return self._jam(te, k, theta, omega, s, sd)
+        if kind == "complete":
+            return self._complete(te, k, theta, omega, s, sd)
+        if kind == "stranded":
+            return self._stop_with_object(te, k, omega, s, sd)
+        details = {
+            "lift_off": f"the normal force vanishes while sliding, th = {theta:.6g} rad",
+            "tip": f"sliding friction puts the contact force at {xb:+.4g} m from the centre, "
+                   f"outside the support (offset {s:+.4g} m)",
+            "slid_off": f"the object's centre passed the end of palm {k + 1}",
+            "stall": f"the palm stops at th = {theta:.6g} rad and swings back",
+        }
+        return self._fail(te, kind, k + 1, state, details[kind])
+
+    def _jam(self, t, k, theta, omega, s, sd):
+        """The sliding contact cannot continue (M + m c sin th <= 0): a tangential impact."""
+        st = self._on_palm(k, theta, omega, s, sd)
+        imp = ph.impact(st["vx"], st["vy"], self.l * omega, theta, m=self.m, inv_M=1.0 / self.M,
+                        mu=self.mu, eps=0.0)
+        if imp.jam or not imp.stick or imp.w <= 0.0:
+            return self._fail(t, "impact_jam", k + 1, st,
+                              "the sliding contact jams and no sticking impulse resolves it")
+        self._log(t, "jam", k + 1, st, self._on_palm(k, theta, imp.w / self.l, s),
+                  "tangential impact: the contact sticks")
+        return lambda: self._stuck(t, k, theta, imp.w, s)
+
+    # ------------------------------------------------------------ bouncing (restitution > 0)
+    def _bouncing(self, t0, k, x, y, vx, vy, theta, omega):
+        """Object in flight above its palm k, which swings freely (l th'' = g sin th)."""
+        g, l = self.g, self.l
+
+        def rhs(t, z):
+            return [z[2], z[3], 0.0, -g, z[5], g * math.sin(z[4]) / l]
+
+        def point(z):
+            return z[0], z[1]
+
+        physics = [(lambda t, z: z[4] + self.alpha, "back_stop"),
+                   (lambda t, z: self.fs - z[4], "front_stop"),
+                   (lambda t, z: z[1] - self.y_floor, "fell_clear")]
+        faces = [(f, d, v, (kind, k))
+                 for f, d, v, kind in face_guards(lambda z: self.row.box(k, z[4]), point)]
+        # The object leaves the carrier's top face at t0: its gap to that face starts at zero.
+        # gap / (t - t0) starts at the separation speed instead and has the same later root.
+        gap, gn0 = faces[0][0], vy + l * omega * math.sin(theta)
+        faces[0] = ((lambda t, z: gap(t, z) / (t - t0) if t > t0 else gn0),) + faces[0][1:]
+        for box in self._obstacles(t0, k):
+            faces += [(f, d, v, (kind, box.palm))
+                      for f, d, v, kind in face_guards(lambda z, b=box: b, point)]
+        z0 = [x, y, vx, vy, theta, omega]
+        te, z, kind, sol = self._integrate(rhs, t0, z0, physics, faces,
+                                           max_step=0.05 * math.sqrt(l / g))
+        if self.record and sol is not None:
+            ts = np.linspace(t0, te, 40)
+            zz = sol.sol(ts)
+            self._rec(ts, zz[0], zz[1], zz[2], zz[3], zz[4], k + 1)
+        z = [float(v) for v in z]
+        state = {"x": z[0], "y": z[1], "vx": z[2], "vy": z[3], "theta": z[4], "omega": z[5]}
+        if kind is None:
+            return self._fail(te, "timeout", k + 1, state, "no event while bouncing")
+        if kind in ("back_stop", "front_stop"):
+            stop = -self.alpha if kind == "back_stop" else self.fs
+            self.rest_angle[k], self.rest_since[k] = stop, te
+            self._log(te, kind, k + 1, state, dict(state, theta=stop, omega=0.0),
+                      f"palm {k + 1} stopped while the object is in the air")
+            return lambda: self._flight(te, z[0], z[1], z[2], z[3], stage=k + 1)
+        if kind == "fell_clear":
+            return self._fail(te, "fell_clear", k + 1, state, "fell past the row")
+        face, j = kind
+        if face != "top":
+            return self._fail(te, "blocked", k + 1, state, f"hits the side of palm {j + 1}")
+        if j == k:
+            return self._impact(te, k, z[4], l * z[5], z[0], z[1], z[2], z[3],
+                                log_as="rebound", stage=k + 1, before=state, at_rest=False)
+        self._release(k, te, z[4], l * z[5])
+        return self._impact(te, j, self.rest_angle[j], 0.0, z[0], z[1], z[2], z[3],
+                            log_as="landing", stage=k + 1, before=state, at_rest=True)
+
+
+def _event(fun, direction, terminal):
+    def ev(t, z):
+        return fun(t, z)
+
+    ev.direction, ev.terminal = direction, terminal
+    return ev

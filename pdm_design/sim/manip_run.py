@@ -1,0 +1,398 @@
+"""One run of the manipulators event simulator: bookkeeping, flights, impacts and stuck carries.
+
+The numerically integrated phases (sliding carry, bouncing) are in manip_ode.py; the pure phase
+functions in manip_phases.py; the geometry in manip_geometry.py. Each phase method returns the
+next phase as a callable, or None when the run has ended (the driver loops until then).
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+
+import numpy as np
+
+from . import manip_phases as ph
+from .core import Event, Outcome, SimulationResult
+from .manip_geometry import Arc, Ballistic, build_row, first_contact
+from .manip_ode import OdePhases
+
+FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object is given up
+ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact
+PHASE_TIME = 200.0  # longest integrated phase, in units of sqrt(l / g)
+EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chattering)
+
+
+class Run(OdePhases):
+    """Mutable bookkeeping of one run around the pure phase functions."""
+
+    def __init__(self, scene, design, stages, offsets, acc, record):
+        self.row = build_row(scene, design, stages, offsets)
+        self.acc, self.record = acc, record
+        self.g, self.l = scene.gravity, design.link_length
+        self.m = scene.body.mass
+        self.M = scene.body.mass / design.mass_ratio
+        self.mu, self.eps = scene.palm.friction, scene.palm.restitution
+        self.alpha, self.beta, self.fs = design.alpha, design.beta, scene.palm.front_stop
+        self.h = scene.body.height
+        self.n = stages
+        self.initial = scene.initial
+        self.rest_angle = [-self.alpha] * stages
+        self.rest_since = [-math.inf] * stages
+        self.y_floor = min(p[1] for p in self.row.pivots) - FALL_DEPTH * self.l
+        self._pivot_order = sorted(range(stages), key=lambda j: self.row.pivots[j][0])
+        self._pivot_x = [self.row.pivots[j][0] for j in self._pivot_order]
+        self.events: list[Event] = []
+        self.palm_events: list[Event] = []
+        self.stages: list[dict] = []
+        self.passed = 0
+        self.failure: Event | None = None
+        self.completed = False
+        self.traj = {k: [] for k in ("time", "x", "y", "vx", "vy", "theta", "manipulator")}
+        self.zeno_speed = ZENO_FRACTION * math.sqrt(self.g * self.l)
+        self.phase_time = PHASE_TIME * math.sqrt(self.l / self.g)
+
+    # ------------------------------------------------------------ driver and bookkeeping
+    def run(self) -> SimulationResult:
+        (x, y), (vx, vy) = self.initial.position, self.initial.velocity
+        step = lambda: self._flight(0.0, x, y, vx, vy, stage=0)  # noqa: E731
+        budget = EVENTS_PER_STAGE * (self.n + 1)
+        while step is not None:
+            budget -= 1
+            if budget < 0:
+                t = self.events[-1].time if self.events else 0.0
+                self._fail(t, "too_many_events", 0, {}, "event budget exhausted (chattering?)")
+                break
+            step = step()
+        t_end = self.events[-1].time if self.events else 0.0
+        log = sorted(self.events + [e for e in self.palm_events if e.time <= t_end],
+                     key=lambda e: e.time)
+        outcome = Outcome(completed=self.completed, stages_passed=self.passed,
+                          failure=self.failure)
+        traj = {k: list(v) for k, v in self.traj.items()} if self.record else {}
+        stages = [{k: _plain(v) for k, v in rec.items()} for rec in self.stages]
+        return SimulationResult("manipulators", outcome, stages, log, self.acc, traj)
+
+    def _log(self, time, kind, stage, before, after, detail="", failure=False):
+        ev = Event(float(time), kind, int(stage), _floats(before), _floats(after), detail, failure)
+        self.events.append(ev)
+        if failure:
+            self.failure = ev
+        return ev
+
+    def _fail(self, time, kind, stage, before, detail):
+        self._log(time, kind, stage, before, {}, detail, failure=True)
+        return None
+
+    def _rec(self, t, x, y, vx, vy, theta, manip):
+        if not self.record:
+            return
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        for key, val in (("time", t), ("x", x), ("y", y), ("vx", vx), ("vy", vy),
+                         ("theta", theta), ("manipulator", manip)):
+            self.traj[key].extend(np.broadcast_to(np.asarray(val, dtype=float), t.shape).tolist())
+
+    def _obstacles(self, t, carrier=None, near=None):
+        """Contact boxes of palms at rest by time t (not the carrier), optionally only those
+        within reach of an object carried by a palm whose pivot is at x = near (the object is
+        within l + W/2 of that pivot, a palm's box within l + (W + w)/2 of its own pivot)."""
+        if near is None:
+            candidates = range(self.n)
+        else:
+            reach = 2.0 * self.l + 1.5 * self.row.palm_width + self.row.body_width
+            lo = bisect.bisect_left(self._pivot_x, near - reach)
+            hi = bisect.bisect_right(self._pivot_x, near + reach)
+            candidates = self._pivot_order[lo:hi]
+        out = []
+        for j in candidates:
+            if j == carrier or self.rest_since[j] > t:
+                continue
+            out.append(self.row.box(j, self.rest_angle[j]))
+        return out
+
+    def _release(self, k, t, theta, w):
+        """Palm k, now empty, swings on alone from (theta, w) to one of its stops; it is an
+        obstacle again once it is there."""
+        dt, stop, speed = ph.free_palm_arrival(theta, w, gravity=self.g, link_length=self.l,
+                                               back_stop=-self.alpha, front_stop=self.fs,
+                                               tol=self.acc.event_tol)
+        self.rest_angle[k], self.rest_since[k] = stop, t + dt
+        if math.isfinite(dt):
+            kind = "front_stop" if stop == self.fs else "back_stop"
+            self.palm_events.append(Event(
+                float(t + dt), kind, k + 1, {"theta": float(stop), "omega": speed / self.l},
+                {"theta": float(stop), "omega": 0.0}, f"empty palm {k + 1} stopped"))
+
+    def _on_palm(self, k, theta, omega, s, sd=0.0):
+        x, y, vx, vy = ph.object_state_on_palm(self.row.pivots[k], theta, omega, s, sd, self.l)
+        return {"x": x, "y": y, "vx": vx, "vy": vy, "theta": theta, "omega": omega, "offset": s}
+
+    def _stage(self, k):
+        return self.stages[-1] if self.stages and self.stages[-1]["manipulator"] == k + 1 else None
+
+    # ------------------------------------------------------------ flight among resting palms
+    def _flight(self, t0, x, y, vx, vy, stage):
+        path = Ballistic(t0, x, y, vx, vy, self.g)
+        roots = path.roots_y(self.y_floor, t0, math.inf)
+        t_floor = roots[-1] if y > self.y_floor and roots else t0
+        entry = first_contact(path, self._obstacles(t0), t0, t_floor)
+        t_hit = entry.tau if entry else t_floor
+        arriving = [r for r in self.rest_since if t0 < r < t_hit]
+        if arriving:  # a swinging palm comes to rest during the flight: it becomes an obstacle
+            t1 = min(arriving)
+            self._rec_flight(path, t0, t1)
+            return lambda: self._flight(t1, *path.at(t1), stage=stage)
+        self._rec_flight(path, t0, t_hit)
+        xe, ye, vxe, vye = path.at(t_hit)
+        state = {"x": xe, "y": ye, "vx": vxe, "vy": vye}
+        if entry is None:
+            return self._fail(t_hit, "fell_clear", stage, state,
+                              f"fell {FALL_DEPTH:g} link lengths below the lowest pivot")
+        j = entry.palm
+        if entry.kind != "top":
+            where = "side" if entry.kind == "side" else "inside"
+            return self._fail(t_hit, "blocked", stage, state,
+                              f"hit the {where} of palm {j + 1} in flight")
+        return self._impact(t_hit, j, self.rest_angle[j], 0.0, xe, ye, vxe, vye,
+                            log_as="landing", stage=stage, before=state, at_rest=True)
+
+    def _rec_flight(self, path, t0, t1):
+        if self.record and t1 > t0:
+            ts = np.linspace(t0, t1, 60)
+            x, y, vx, vy = path.at(ts)
+            self._rec(ts, x, y, vx, vy, np.nan, 0)
+
+    # ------------------------------------------------------------ impacts
+    def _resolve(self, vx, vy, w, theta, eps, at_rest):
+        """Impact on palm at theta; a palm at rest on a stop that the impulse pushes into the stop
+        is held there (the stop takes the impulse: infinite effective mass)."""
+        imp = ph.impact(vx, vy, w, theta, m=self.m, inv_M=1.0 / self.M, mu=self.mu, eps=eps)
+        if imp.jam or not at_rest:
+            return imp, False
+        if (theta <= -self.alpha and imp.w < 0.0) or (theta >= self.fs and imp.w > 0.0):
+            return ph.impact(vx, vy, 0.0, theta, m=self.m, inv_M=0.0, mu=self.mu, eps=eps), True
+        return imp, imp.w == 0.0
+
+    def _impact(self, t, j, theta, w, x, y, vx, vy, *, log_as, stage, before, at_rest):
+        """The object meets palm j (angle theta, speed w) from above: impact, then what follows.
+
+        log_as: "landing" (from a flight), "handover" (from the previous palm), "rebound" (onto
+        the palm it bounced off), "stop" (its palm has just been stopped by the front stop)."""
+        imp, held = self._resolve(vx, vy, w, theta, self.eps, at_rest)
+        gn = imp.vy + imp.w * math.sin(theta)
+        bounce = self.eps > 0.0 and not imp.jam and gn > self.zeno_speed
+        if self.eps > 0.0 and not imp.jam and not bounce:  # too slow a bounce: contact persists
+            imp, held = self._resolve(vx, vy, w, theta, 0.0, at_rest)
+        if imp.jam:
+            return self._fail(t, "impact_jam", j + 1, before,
+                              f"landing on palm {j + 1}: no consistent sliding impact")
+        cx, y = self.row.palm_top(j, theta)  # the contact is on the palm's top by definition
+        offset = x - cx
+        after = {"x": x, "y": y, "vx": imp.vx, "vy": imp.vy, "theta": theta,
+                 "omega": imp.w / self.l, "offset": offset, "palm": j + 1}
+        rec = self._stage(j)
+        if log_as == "handover" or (log_as == "landing" and rec is None):
+            rec = self._new_stage(j, t, offset, vx, vy, imp)
+        elif log_as in ("landing", "rebound"):
+            rec["bounces"] += 1
+        if log_as == "handover":
+            self._log(t, "handover", stage, before, after, f"palm {stage} -> palm {j + 1}")
+        elif log_as == "stop":
+            self._log(t, "front_stop", j + 1, before, after,
+                      f"palm {j + 1} stopped carrying the object")
+        else:
+            self._log(t, "landing", j + 1, before, after,
+                      f"on palm {j + 1} at {offset:+.4g} m from its centre, "
+                      f"{'sticking' if imp.stick else 'sliding'}")
+        if log_as in ("landing", "handover"):
+            self.passed = max(self.passed, j)
+        if rec is not None and not imp.stick:
+            rec["slipped"] = True
+        lo, hi = self.row.support(offset)
+        xb = ph.impact_force_point(imp.pt, imp.pn, self.h) if imp.pn > 0.0 else 0.0
+        if not lo <= xb <= hi:
+            return self._fail(t, "tip", j + 1, after,
+                              f"the impulse crosses the base at {xb:+.4g} m, outside the "
+                              f"support [{lo:+.4g}, {hi:+.4g}] m")
+        if bounce:
+            self._log(t, "bounce", j + 1, before, after, f"separating at {gn:.4g} m/s")
+            if held:
+                self.rest_angle[j], self.rest_since[j] = theta, t
+                return lambda: self._flight(t, x, y, imp.vx, imp.vy, stage=j + 1)
+            self.rest_since[j] = math.inf
+            return lambda: self._bouncing(t, j, x, y, imp.vx, imp.vy, theta, imp.w / self.l)
+        if held:
+            self.rest_angle[j], self.rest_since[j] = theta, t
+            return self._held_slide(t, j, theta, offset, imp.vx, after)
+        if imp.w < 0.0:
+            return self._fail(t, "stall", j + 1, after,
+                              f"the impact drives palm {j + 1} backwards with the object")
+        self.rest_since[j] = math.inf
+        if imp.stick:
+            return lambda: self._stuck(t, j, theta, imp.w, offset)
+        sd = imp.vx - imp.w * math.cos(theta)
+        return lambda: self._sliding(t, j, theta, imp.w / self.l, offset, sd)
+
+    def _new_stage(self, j, t, offset, vx, vy, imp):
+        loss = (0.5 * self.m * (vx * vx + vy * vy - imp.vx ** 2 - imp.vy ** 2)
+                - 0.5 * self.M * imp.w ** 2)
+        rec = {"manipulator": j + 1, "landing_time": t, "landing_offset": offset,
+               "landing_vx": vx, "landing_vy": vy, "landing_speed": imp.w,
+               "landing_stick": bool(imp.stick), "impact_loss": loss,
+               "handover_time": None, "handover_speed": None, "handover_angle": None,
+               "handover_vx": None, "handover_vy": None, "release_speed": None,
+               "slipped": not imp.stick, "bounces": 0}
+        self.stages.append(rec)
+        return rec
+
+    def _held_slide(self, t, j, theta, s, sd, state):
+        """The object on palm j held by a stop (static, horizontal top), sliding at sd.
+
+        At the back stop friction may drag the palm off its stop (then a sliding carry starts);
+        otherwise the object decelerates at mu g and stops on the palm (stall at the back stop,
+        stranded at the front stop), or reaches the palm's end first (tip over the edge when
+        mu > 0, slid_off when frictionless)."""
+        at_back = theta <= -self.alpha
+        stuck_kind = "stall" if at_back else "stranded"
+        where = f"palm {j + 1} held by its {'back' if at_back else 'front'} stop"
+        if sd == 0.0:
+            return self._fail(t, stuck_kind, j + 1, state, f"the object rests on {where}")
+        sgn = math.copysign(1.0, sd)
+        if at_back:
+            p = ph.SlideParams(self.m, self.M, self.mu, self.g, self.l, sgn)
+            if ph.slide_accelerations(theta, 0.0, p)[0] > 0.0:  # friction drags the palm along
+                self.rest_since[j] = math.inf
+                return lambda: self._sliding(t, j, theta, 0.0, s, sd)
+        xb = ph.slide_force_point(sgn, self.mu, self.h)
+        lo, hi = self.row.support(s)
+        if not lo <= xb <= hi:
+            return self._fail(t, "tip", j + 1, state, f"sliding on {where}: friction tips it")
+        dist = abs(sgn * 0.5 * self.row.palm_width - xb - s)
+        decel = self.mu * self.g
+        if decel > 0.0 and sd * sd < 2.0 * decel * dist:
+            return self._fail(t + abs(sd) / decel, stuck_kind, j + 1, state,
+                              f"slides {sd * sd / (2 * decel):.4g} m and stops on {where}")
+        tau = dist / abs(sd) if decel == 0.0 else (
+            (abs(sd) - math.sqrt(sd * sd - 2.0 * decel * dist)) / decel)
+        kind = "tip" if self.mu > 0.0 else "slid_off"
+        return self._fail(t + tau, kind, j + 1, state,
+                          f"slides to the end of {where} and goes over its edge")
+
+    def _handover(self, t, k, theta, omega, s, sd, j):
+        """The object on palm k meets palm j's top: record, release palm k, land on palm j."""
+        before = self._on_palm(k, theta, omega, s, sd)
+        rec = self._stage(k)
+        vx, vy = before["vx"], before["vy"]
+        if rec is not None:
+            rec.update(handover_time=t, handover_speed=math.hypot(vx, vy), handover_angle=theta,
+                       handover_vx=vx, handover_vy=vy, release_speed=self.l * omega)
+        self.passed = max(self.passed, k + 1)
+        self._release(k, t, theta, self.l * omega)
+        return self._impact(t, j, self.rest_angle[j], 0.0, before["x"], before["y"], vx, vy,
+                            log_as="handover", stage=k + 1, before=before, at_rest=True)
+
+    def _stop_with_object(self, t, k, omega, s, sd):
+        """Palm k reaches its front stop carrying the object: the palm stops (plastic); the
+        object, moving down along t(front_stop), then meets the stopped palm."""
+        st = self._on_palm(k, self.fs, omega, s, sd)
+        self.rest_angle[k], self.rest_since[k] = self.fs, t
+        return self._impact(t, k, self.fs, 0.0, st["x"], st["y"], st["vx"], st["vy"],
+                            log_as="stop", stage=k + 1, before=st, at_rest=True)
+
+    def _complete(self, t, k, theta, omega, s, sd=0.0):
+        state = self._on_palm(k, theta, omega, s, sd)
+        rec = self._stage(k)
+        if rec is not None:
+            rec.update(handover_angle=theta)
+        self.passed, self.completed = self.n, True
+        self._log(t, "complete", k + 1, state, state,
+                  f"the last manipulator ({k + 1}) carried the object to beta")
+        return None
+
+    # ------------------------------------------------------------ stuck carry (closed form)
+    def _stuck(self, t0, k, theta0, v0, s):
+        """Object stuck on palm k from (theta0, speed v0): every guard is a function of theta,
+        located by root finding; the time of an angle is the quadrature of l dth / v(th)."""
+        g, l, tol = self.g, self.l, self.acc.event_tol
+        if v0 <= 0.0:
+            return self._fail(t0, "stall", k + 1, self._on_palm(k, theta0, v0 / l, s),
+                              "the palm is not moving forward")
+        turn = ph.turning_angle(theta0, v0, gravity=g, link_length=l)
+        ends = [(self.fs, "stranded")]
+        if turn is not None:
+            ends.append((turn, "stall"))
+        if k == self.n - 1 and theta0 < self.beta:
+            ends.append((self.beta, "complete"))
+        theta_end, end_kind = min(ends)
+        px, py = self.row.pivots[k]
+        entry = first_contact(Arc(px + s, py, l), self._obstacles(t0, k, near=px), theta0,
+                              theta_end)
+        candidates = [(theta_end, 5, end_kind)]
+        if entry is not None:
+            candidates.append((entry.tau, 4, "handover" if entry.kind == "top" else "blocked"))
+        cap = min(theta_end, 0.5 * math.pi - 1e-9)  # slip and lift-off always come before pi/2
+        lo, hi = self.row.support(s)
+        guards = [
+            (lambda th: ph.lift_off_guard(th, theta0, v0, gravity=g, link_length=l), 0,
+             "lift_off"),
+            (lambda th: ph.stuck_force_point(th, self.h) - hi, 1, "tip"),
+            (lambda th: lo - ph.stuck_force_point(th, self.h), 1, "tip"),
+            (lambda th: math.tan(th) - self.mu, 2, "slip"),
+            (lambda th: -math.tan(th) - self.mu, 2, "slip"),
+        ]
+        for fun, prio, kind in guards:
+            th = ph.first_crossing(fun, theta0, cap, tol, breaks=(0.0,))
+            if th is not None:
+                candidates.append((th, prio, kind))
+        theta_e, _, kind = min(candidates)
+        te = t0 + ph.swing_time(theta0, theta_e, theta0, v0, gravity=g, link_length=l, tol=tol,
+                                turn=turn if kind == "stall" else None)
+        omega_e = math.sqrt(max(ph.speed_squared(theta_e, theta0, v0, gravity=g,
+                                                 link_length=l), 0.0)) / l
+        self._rec_stuck(t0, k, theta0, v0, s, theta_e, turn if kind == "stall" else None)
+        state = self._on_palm(k, theta_e, omega_e, s)
+        if kind == "handover":
+            return self._handover(te, k, theta_e, omega_e, s, 0.0, entry.palm)
+        if kind == "complete":
+            return self._complete(te, k, theta_e, omega_e, s)
+        if kind == "stranded":
+            return self._stop_with_object(te, k, omega_e, s, 0.0)
+        if kind == "slip":
+            self._log(te, "slip", k + 1, state, state,
+                      f"|tan th| = {abs(math.tan(theta_e)):.6g} reaches mu = {self.mu:g}")
+            return lambda: self._sliding(te, k, theta_e, omega_e, s, 0.0)
+        details = {
+            "lift_off": f"v^2 = g l cos th at th = {theta_e:.6g} rad",
+            "tip": f"the contact force crosses the base at "
+                   f"{ph.stuck_force_point(theta_e, self.h):+.4g} m, outside the support "
+                   f"[{lo:+.4g}, {hi:+.4g}] m, th = {theta_e:.6g} rad",
+            "stall": f"the palm stops at th = {theta_e:.6g} rad before the top and swings back",
+            "blocked": f"the carried object hits the side of palm "
+                       f"{entry.palm + 1 if entry else '?'}",
+        }
+        return self._fail(te, kind, k + 1, state, details[kind])
+
+    def _rec_stuck(self, t0, k, theta0, v0, s, theta_e, turn):
+        if not self.record or theta_e <= theta0:
+            return
+        g, l = self.g, self.l
+        ths = np.linspace(theta0, theta_e, 40)
+        t = t0
+        for i, th in enumerate(ths):
+            if i:
+                t += ph.swing_time(ths[i - 1], th, theta0, v0, gravity=g, link_length=l,
+                                   tol=1e-10, turn=turn if i == len(ths) - 1 else None)
+            v = math.sqrt(max(ph.speed_squared(th, theta0, v0, gravity=g, link_length=l), 0.0))
+            st = self._on_palm(k, th, v / l, s)
+            self._rec(t, st["x"], st["y"], st["vx"], st["vy"], th, k + 1)
+
+
+def _plain(value):
+    """Stage-record values as plain Python values (JSON-ready)."""
+    if isinstance(value, (bool, int, str)) or value is None:
+        return value
+    return float(value)
+
+
+def _floats(state: dict) -> dict:
+    return {k: float(v) for k, v in state.items() if v is not None}
