@@ -52,4 +52,51 @@ def design(spec: Spec, *, verify: bool = True, accuracy: str | None = None) -> D
     """Solve the spec: evaluate a fixed design, or optimise the free variables; verify."""
     if not spec.free_variables:
         return evaluate(spec, verify=verify, accuracy=accuracy)
-    raise NotImplementedError("optimising free design variables is not available yet")
+    return optimize(spec, verify=verify, accuracy=accuracy)
+
+
+def optimize(spec: Spec, *, verify: bool = True, accuracy: str | None = None,
+             starts: int = 8) -> DesignOutcome:
+    """Choose the free design variables with IPOPT (multistart), then verify the answer and
+    its claimed tolerance box in the simulator."""
+    from .solve import optimize as solve
+
+    result = solve(spec, starts=starts)
+    point = spec.design_at({name: result.design[name] for name in spec.free_variables})
+    analysis = analyse(spec.scene, point)
+    violations = tuple(v.text for v in result.violations) + tuple(analysis.problems)
+    verification = None
+    if verify and result.status.is_success:
+        verification = _verify_with_box(spec, point, analysis, result.tolerance, accuracy)
+    solver = result.stats.to_json() | {"status": result.status.value, "message": result.message}
+    objective = {"weights": dict(spec.objective), "value": result.objective,
+                 "terms": result.objectives}
+    tolerance = None
+    if result.tolerance is not None:
+        tolerance = dict(result.tolerance)
+        if result.linearised is not None:
+            tolerance["linearised"] = result.linearised.to_json()
+    return DesignOutcome(spec=spec, status=result.status, analysis=analysis,
+                         violations=violations, objective=objective, tolerance=tolerance,
+                         verification=verification, solver=solver)
+
+
+def _verify_with_box(spec, point, analysis, tolerance, accuracy) -> dict:
+    """Nominal run plus, when a tolerance is claimed, its corners and random samples."""
+    from .verify import verify_nominal
+
+    nominal = verify_nominal(spec, point, analysis, accuracy=accuracy)
+    if not tolerance:
+        return nominal
+    from .verify_tolerance import verify_tolerance
+
+    box = verify_tolerance(spec, point, tolerance, samples=spec.verification.samples,
+                           accuracy=accuracy)
+    failures = nominal["failures"] + [
+        f"tolerance refuted: {f['build']} fails ({f['failure']})" for f in box["failures"]]
+    summary = nominal["summary"] if nominal["passed"] else "; ".join(nominal["failures"])
+    summary += (f"; tolerance box confirmed by {box['samples']} simulated builds"
+                if box["passed"] else f"; {len(box['failures'])} of {box['samples']} builds "
+                "inside the claimed tolerance box fail")
+    return nominal | {"passed": not failures, "summary": summary, "failures": failures,
+                      "samples": 1 + box["samples"], "tolerance_failures": box["failures"]}

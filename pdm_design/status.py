@@ -14,6 +14,7 @@ class Status(Enum):
     ITERATION_LIMIT = "iteration_limit"
     INFEASIBLE = "infeasible"
     SOLVER_ERROR = "solver_error"
+    UNVERIFIED = "unverified"
 
     @property
     def message(self) -> str:
@@ -38,6 +39,9 @@ _MESSAGES = {
     "guess closer to the answer.",
     Status.INFEASIBLE: "No design meets every requirement: relax the requirements listed as "
     "violated, widen the bounds, or change the scene.",
+    Status.UNVERIFIED: "IPOPT converged, but an independent re-check of the answer (closed-form "
+    "analysis or offsets sampled inside the tolerance box) failed: do not build it; see the "
+    "checks and report the spec.",
     Status.SOLVER_ERROR: "The solver failed (numerical trouble): check the scene for degenerate "
     "values and report the spec if it looks sound.",
 }

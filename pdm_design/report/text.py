@@ -28,6 +28,18 @@ def _rows(values: dict) -> list[str]:
     return out
 
 
+def _tolerance_rows(tolerance: dict) -> list[str]:
+    box = {k: v for k, v in tolerance.items() if k != "linearised"}
+    lines = [f"  {axis:<6} +-{value * 1e3:.2f} mm (robust NLP)" for axis, value in box.items()]
+    linear = tolerance.get("linearised")
+    if linear:
+        per_axis = ", ".join(f"{k} +-{v * 1e3:.2f} mm" for k, v in linear["box"].items())
+        lines.append(f"  linearised safe set (cvxpy): square +-{linear['square'] * 1e3:.2f} mm; "
+                     f"widest box {per_axis}; ellipsoid semi-axes "
+                     f"{linear['ellipsoid'].get('min_semi_axis', float('nan')) * 1e3:.2f} mm and up")
+    return lines
+
+
 def optimize_text(outcome: DesignOutcome) -> str:
     spec, analysis = outcome.spec, outcome.analysis
     free = set(spec.free_variables)
@@ -45,13 +57,17 @@ def optimize_text(outcome: DesignOutcome) -> str:
         flag = "ok" if value >= need else f"VIOLATED (needs >= {need:g})"
         lines.append(f"  {name:<{width}}  {value:+.4f}  {flag}")
     if outcome.tolerance:
-        lines += ["", "tolerance:", *_rows(outcome.tolerance)]
+        lines += ["", "tolerance (half-widths of the box every pivot or step may be off by):"]
+        lines += _tolerance_rows(outcome.tolerance)
     if outcome.verification is not None:
         v = outcome.verification
         lines += ["", f"verification: {'passed' if v.get('passed') else 'FAILED'}"
                   f" - {v.get('summary', '')}"]
     if outcome.solver:
-        lines += ["", "solver:", *_rows(outcome.solver)]
+        stats = outcome.solver
+        lines += ["", f"solver: IPOPT {stats['status']}, {stats['iterations']} iterations, "
+                  f"{1e3 * stats['solve_time']:.2f} ms per solve; {stats['starts']} starts, "
+                  f"{1e3 * stats['wall_time']:.0f} ms in all"]
     if outcome.violations:
         lines += ["", "why it does not work:", *(f"  - {v}" for v in outcome.violations)]
     return "\n".join(lines) + "\n"

@@ -1,0 +1,34 @@
+"""`formulate(spec)`: the scene's NLP, built once per spec and cached."""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import replace
+
+from . import manipulator_offsets, manipulators, stairs, stairs_errors
+from .common import Formulation, assemble, spec_key
+
+_CACHE: dict[str, Formulation] = {}
+_LOCK = threading.Lock()
+
+
+def formulate(spec, *, cache: bool = True) -> Formulation:
+    """The NLP of `spec` (cached by everything it depends on; requirements are parameters)."""
+    key = spec_key(spec)
+    with _LOCK:
+        if cache and key in _CACHE:
+            return _CACHE[key]
+    start = time.perf_counter()
+    module = stairs if spec.kind == "stairs" else manipulators
+    model, bounds, closed_forms = module.build(spec)
+    if spec.kind == "stairs":
+        model = replace(model, scenario=stairs_errors.scenario(spec, model, closed_forms))
+    else:
+        model = replace(model, scenario=manipulator_offsets.scenario(spec, model, closed_forms))
+    form = assemble(spec, model, key=key, bounds=bounds)
+    form = replace(form, build_time=time.perf_counter() - start)
+    if cache:
+        with _LOCK:
+            _CACHE[key] = form
+    return form

@@ -1,0 +1,282 @@
+"""What every scene's formulation shares: named conditions, the NLP assembly, the inverse map.
+
+A scene module (manipulators.py, stairs.py) writes each physical condition once, as CasADi SX
+expressions built from the closed forms in `pdm_design.physics`:
+
+    slack >= required_margin * scale        (capacity - demand >= r * capacity)
+
+so that slack / scale is the normalised margin reported by `analysis.result.margin` whenever the
+condition holds. `assemble` turns those conditions into one NLP
+
+    minimise  f(x)   subject to   lbx <= x <= ubx,   lbg <= g(x, p) <= ubg
+
+with x = [free design variables, auxiliary variables], p = the required margins (parameters, so one
+built NLP is re-solved for other requirements), and returns a frozen `Formulation`: the
+nlpsol-ready dict, bounds, the named condition list (for diagnosis) and the inverse map from a
+solution vector back to named design values.
+
+Condition kinds:
+* "margin": a physical condition the spec may put a required margin on (key = margin name). With
+  the `max_min_margin` objective the epigraph variable t enters as slack >= (required + t) scale,
+  so t is the smallest margin above its requirement, maximised.
+* "validity": must hold for the closed forms to describe the motion (e.g. the object lands moving
+  forward); slack >= 0, no margin, no epigraph.
+* "model": definitions of auxiliary variables (fixed point, invariant interval); never relaxed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from ..spec.model import Bounds
+
+OBJECTIVE_SENSE = {  # +1: larger is better, -1: smaller is better
+    "max_offset_tolerance": 1.0,
+    "max_min_margin": 1.0,
+    "min_drop": -1.0,
+    "fastest_convergence": -1.0,
+}
+
+MARGIN, VALIDITY, MODEL = "margin", "validity", "model"
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One condition slack >= required * scale (or slack == 0 when equality)."""
+
+    keys: tuple[str, ...]  # requirement keys (margin names); the largest requirement applies
+    where: str  # where / in which scenario, in words
+    slack: object
+    scale: object = 1.0
+    kind: str = MARGIN
+    equality: bool = False
+    epigraph: bool = True  # counts in max_min_margin
+
+    @property
+    def name(self) -> str:
+        return self.keys[0] if self.keys else "model"
+
+    @property
+    def label(self) -> str:
+        return f"{self.name} ({self.where})" if self.where else self.name
+
+
+@dataclass(frozen=True)
+class ConditionInfo:
+    """What the solve layer needs to know about row `index` of g (no symbols)."""
+
+    index: int
+    name: str
+    keys: tuple[str, ...]
+    where: str
+    kind: str
+    equality: bool
+
+    @property
+    def label(self) -> str:
+        return f"{self.name} ({self.where})" if self.where else self.name
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Conditions as explicit functions of the offsets / construction errors d (not worst cases):
+    slack(x, d) and scale(x, d) per condition, for linearisation (cvxpy) and for sampling checks."""
+
+    function: object  # casadi Function (x, d) -> (slack, scale)
+    offset_names: tuple[str, ...]
+    groups: dict[str, tuple[int, ...]]  # e.g. {"dx": (...), "dy": (...)}: columns of d per group
+    conditions: tuple[ConditionInfo, ...]
+
+
+@dataclass(frozen=True)
+class SceneModel:
+    """What a scene module hands to `assemble`."""
+
+    kind: str
+    design_symbols: dict[str, object]  # free design variable -> SX symbol
+    aux: tuple[tuple[str, object, float, float], ...]  # (name, SX, lower, upper)
+    conditions: tuple[Condition, ...]
+    objective_terms: dict[str, object]  # objective name -> SX (natural value)
+    tolerance_symbol: object | None  # SX of the box half-width when robust, else None
+    margin_symbol: object | None  # SX of the epigraph variable t when max_min_margin, else None
+    aux_init: object  # casadi Function design -> aux start values (aux order)
+    derived: dict[str, object]  # named design quantities (SX) reported with the design
+    tolerance_axes: tuple[str, ...]  # ("dx", "dy") or ("rise", "tread")
+    scenario: Scenario | None = None
+
+
+@dataclass(frozen=True)
+class Formulation:
+    """A spec's NLP, built once: hand `nlp` to casadi.nlpsol and solve many times."""
+
+    kind: str
+    key: str
+    nlp: dict
+    x_names: tuple[str, ...]
+    design_names: tuple[str, ...]  # free design variables (first entries of x)
+    lbx: np.ndarray
+    ubx: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+    p_names: tuple[str, ...]  # requirement keys
+    p_default: np.ndarray  # the spec's required margins
+    conditions: tuple[ConditionInfo, ...]
+    objective_names: tuple[str, ...]
+    weights: dict[str, float]
+    evaluate: object  # casadi Function (x, p) -> (slack, scale, objective terms, derived)
+    aux_init: object
+    tolerance_axes: tuple[str, ...]
+    tolerance_index: int | None  # index of the tolerance variable in x, if robust
+    margin_index: int | None
+    fixed: dict[str, float]  # design variables fixed by the spec
+    derived_names: tuple[str, ...]
+    norms: np.ndarray  # constant row normalisers of g
+    scenario: Scenario | None
+    build_time: float = 0.0
+    extras: dict = field(default_factory=dict)
+
+    @property
+    def n_design(self) -> int:
+        return len(self.design_names)
+
+    def parameters(self, requirements: dict[str, float] | None = None) -> np.ndarray:
+        """The parameter vector p (required margins by key) for a requirements mapping."""
+        if requirements is None:
+            return self.p_default.copy()
+        return np.array([float(requirements.get(n, 0.0)) for n in self.p_names])
+
+    def requirement(self, info: ConditionInfo, p) -> float:
+        """The required margin of one condition under parameters p (0 for non-margin kinds)."""
+        if info.kind != MARGIN or info.equality:
+            return 0.0
+        values = dict(zip(self.p_names, np.asarray(p, dtype=float).ravel()))
+        return max((values[k] for k in info.keys), default=0.0)
+
+    def design_values(self, x) -> dict[str, float]:
+        """Inverse map: the named design (free and fixed variables, and derived quantities)."""
+        x = np.asarray(x, dtype=float).ravel()
+        out = dict(self.fixed)
+        out.update({n: float(v) for n, v in zip(self.design_names, x[: self.n_design])})
+        derived = np.asarray(self.evaluate(x, self.p_default)[3]).ravel()
+        for name, value in zip(self.derived_names, derived):
+            out.setdefault(name, float(value))
+        return out
+
+    def start_vector(self, design: dict[str, float]) -> np.ndarray:
+        """A full start vector from free design values: auxiliaries from `aux_init`."""
+        xd = np.array([float(design[n]) for n in self.design_names])
+        aux = np.asarray(self.aux_init(xd)).ravel() if self.aux_init is not None else np.zeros(0)
+        x = np.concatenate([xd, aux])
+        return np.clip(x, self.lbx, self.ubx)
+
+
+def requirement_value(requirements: dict[str, float], keys: tuple[str, ...]) -> float:
+    return max((float(requirements.get(k, 0.0)) for k in keys), default=0.0)
+
+
+def design_inputs(spec, names: tuple[str, ...], defaults: dict[str, float]):
+    """SX symbols for the free design variables, floats for the fixed ones.
+
+    Returns (values: name -> SX or float, symbols: name -> SX, bounds: name -> (lo, hi, guess)).
+    `defaults` gives the value of a variable the spec leaves out (None: derived by the scene).
+    """
+    values, symbols, bounds = {}, {}, {}
+    for name in names:
+        entry = spec.design.get(name, defaults.get(name))
+        if isinstance(entry, Bounds):
+            sym = ca.SX.sym(name)
+            values[name] = symbols[name] = sym
+            bounds[name] = (entry.min, entry.max, entry.guess)
+        else:
+            values[name] = None if entry is None else float(entry)
+    return values, symbols, bounds
+
+
+def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
+    """The NLP of a scene model, with requirements as parameters."""
+    design_names = tuple(model.design_symbols)
+    aux_names = tuple(a[0] for a in model.aux)
+    x = ca.vertcat(*model.design_symbols.values(), *(a[1] for a in model.aux))
+    lbx = [bounds[n][0] for n in design_names] + [a[2] for a in model.aux]
+    ubx = [bounds[n][1] for n in design_names] + [a[3] for a in model.aux]
+
+    p_names = tuple(sorted({k for c in model.conditions if c.kind == MARGIN for k in c.keys}))
+    p = ca.SX.sym("required", len(p_names))
+    p_of = {n: p[i] for i, n in enumerate(p_names)}
+    t = model.margin_symbol if model.margin_symbol is not None else 0.0
+
+    # Row normalisers: |scale| of each condition at the spec's guess (constants).
+    guess = {n: bounds[n][2] for n in design_names}
+    scale_fn = ca.Function("s", [x], [ca.vertcat(*[c.scale for c in model.conditions])])
+    x_guess = np.concatenate([[guess[n] for n in design_names],
+                              np.asarray(model.aux_init([guess[n] for n in design_names])).ravel()
+                              if model.aux else []])
+    norms = np.abs(np.asarray(scale_fn(x_guess)).ravel())
+    norms = np.where(np.isfinite(norms) & (norms > 1e-9), norms, 1.0)
+
+    rows, lbg, ubg, infos = [], [], [], []
+    for i, c in enumerate(model.conditions):
+        if c.kind == MARGIN and not c.equality:
+            need = _fmax_all([p_of[k] for k in c.keys])
+            expr = c.slack - (need + (t if c.epigraph else 0.0)) * c.scale
+        else:
+            expr = c.slack
+        rows.append(expr / norms[i])
+        lbg.append(0.0)
+        ubg.append(0.0 if c.equality else math.inf)
+        infos.append(ConditionInfo(i, c.name, c.keys, c.where, c.kind, c.equality))
+
+    weights = {k: float(v) for k, v in spec.objective.items() if float(v) != 0.0}
+    f = 0.0
+    for name, w in weights.items():
+        f = f - w * OBJECTIVE_SENSE[name] * model.objective_terms[name]
+    terms = ca.vertcat(*[model.objective_terms[n] for n in OBJECTIVE_SENSE])
+    derived_names = tuple(model.derived)
+    evaluate = ca.Function(
+        "evaluate", [x, p],
+        [ca.vertcat(*[c.slack for c in model.conditions]),
+         ca.vertcat(*[c.scale for c in model.conditions]), terms,
+         ca.vertcat(*model.derived.values()) if model.derived else ca.SX(0, 1)],
+    )
+    x_names = design_names + aux_names
+    n_d = len(design_names)
+    tol_index = aux_names.index("tolerance") + n_d if "tolerance" in aux_names else None
+    m_index = aux_names.index("min_margin") + n_d if "min_margin" in aux_names else None
+    p_default = np.array([float(spec.requirements.get(n, 0.0)) for n in p_names])
+    fixed = {n: v for n, v in _fixed_values(spec).items()}
+    return Formulation(
+        kind=model.kind, key=key,
+        nlp={"x": x, "p": p, "f": f, "g": ca.vertcat(*rows)},
+        x_names=x_names, design_names=design_names,
+        lbx=np.array(lbx, dtype=float), ubx=np.array(ubx, dtype=float),
+        lbg=np.array(lbg), ubg=np.array(ubg),
+        p_names=p_names, p_default=p_default, conditions=tuple(infos),
+        objective_names=tuple(OBJECTIVE_SENSE), weights=weights, evaluate=evaluate,
+        aux_init=model.aux_init, tolerance_axes=model.tolerance_axes,
+        tolerance_index=tol_index, margin_index=m_index, fixed=fixed,
+        derived_names=derived_names, norms=norms, scenario=model.scenario,
+    )
+
+
+def _fmax_all(values):
+    if not values:
+        return 0.0
+    out = values[0]
+    for v in values[1:]:
+        out = ca.fmax(out, v)
+    return out
+
+
+def _fixed_values(spec) -> dict[str, float]:
+    return {k: float(v) for k, v in spec.design.items() if not isinstance(v, Bounds)}
+
+
+def spec_key(spec) -> str:
+    """A canonical text of everything in a spec that the NLP depends on (the build cache key)."""
+    design = sorted((k, repr(v)) for k, v in spec.design.items())
+    objective = sorted((k, float(v)) for k, v in spec.objective.items())
+    return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages))

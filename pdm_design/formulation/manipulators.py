@@ -1,0 +1,304 @@
+"""The manipulators NLP: periodic handover, first approach and robust offset tolerance.
+
+Every condition is written with the closed forms of `physics.manipulators` on CasADi symbols.
+
+Decision vector x = [free design variables (alpha, beta, link_length, mass_ratio, first_pivot_x,
+first_pivot_y: whichever the spec leaves free), S (periodic handover speed squared), u_lo, u_hi
+(an invariant interval of landing speeds), tau (offset box half-width, when robust), t (margin
+epigraph, when max_min_margin)].
+
+Robust tolerance (the semi-infinite constraint, docs/optimizer.md has the full argument).
+Every pivot K = 1..N (N = verification stages) may be off by (dx_K, dy_K), |dx_K|, |dy_K| <= tau.
+Instead of enumerating the 4^N corners we bound each quantity a condition depends on, soundly:
+
+* Handover into K happens at cos th_K = cos b + delta_K / l, delta_K = dy_K - dy_{K-1} in
+  [-2 tau, 2 tau]: th_K in [th_lo, th_hi] with cos th_lo = cos b + 2 tau / l, cos th_hi =
+  cos b - 2 tau / l.
+* Landing speeds u_K: u_{K+1} = F(u_K, th_{K+1}) is increasing in u_K. With M >= d2 ln F/d th2
+  on the whole interval (a closed-form curvature bound, M+ = max(M, 0)):
+  min_th F >= min(F(th_lo), F(th_hi)) exp(-M+ (th_hi - th_lo)^2 / 8)   (chord bound), and
+  max_th F <= max over the ends of F(b) exp(lambda (th - b) + M+ (th - b)^2 / 2)   (Taylor bound,
+  lambda = d ln F / d th at b by CasADi AD). When ln F is concave (M <= 0) the low bound is exact.
+  An interval [u_lo, u_hi] containing the
+  first landing speeds and mapped into itself by these bounds holds every u_K, for any number of
+  stages (so it covers the whole approach as well as the periodic orbit).
+* Landing position o_K on palm K (from the palm centre): telescoping the per-stage shifts,
+      o_K = o_1(dy_1) - dx_K + dx_1... = C0 + vx0 t(dy_1) - dx_K + sum_j g(delta_j),
+  g(delta) = l (sin th(delta) - sin b) is concave with g'(0) = -cot b, so sum_j g <= -cot b
+  (dy_K - dy_1) and sum_j g >= -cot b (dy_K - dy_1) + (K-1) min(r(2 tau), r(-2 tau)) with
+  r = g + cot b delta <= 0 concave. The first flight time t(dy_1) is concave in dy_1.
+* Conditions at an impact are A cos th + B sin th >= 0 in th (a sinusoid): on an interval shorter
+  than pi it holds everywhere iff it holds at both ends. The first impact's conditions are affine
+  in the fall speed Q: ends again.
+* Every other condition is monotone in the bounded quantity (worst end used).
+Bounds that are not exact are outer bounds, so the box found is sound (never too large).
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+
+from ..physics import manipulators as phys
+from ..scenes import ManipulatorsDesign
+from .common import MARGIN, MODEL, VALIDITY, Condition, SceneModel, design_inputs
+
+DEFAULTS = {"first_pivot_x": 0.0, "first_pivot_y": 0.0}
+START_CLEARANCE = 1e-3  # (x link length): the object starts at least this far above palm 1
+TOLERANCE_CAP = 10.0  # upper bound of the box half-width variable, in link lengths
+
+
+def build(spec):
+    """SceneModel and bounds of a manipulators spec."""
+    scene = spec.scene
+    values, symbols, bounds = design_inputs(spec, ManipulatorsDesign.VARIABLES, DEFAULTS)
+    robust = float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0
+    epigraph = float(spec.objective.get("max_min_margin", 0.0)) > 0.0
+    stages = spec.verification.stages
+
+    S = ca.SX.sym("periodic_speed_sq")
+    u_lo, u_hi = ca.SX.sym("landing_speed_lo"), ca.SX.sym("landing_speed_hi")
+    tau = ca.SX.sym("tolerance") if robust else 0.0
+    t = ca.SX.sym("min_margin") if epigraph else None
+    l_max = bounds["link_length"][1] if "link_length" in bounds else values["link_length"]
+
+    m = _Model(scene, values, stages)
+    conditions = m.conditions(S, u_lo, u_hi, tau, robust)
+    aux = [("periodic_speed_sq", S, 0.0, math.inf),
+           ("landing_speed_lo", u_lo, 0.0, math.inf),
+           ("landing_speed_hi", u_hi, 0.0, math.inf)]
+    if robust:
+        aux.append(("tolerance", tau, 0.0, TOLERANCE_CAP * l_max))
+    if epigraph:
+        aux.append(("min_margin", t, 0.0, 1.0))
+
+    xd = ca.vertcat(*symbols.values()) if symbols else ca.SX(0, 1)
+    start = m.aux_start()
+    if robust:
+        start.append(0.0)
+    if epigraph:
+        start.append(0.0)
+    aux_init = ca.Function("aux_init", [xd], [ca.vertcat(*start)])
+
+    objective_terms = {
+        "max_offset_tolerance": tau if robust else ca.SX(0.0),
+        "max_min_margin": t if epigraph else ca.SX(0.0),
+        "min_drop": m.pitch_y,
+        "fastest_convergence": m.c,
+    }
+    model = SceneModel(
+        kind="manipulators", design_symbols=symbols, aux=tuple(aux),
+        conditions=tuple(conditions), objective_terms=objective_terms,
+        tolerance_symbol=tau if robust else None, margin_symbol=t, aux_init=aux_init,
+        derived={}, tolerance_axes=("dx", "dy"),
+    )
+    return model, bounds, m
+
+
+class _Model:
+    """The closed forms of one manipulators scene on (possibly symbolic) design values."""
+
+    def __init__(self, scene, values, stages):
+        self.scene, self.stages = scene, stages
+        self.g = scene.gravity
+        self.a, self.b = values["alpha"], values["beta"]
+        self.l, self.q = values["link_length"], values["mass_ratio"]
+        self.pivot = (values["first_pivot_x"], values["first_pivot_y"])
+        a, b, l, q, g = self.a, self.b, self.l, self.q, self.g
+        self.k = phys.momentum_fraction(q)
+        self.c = phys.contraction(a, b, q)
+        self.D = phys.energy_gain_squared(a, b, gravity=g, link_length=l)
+        self.pitch_x, self.pitch_y = phys.pitch(a, b, l)
+        px1, py1 = phys.palm_centre(self.pivot[0], self.pivot[1], -a, l)
+        (x0, y0), (self.vx0, self.vy0) = scene.initial.position, scene.initial.velocity
+        self.H = y0 - py1  # fall height onto palm 1 (nominal)
+        self.C0 = x0 - px1  # object ahead of palm 1's centre at the start
+        self.top_needed = phys.top_speed_squared_needed(a, gravity=g, link_length=l)
+
+    # -- pieces --------------------------------------------------------------------------------
+    def fall_speed(self, dy):
+        """Vertical speed Q at the first landing when palm 1 is raised by dy."""
+        return ca.sqrt(self.vy0**2 + 2.0 * self.g * (self.H - dy))
+
+    def flight_time(self, dy):
+        return (self.vy0 + self.fall_speed(dy)) / self.g
+
+    def first_speed(self, Q):
+        return phys.landing_speed(self.vx0, -Q, self.a, self.q)
+
+    def next_speed(self, u, th):
+        """Landing speed on the next palm after carrying at u from -alpha to the handover th."""
+        v = ca.sqrt(phys.carry_speed_squared(u, self.a, th, gravity=self.g, link_length=self.l))
+        return phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), self.a, self.q)
+
+    def aux_start(self):
+        """Feasible auxiliaries at tau = 0: S from the fixed point, [u_lo, u_hi] spanning the
+        first and the periodic landing speeds."""
+        S = phys.handover_speed_squared(self.a, self.b, self.q, gravity=self.g, link_length=self.l)
+        u_star = self.k * ca.sqrt(ca.fmax(S, 0.0)) * ca.cos(self.a + self.b)
+        u1 = self.first_speed(self.fall_speed(0.0))
+        return [S, ca.fmax(ca.fmin(u1, u_star), 0.0), ca.fmax(u1, u_star)]
+
+    def landing_ranges(self, tau, robust):
+        """(o1_hi, o1_lo), (later o_hi versions, later o_lo versions): outer bounds of the landing
+        offset on palm 1 and on every palm (module docstring)."""
+        vx0, C0, N = self.vx0, self.C0, self.stages
+        if not robust:
+            o = C0 + vx0 * self.flight_time(0.0)
+            return (o, o), ([o], [o])
+        t_up, t_down = self.flight_time(-tau), self.flight_time(tau)  # palm lower: longer flight
+        if vx0 >= 0:
+            o1 = (C0 + vx0 * t_up + tau, C0 + vx0 * t_down - tau)
+        else:
+            o1 = (C0 + vx0 * t_down + tau, C0 + vx0 * t_up - tau)
+        if N < 2:
+            return o1, ([o1[0]], [o1[1]])
+        b, l = self.b, self.l
+        cot_b = ca.cos(b) / ca.sin(b)
+        phi0 = vx0 * self.flight_time(0.0)
+        slope = cot_b - vx0 / self.fall_speed(0.0)  # d phi / d dy_1 at 0
+        phi_plus = vx0 * t_down + cot_b * tau
+        phi_minus = vx0 * t_up - cot_b * tau
+        if vx0 >= 0:  # phi concave: tangent above, ends below
+            phi_max = [phi0 + slope * tau, phi0 - slope * tau]
+            phi_min = [phi_plus, phi_minus]
+        else:  # phi convex: ends above, tangent below
+            phi_max = [phi_plus, phi_minus]
+            phi_min = [phi0 + slope * tau, phi0 - slope * tau]
+        cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
+        r_ends = [l * (ca.sqrt(1 - cp**2) - ca.sin(b)) + 2 * tau * cot_b,
+                  l * (ca.sqrt(1 - cm**2) - ca.sin(b)) - 2 * tau * cot_b]
+        spread = tau * (1 + cot_b)
+        o_hi = [C0 + p + spread for p in phi_max]
+        o_lo = [C0 + p - spread + (N - 1) * r for p in phi_min for r in r_ends]
+        return o1, (o_hi, o_lo)
+
+    # -- the conditions -----------------------------------------------------------------------
+    def conditions(self, S, u_lo, u_hi, tau, robust):
+        a, b, l, g = self.a, self.b, self.l, self.g
+        body, palm = self.scene.body, self.scene.palm
+        mu, W, w, h = palm.friction, palm.width, body.width, body.height
+        out: list[Condition] = []
+
+        def add(keys, where, slack, scale=1.0, kind=MARGIN, **kw):
+            out.append(Condition(tuple(keys) if isinstance(keys, (tuple, list)) else (keys,),
+                                 where, slack, scale, kind, **kw))
+
+        if robust:
+            cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
+            th_hi, th_lo = ca.acos(cm), ca.acos(cp)
+            thetas = [("smallest handover angle", th_lo), ("largest handover angle", th_hi)]
+            Qs = [("palm 1 high", self.fall_speed(tau)), ("palm 1 low", self.fall_speed(-tau))]
+        else:
+            th_hi = th_lo = b
+            thetas = [("at beta", b)]
+            Qs = [("", self.fall_speed(0.0))]
+        Q_hi = Qs[-1][1]
+
+        # Model: the periodic fixed point and the invariant interval of landing speeds.
+        add((), "periodic handover speed: S (1 - c) = D", S * (1 - self.c) - self.D,
+            kind=MODEL, equality=True)
+        u1_lo, u1_hi = self.first_speed(Q_hi), self.first_speed(Qs[0][1])
+        add((), "interval holds the first landing speed (low)", u1_lo - u_lo, kind=MODEL)
+        add((), "interval holds the first landing speed (high)", u_hi - u1_hi, kind=MODEL)
+        if robust:
+            # Curvature bound of ln F(u, th) on the whole interval, for every u (docs/optimizer.md):
+            # d2 ln F / d th2 = -sec^2(a + th) + (y cos th - y^2 sin^2 th) / 2 with y = 2 g l / v^2
+            # <= cot^2(th_lo) / 8 - sec^2(a + th_lo) =: M; M+ = smooth max(M, 0) >= max(M, 0).
+            curv = (ca.cos(th_lo) / ca.sin(th_lo)) ** 2 / 8 - 1 / ca.cos(a + th_lo) ** 2
+            curv = (curv + ca.sqrt(curv**2 + 1e-12)) / 2
+            # Low end: ln F >= chord - M+ (th - th_lo)(th_hi - th) / 2 >= min over the ends
+            # - M+ (th_hi - th_lo)^2 / 8.
+            sag = ca.exp(-curv * (th_hi - th_lo) ** 2 / 8)
+            for where, th in thetas:
+                add((), f"interval invariant (low, {where})",
+                    self.next_speed(u_lo, th) * sag - u_lo, kind=MODEL)
+            # High end: ln F <= ln F(b) + lambda (th - b) + M+ (th - b)^2 / 2 (Taylor), convex in
+            # th so largest at an end; lambda = d ln F / d th at b by CasADi AD.
+            th_s = ca.SX.sym("th")
+            dlog = ca.substitute(ca.jacobian(ca.log(self.next_speed(u_hi, th_s)), th_s), th_s, b)
+            u_b = self.next_speed(u_hi, b)
+            for where, th in thetas:
+                bound = u_b * ca.exp(dlog * (th - b) + curv * (th - b) ** 2 / 2)
+                add((), f"interval invariant (high, {where})", u_hi - bound, kind=MODEL)
+        else:
+            add((), "interval invariant (low)", self.next_speed(u_lo, b) - u_lo, kind=MODEL)
+            add((), "interval invariant (high)", u_hi - self.next_speed(u_hi, b), kind=MODEL)
+
+        # Validity of the closed forms.
+        add(("forward_landing",), "first landing moves the palm forward", self.first_speed(Q_hi),
+            scale=self.k * ca.sqrt(self.vx0**2 + Q_hi**2), kind=VALIDITY)
+        add(("forward_landing",), "handover moves the next palm forward",
+            phys.landing_speed(ca.cos(th_hi), -ca.sin(th_hi), a, self.q), scale=self.k,
+            kind=VALIDITY)
+        add(("start_height",), "the object starts above palm 1",
+            self.H - tau - START_CLEARANCE * l, scale=l, kind=VALIDITY)
+
+        # Carry conditions on every palm (the first included: u_lo <= u_1 <= u_hi).
+        add(("over_the_top", "first_over_the_top"), "slowest landing on any palm",
+            u_lo**2 - self.top_needed, u_lo**2)
+        add(("lift_off", "first_lift_off"), "at the back stop, fastest landing",
+            g * l * ca.cos(a) - u_hi**2, g * l * ca.cos(a))
+        v2 = phys.carry_speed_squared(u_hi, a, th_hi, gravity=g, link_length=l)
+        add(("lift_off", "first_lift_off"), "at the handover, fastest carry",
+            g * l * ca.cos(th_hi) - v2, g * l * ca.cos(th_hi))
+        add("slip_carry", "at the back stop", mu - phys.friction_demand(a), mu)
+        add("slip_carry", "at the largest handover angle", mu - phys.friction_demand(th_hi), mu)
+        add("palm_clearance", "next palm below the object until the handover",
+            self.pitch_y - 2 * tau, l, epigraph=False)
+        if palm.front_stop < math.pi / 2:
+            add("front_stop", "largest handover angle before the front stop",
+                palm.front_stop - th_hi, palm.front_stop, epigraph=False)
+
+        (o1_hi, o1_lo), (o_hi, o_lo) = self.landing_ranges(tau, robust)
+        # Landing within the palm: |o| + w/2 <= W/2.
+        for i, o in enumerate(o_hi):
+            add("landing", _v("object furthest ahead", i, o_hi), W / 2 - o - w / 2, W / 2)
+        for i, o in enumerate(o_lo):
+            add("landing", _v("object furthest behind", i, o_lo), W / 2 + o - w / 2, W / 2)
+        # Tipping during the carry: force point (h/2) tan th from the centre within the support.
+        fp_back = h / 2 * ca.tan(a)
+        add("tip_carry", "at the back stop, object's front edge", w / 2 - fp_back, w / 2)
+        for i, o in enumerate(o_hi):
+            add("tip_carry", _v("at the back stop, palm's front edge", i, o_hi),
+                W / 2 - o - fp_back, W / 2 - o)
+        fp_front = h / 2 * ca.tan(th_hi)
+        add("tip_carry", "at the handover, object's rear edge", w / 2 - fp_front, w / 2)
+        for i, o in enumerate(o_lo):
+            add("tip_carry", _v("at the handover, palm's rear edge", i, o_lo),
+                W / 2 + o - fp_front, W / 2 + o)
+
+        # Impacts: on palms 2.. (velocity along the handover tangent) and the first landing.
+        if self.stages >= 2:
+            for where, th in thetas:
+                px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a, self.q)
+                self._impact(add, "slip_impact", "tip_impact", where, px, py, o_hi, o_lo)
+        for where, Q in Qs:
+            px, py = phys.landing_impulse(self.vx0, -Q, a, self.q)
+            self._impact(add, "first_slip_impact", "first_tip_impact", where, px, py,
+                         [o1_hi], [o1_lo])
+        return out
+
+    def _impact(self, add, slip, tip, where, px, py, o_hi, o_lo):
+        """Stick (|px| <= mu py) and no tip (impulse line through the support) at a landing."""
+        body, palm = self.scene.body, self.scene.palm
+        mu, W, w, h = palm.friction, palm.width, body.width, body.height
+        sep = ", " if where else ""
+        add(slip, f"{where}{sep}sliding back", mu * py - px, mu * py)
+        add(slip, f"{where}{sep}sliding forward", mu * py + px, mu * py)
+        # Force point -(h/2) px/py from the centre: ahead (px < 0) within min(w/2, W/2 - o),
+        # behind within min(w/2, W/2 + o). Multiplied by py > 0 (implied by the stick rows).
+        add(tip, f"{where}{sep}over the object's front edge", w / 2 * py + h / 2 * px, w / 2 * py)
+        add(tip, f"{where}{sep}over the object's rear edge", w / 2 * py - h / 2 * px, w / 2 * py)
+        for i, o in enumerate(o_hi):
+            add(tip, _v(f"{where}{sep}over the palm's front edge", i, o_hi),
+                (W / 2 - o) * py + h / 2 * px, (W / 2 - o) * py)
+        for i, o in enumerate(o_lo):
+            add(tip, _v(f"{where}{sep}over the palm's rear edge", i, o_lo),
+                (W / 2 + o) * py - h / 2 * px, (W / 2 + o) * py)
+
+
+def _v(text, i, versions):
+    """Label of one version of a bound that has several candidate expressions."""
+    return text if len(versions) == 1 else f"{text}, bound {i + 1}"

@@ -1,0 +1,181 @@
+"""The stairs NLP: periodic bounce, first approach and robust per-step construction errors.
+
+Decision vector x = [free design variables (restitution, launch_speed, rise, tread,
+landing_offset: whichever the spec leaves free), V (periodic vertical impact speed, when the rise
+is not derived), tau (error box half-width, when robust), t (margin epigraph)].
+
+Stage recursion from the first impact (the approach is part of the problem): the ball reaches
+tread 1 with vertical speed v_1 = sqrt(2 g h0), `landing_offset` L_1 from its riser, horizontal
+speed vx (the launch speed, or after the first rolling impact with friction). Flight n leaves
+tread n upward at eps v_n, falls rise_n = rise + er_n below, lasts
+    T_n = (eps v_n + sqrt(eps^2 v_n^2 + 2 g rise_n)) / g,
+and lands at L_{n+1} = L_n + vx T_n - tread_n (tread_n = tread + et_n), v_{n+1}^2 = eps^2 v_n^2 +
+2 g rise_n. Periodicity: V^2 (1 - eps^2) = 2 g rise and tread = vx (1 + eps) V / g.
+
+Nose clearance, smooth and sound: with d the distance from the landing point to the nose, the ball
+(radius r) is horizontally over the nose while its centre is in [d - r, d + r]; its centre height
+above the take-off level is concave in time, so the ball stays above the nose level (and over the
+tread before it) iff its lowest point is above that level at the two ends, x = d - r and d + r:
+    eps v vx z - g z^2 / 2 >= 0  for z = d - r, d + r   (times vx^2 > 0).
+After x = d + r it is clear of the riser; it then lands on the next tread.
+
+Robust errors |er_n|, |et_n| <= tau: L_n increases with every er_j and decreases with every et_j
+(j < n), v_n increases with every er_j: so L_n is largest on the corner (er, et) = (+tau, -tau),
+smallest on (-tau, +tau), v_n smallest on er = -tau (the latter corner). The nose condition is
+increasing in v and concave in d, so its worst case over d in [d_lo, d_hi] is at an end: checking
+both ends with the smallest v is sound. Errors accumulate (the horizontal landing is neutrally
+stable), so the tolerance shrinks with the number of stages checked.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+
+from ..physics import stairs as phys
+from ..scenes import StairsDesign
+from .common import MARGIN, MODEL, VALIDITY, Condition, SceneModel, design_inputs
+
+DEFAULTS = {"rise": None, "tread": None, "landing_offset": None}
+MIN_FORWARD_SPEED = 1e-3  # m/s
+
+
+def build(spec):
+    scene = spec.scene
+    values, symbols, bounds = design_inputs(spec, StairsDesign.VARIABLES, DEFAULTS)
+    robust = float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0
+    epigraph = float(spec.objective.get("max_min_margin", 0.0)) > 0.0
+    tau = ca.SX.sym("tolerance") if robust else 0.0
+    t = ca.SX.sym("min_margin") if epigraph else None
+    m = _Model(scene, values, spec.verification.stages)
+
+    aux, start = [], []
+    if m.V_symbol is not None:
+        aux.append(("periodic_vertical_speed", m.V_symbol, 0.0, math.inf))
+        start.append(ca.sqrt(2 * m.g * m.rise / ca.fmax(1 - m.eps**2, 1e-9)))
+    if robust:
+        aux.append(("tolerance", tau, 0.0, max(scene.initial.drop_height, 1.0)))
+        start.append(0.0)
+    if epigraph:
+        aux.append(("min_margin", t, 0.0, 1.0))
+        start.append(0.0)
+    xd = ca.vertcat(*symbols.values()) if symbols else ca.SX(0, 1)
+    aux_init = ca.Function("aux_init", [xd], [ca.vertcat(*start) if start else ca.SX(0, 1)])
+
+    model = SceneModel(
+        kind="stairs", design_symbols=symbols, aux=tuple(aux),
+        conditions=tuple(m.conditions(tau, robust)),
+        objective_terms={
+            "max_offset_tolerance": tau if robust else ca.SX(0.0),
+            "max_min_margin": t if epigraph else ca.SX(0.0),
+            "min_drop": ca.SX(m.rise) if not isinstance(m.rise, ca.SX) else m.rise,
+            "fastest_convergence": m.eps**2,
+        },
+        tolerance_symbol=tau if robust else None, margin_symbol=t, aux_init=aux_init,
+        derived={"rise": m.rise, "tread": m.tread, "landing_offset": m.L1,
+                 "horizontal_speed": m.vx, "periodic_vertical_speed": m.V},
+        tolerance_axes=("rise", "tread"),
+    )
+    return model, bounds, m
+
+
+class _Model:
+    """Closed forms of one stairs scene on (possibly symbolic) design values."""
+
+    def __init__(self, scene, values, stages):
+        self.scene, self.stages, self.g = scene, stages, scene.gravity
+        ball = scene.ball
+        self.eps, self.v0 = values["restitution"], values["launch_speed"]
+        h0 = scene.initial.drop_height
+        self.vy1 = phys.impact_speed_vertical(self.g, h0)
+        if scene.frictionless:
+            self.vx = self.v0
+        else:
+            self.vx, _ = phys.rolling_impact(self.v0, scene.initial.spin, radius=ball.radius,
+                                             mass=ball.mass, inertia=ball.inertia)
+        self.rise_derived = values["rise"] is None
+        if self.rise_derived:
+            self.rise = phys.periodic_rise(h0, self.eps)
+            self.V, self.V_symbol = self.vy1, None
+        else:
+            self.rise = values["rise"]
+            self.V = self.V_symbol = ca.SX.sym("periodic_vertical_speed")
+        self.tread_derived = values["tread"] is None
+        orbit_tread = phys.periodic_tread(self.vx, self.g, self.V**2 / (2 * self.g), self.eps)
+        self.orbit_tread = orbit_tread
+        self.tread = orbit_tread if self.tread_derived else values["tread"]
+        self.L1 = self.tread / 2 if values["landing_offset"] is None else values["landing_offset"]
+
+    def flight(self, v, rise_n):
+        """(time, next vertical impact speed) of a flight leaving at eps v, falling rise_n."""
+        up = self.eps * v
+        down = ca.sqrt(up**2 + 2 * self.g * rise_n)
+        return (up + down) / self.g, down
+
+    def trajectory(self, er, et):
+        """Landing offsets L_1..L_N and vertical impact speeds v_1..v_N with every step's errors
+        (er, et) (numbers, symbols or per-step sequences)."""
+        L, v = [self.L1], [self.vy1]
+        for n in range(self.stages - 1):
+            e_r = er[n] if isinstance(er, (list, tuple)) else er
+            e_t = et[n] if isinstance(et, (list, tuple)) else et
+            T, v_next = self.flight(v[-1], self.rise + e_r)
+            L.append(L[-1] + self.vx * T - (self.tread + e_t))
+            v.append(v_next)
+        return L, v
+
+    def nose_slack(self, v, dist):
+        """Clearance rows of one flight over a nose `dist` ahead: [(where, slack), ...]."""
+        r, vx, g = self.scene.ball.radius, self.vx, self.g
+        ends = [("leading edge over the nose", dist - r), ("trailing edge over the nose", dist + r)]
+        if r == 0.0:
+            ends = [("over the nose", dist)]
+        return [(where, self.eps * v * vx * z - g * z**2 / 2) for where, z in ends]
+
+    def conditions(self, tau, robust):
+        g, r = self.g, self.scene.ball.radius
+        out: list[Condition] = []
+
+        def add(key, where, slack, scale=1.0, kind=MARGIN, **kw):
+            out.append(Condition((key,) if key else (), where, slack, scale, kind, **kw))
+
+        if self.V_symbol is not None:
+            add(None, "periodic vertical speed: V^2 (1 - eps^2) = 2 g rise",
+                self.V**2 * (1 - self.eps**2) - 2 * g * self.rise, kind=MODEL, equality=True)
+        if not self.tread_derived:
+            add("periodic_tread", "tread = horizontal speed x periodic flight time",
+                self.tread - self.orbit_tread, self.tread, equality=True)
+        if not self.scene.frictionless:
+            ball = self.scene.ball
+            demand = phys.rolling_impulse_ratio(self.v0, self.scene.initial.spin, self.vy1,
+                                                self.eps, radius=ball.radius, mass=ball.mass,
+                                                inertia=ball.inertia)
+            add("first_impact_friction", "first impact ends rolling",
+                self.scene.friction - demand, self.scene.friction)
+        add("forward_flight", "the ball keeps moving down the stairs",
+            self.vx - MIN_FORWARD_SPEED, 1.0, kind=VALIDITY)
+        add("step_down", "every step goes down", self.rise - tau, self.tread, kind=VALIDITY)
+
+        tread = self.tread
+        scale = tread * self.vx**2
+        if robust:
+            L_long, _ = self.trajectory(tau, -tau)
+            L_short, v_short = self.trajectory(-tau, tau)
+        else:
+            L_long, v_short = self.trajectory(0.0, 0.0)
+            L_short = L_long
+        for n in range(self.stages):
+            stage = n + 1
+            if n == 0 or robust is False:
+                add("riser_clearance", f"landing {stage}", L_short[n] - r, tread)
+            else:
+                add("riser_clearance", f"landing {stage}, shortest drift", L_short[n] - r, tread)
+            ends = [("", tread - L_long[n])] if not robust else [
+                ("nose nearest, ", tread - tau - L_long[n]),
+                ("nose furthest, ", tread + tau - L_short[n]),
+            ]
+            for prefix, dist in ends:
+                for where, slack in self.nose_slack(v_short[n], dist):
+                    add("nose_clearance", f"flight {stage}, {prefix}{where}", slack, scale)
+        return out

@@ -1,0 +1,78 @@
+"""Independent re-checks of an optimizer answer (no simulator: solving never imports it).
+
+* closed_form_check: the fixed-design analysis (`pdm_design.analysis`) of the returned design
+  must meet the requirements (a different code path from the NLP's rows);
+* sampled_offsets_check: the explicit-offset conditions (formulation/*_offsets.py: exact stage by
+  stage, no worst-case bounds) evaluated at offsets sampled inside the robust box (uniform, random
+  corners, alternating patterns) must all hold.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..analysis.manipulators import analyse_manipulators
+from ..analysis.stairs import analyse_stairs
+
+CHECK_TOL = 1e-6
+# Margins whose optimizer meaning differs from the analysis' (checked at 0: the condition holds).
+_CHECK_AT_ZERO = {"stairs": {"nose_clearance"}, "manipulators": set()}
+
+
+def analyse(spec, design: dict[str, float]):
+    cls = spec.design_class
+    values = {k: design[k] for k in cls.VARIABLES if k in design and design[k] is not None}
+    point = cls(**values)
+    if spec.kind == "stairs":
+        return analyse_stairs(spec.scene, point)
+    return analyse_manipulators(spec.scene, point)
+
+
+def closed_form_check(spec, design: dict[str, float], requirements: dict[str, float]) -> dict:
+    try:
+        analysis = analyse(spec, design)
+    except (ValueError, TypeError) as exc:  # the design cannot even be built
+        return {"passed": False, "failures": [f"design rejected: {exc}"], "analysis": None}
+    at_zero = _CHECK_AT_ZERO[spec.kind]
+    failures = list(analysis.problems)
+    for name, value in analysis.margins.items():
+        need = 0.0 if name in at_zero else float(requirements.get(name, 0.0))
+        if value < need - CHECK_TOL:
+            failures.append(f"margin {name} = {value:.6g} is below the required {need:.6g}")
+    return {"passed": not failures, "failures": failures, "analysis": analysis}
+
+
+def offset_samples(names, groups, tau: float, count: int, seed: int = 0) -> np.ndarray:
+    """Offsets inside the box |d| <= tau: alternating patterns, random corners, uniform."""
+    n = len(names)
+    rng = np.random.default_rng(seed)
+    alt = np.array([1.0 if i % 2 else -1.0 for i in range(n)])
+    patterns = [np.zeros(n), np.ones(n), -np.ones(n), alt, -alt]
+    for g in groups.values():  # one group alternating, the other fixed at each end
+        for sign in (1.0, -1.0):
+            v = np.zeros(n)
+            v[list(g)] = alt[list(g)] * sign
+            patterns.append(v)
+    count = max(count, len(patterns))
+    corners = rng.choice([-1.0, 1.0], size=(count // 2, n))
+    uniform = rng.uniform(-1.0, 1.0, size=(count - count // 2 - len(patterns), n))
+    return tau * np.vstack([np.array(patterns), corners, uniform])
+
+
+def sampled_offsets_check(form, x, p, tau: float, *, samples: int = 256, seed: int = 0) -> dict:
+    sc = form.scenario
+    D = offset_samples(sc.offset_names, sc.groups, tau, samples, seed)
+    fn = sc.function.map(D.shape[0])
+    slack, scale = (np.asarray(v, dtype=float) for v in fn(np.tile(np.asarray(x)[:, None],
+                                                                   (1, D.shape[0])), D.T))
+    required = dict(zip(form.p_names, np.asarray(p, dtype=float).ravel()))
+    r = np.array([max((required.get(k, 0.0) for k in info.keys), default=0.0)
+                  if info.kind == "margin" else 0.0 for info in sc.conditions])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        excess = slack / np.where(scale != 0, scale, 1.0) - r[:, None]
+    excess = np.where(np.isfinite(excess), excess, -np.inf)
+    i, j = np.unravel_index(np.argmin(excess), excess.shape)
+    worst = float(excess[i, j])
+    return {"passed": worst >= -CHECK_TOL, "samples": int(D.shape[0]), "tolerance": float(tau),
+            "worst_excess_margin": worst, "worst_condition": sc.conditions[i].label,
+            "worst_offsets": dict(zip(sc.offset_names, D[j].tolist()))}

@@ -1,0 +1,166 @@
+"""`optimize(spec)`: build (or reuse) the NLP, multistart IPOPT, diagnose, re-check, report."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..formulation import formulate
+from ..formulation.common import MODEL, OBJECTIVE_SENSE
+from ..status import Status
+from . import check, elastic
+from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
+from .result import OptimizeResult, Solution, SolverStats
+from .tolerance import linearised_tolerance
+from .words import normalised_margin
+
+FEASIBILITY_TOL = 1e-7
+
+
+def optimize(
+    spec,
+    *,
+    starts: int = 8,
+    seed: int = 0,
+    max_iter: int = 500,
+    tol: float = 1e-8,
+    requirements: dict[str, float] | None = None,
+    warm_start: OptimizeResult | None = None,
+    diagnose: bool = True,
+    linearise: bool = True,
+    check_samples: int = 256,
+) -> OptimizeResult:
+    """Best design of `spec` (see docs/optimizer.md).
+
+    starts: IPOPT runs from the spec's initial guess and scrambled-Sobol points in the bounds.
+    requirements: required margins (default: the spec's); they are NLP parameters, so changing
+        them re-solves the same built NLP.
+    warm_start: a previous result of the same spec: one extra run from its solution and
+        multipliers (IPOPT warm start), tried first.
+    diagnose: when no start succeeds, solve the elastic problem and report what cannot be met.
+    linearise: compute the cvxpy box / ellipsoid in the linearised safe set.
+    check_samples: offsets sampled inside the robust box for the independent check (0: skip).
+    """
+    tic = time.perf_counter()
+    was_cached = _is_cached(spec)
+    form = formulate(spec)
+    build_time = 0.0 if was_cached else form.build_time
+    reqs = dict(spec.requirements if requirements is None else requirements)
+    p = form.parameters(reqs)
+    options = SolverOptions(max_iter=max_iter, tol=tol)
+    solver = solver_for(form.key, form.nlp, options)
+
+    names = form.design_names
+    guess = {n: spec.design[n].guess for n in names}
+    lows = [spec.design[n].min for n in names]
+    highs = [spec.design[n].max for n in names]
+    designs = start_designs(names, lows, highs, guess, max(starts, 1), seed)
+    x_starts = [form.start_vector(d) for d in designs]
+
+    runs = []
+    if warm_start is not None and warm_start.solution is not None \
+            and warm_start.solution.key == form.key:
+        warm = solver_for(form.key, form.nlp, SolverOptions(max_iter=max_iter, tol=tol, warm=True))
+        ws = warm_start.solution
+        runs.append(solve_once(warm, ws.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
+                               lam_x0=ws.lam_x, lam_g0=ws.lam_g, start=-1))
+    for i, x0 in enumerate(x_starts):
+        runs.append(solve_once(solver, x0, p, form.lbx, form.ubx, form.lbg, form.ubg, start=i))
+    chosen = best(runs)
+    status, x = chosen.status, chosen.x
+    violations, at_bounds = (), ()
+    extra_iters, extra_time = 0, 0.0
+
+    if status in (Status.INFEASIBLE, Status.SOLVER_ERROR) and diagnose:
+        diag = elastic.diagnose(form, p, x_starts[: min(len(x_starts), 4)], max_iter=max_iter)
+        extra_iters, extra_time = diag.iterations, diag.seconds
+        if diag.status not in (Status.OPTIMAL, Status.ACCEPTABLE):
+            pass  # the elastic problem failed too: keep IPOPT's own status, claim nothing more
+        elif diag.total <= FEASIBILITY_TOL:  # feasible after all: restart from the elastic point
+            retry = solve_once(solver, diag.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
+                               start=len(runs))
+            runs.append(retry)
+            if retry.status in (Status.OPTIMAL, Status.ACCEPTABLE):
+                chosen, status, x = retry, retry.status, retry.x
+        else:
+            status, x, violations = Status.INFEASIBLE, diag.x, diag.violations
+            at_bounds = diag.at_bounds
+
+    design = form.design_values(x)
+    slack, scale, terms, _ = (np.asarray(v, dtype=float).ravel() for v in form.evaluate(x, p))
+    objectives = dict(zip(form.objective_names, terms.tolist()))
+    robust = form.tolerance_index is not None
+    tolerance = None
+    if robust and status not in (Status.INFEASIBLE,):
+        tol_value = float(x[form.tolerance_index])
+        tolerance = {axis: tol_value for axis in form.tolerance_axes}
+    robust_margins = {info.label: normalised_margin(slack[info.index], scale[info.index])
+                      for info in form.conditions if info.kind != MODEL}
+    score = None
+    if status is not Status.INFEASIBLE:
+        score = float(sum(w * OBJECTIVE_SENSE[n] * objectives[n] for n, w in form.weights.items()))
+
+    checks: dict[str, object] = {}
+    margins: dict[str, float] = {}
+    periodic: dict[str, float | None] = {}
+    closed = check.closed_form_check(spec, design, reqs)
+    if closed["analysis"] is not None:
+        margins = dict(closed["analysis"].margins)
+        periodic = dict(closed["analysis"].periodic)
+    checks["closed_form"] = {"passed": closed["passed"], "failures": closed["failures"]}
+    if robust and tolerance and check_samples > 0 and status is not Status.INFEASIBLE:
+        checks["sampled_offsets"] = check.sampled_offsets_check(
+            form, x, p, float(x[form.tolerance_index]), samples=check_samples, seed=seed)
+
+    linearised = None
+    if linearise and status is not Status.INFEASIBLE and form.scenario is not None:
+        try:
+            linearised = linearised_tolerance(form, x, p, cap=_length_scale(spec, design))
+        except Exception as exc:  # cvxpy solver failure: report, do not hide the NLP answer
+            checks["linearised_error"] = str(exc)
+
+    if status in (Status.OPTIMAL, Status.ACCEPTABLE):
+        failed = [k for k, v in checks.items() if isinstance(v, dict) and not v["passed"]]
+        if failed:
+            status = Status.UNVERIFIED
+        elif status is Status.OPTIMAL and not form.design_names:
+            status = Status.EVALUATED
+    message = status.message
+    if violations:
+        message += " Cannot be met: " + "; ".join(v.text for v in violations[:5]) + "."
+        if at_bounds:
+            message += " At the least-violation design " + ", ".join(at_bounds) + \
+                ": widening those bounds may help."
+
+    stats = SolverStats(
+        iterations=chosen.iterations,
+        total_iterations=sum(r.iterations for r in runs) + extra_iters,
+        solve_time=chosen.seconds,
+        total_solve_time=sum(r.seconds for r in runs) + extra_time,
+        starts=len(runs),
+        build_time=build_time,
+        wall_time=time.perf_counter() - tic,
+        return_statuses=tuple(r.return_status for r in runs),
+    )
+    return OptimizeResult(
+        status=status, design=design, objective=score, objectives=objectives,
+        tolerance=tolerance, linearised=linearised, margins=margins,
+        robust_margins=robust_margins, periodic=periodic, violations=tuple(violations),
+        checks=checks, stats=stats, message=message,
+        solution=Solution(form.key, x, chosen.lam_x, chosen.lam_g),
+    )
+
+
+def _is_cached(spec) -> bool:
+    from ..formulation import build
+    from ..formulation.common import spec_key
+
+    return spec_key(spec) in build._CACHE
+
+
+def _length_scale(spec, design) -> float:
+    if spec.kind == "stairs":
+        return 10.0 * float(design.get("tread") or 1.0)
+    return 10.0 * float(design.get("link_length", 1.0))
+

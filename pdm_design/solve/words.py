@@ -1,0 +1,65 @@
+"""Conditions in a designer's words (used by the elastic diagnosis)."""
+
+from __future__ import annotations
+
+CONDITIONS = {
+    # manipulators
+    "over_the_top": ("the object is carried over the top of the palm's arc",
+                     "raise the landing speed: larger beta - alpha, smaller alpha, lighter palm"),
+    "first_over_the_top": ("the first landing carries the object over the top",
+                           "move the first manipulator or reduce alpha"),
+    "lift_off": ("the object stays pressed on the palm (no lift-off)",
+                 "slow the carry: smaller beta - alpha or longer links"),
+    "first_lift_off": ("the object stays on palm 1 after the first landing",
+                       "lower the start or move the first manipulator"),
+    "slip_carry": ("friction holds the object on the palm during the carry",
+                   "smaller alpha and beta, or more friction"),
+    "tip_carry": ("the object does not tip over during the carry",
+                  "smaller angles, a wider or lower object, or centre the landing"),
+    "slip_impact": ("the object sticks where it lands on a palm",
+                    "land more along the palm's path: change alpha + beta or the mass ratio"),
+    "first_slip_impact": ("the object sticks where it first lands",
+                          "change the start velocity, alpha or the mass ratio"),
+    "tip_impact": ("the object does not tip when it lands on a palm",
+                   "a wider or lower object, or centre the landing"),
+    "first_tip_impact": ("the object does not tip when it first lands",
+                         "centre the first landing on palm 1"),
+    "landing": ("the object lands fully on the palm",
+                "move the first manipulator to centre the landing, or widen the palm"),
+    "palm_clearance": ("the next palm stays below the object until the handover",
+                       "larger beta - alpha (more drop per stage) or a smaller offset box"),
+    "front_stop": ("the palm hands over before its front stop", "smaller beta or a later stop"),
+    "forward_landing": ("the landing pushes the palm forward", "smaller alpha + beta"),
+    "start_height": ("the object starts above the first palm", "lower the first manipulator"),
+    # stairs
+    "riser_clearance": ("the ball lands clear of the riser behind it",
+                        "land further along the tread (landing_offset) or adjust the tread"),
+    "nose_clearance": ("the ball clears the step nose ahead",
+                       "land further back on the tread, or bounce higher (restitution)"),
+    "first_impact_friction": ("friction stops the ball slipping at the first impact",
+                              "more friction, or launch speed and spin that match rolling"),
+    "periodic_tread": ("the tread matches the periodic flight (no drift per bounce)",
+                       "free the tread or the launch speed"),
+    "forward_flight": ("the ball keeps moving down the stairs", "a faster launch"),
+    "step_down": ("every step goes down", "a larger rise"),
+}
+
+
+def normalised_margin(slack: float, scale: float) -> float:
+    """The analysis' margin (c - d) / max(c, d) from slack = c - d and scale = c."""
+    slack, scale = float(slack), float(scale)
+    if scale <= 0.0:
+        return slack if scale == 0.0 else -1.0
+    return slack / max(scale, scale - slack)
+
+
+def describe(name: str, where: str, required: float, achieved: float, *,
+             equality: bool = False, value: float | None = None) -> str:
+    what, hint = CONDITIONS.get(name, (name.replace("_", " "), ""))
+    place = f" ({where})" if where else ""
+    if equality:
+        text = f"{what}{place}: cannot be met, best achievable residual {value:.3g}"
+    else:
+        text = (f"{what}{place}: needs margin {required:.3g}, "
+                f"best achievable {achieved:.3g}")
+    return f"{text}; try: {hint}" if hint else text

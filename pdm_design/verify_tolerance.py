@@ -1,0 +1,78 @@
+"""Verification of a claimed tolerance box by simulation.
+
+The optimizer claims that every manipulator's pivot may be off by up to (dx, dy), or every
+step's rise and tread by up to (rise, tread), and the device still works. We do not take its
+word: the simulator runs the device at the box's corner patterns and at random samples inside
+it, from the spec's initial state, and any run that does not complete refutes the claim.
+
+Corner patterns (each of the four sign corners (+-dx, +-dy)):
+- every pivot (step) at the same corner: the whole row shifted or skewed;
+- alternating corners on odd and even pivots: the largest relative offsets, 2 x the box;
+- only the second pivot at the corner: the paper's experiment.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from .spec.model import ManipulatorOffset, Spec, StepError
+from .verify import simulate_spec
+
+SIGNS = tuple(itertools.product((1.0, -1.0), repeat=2))
+
+
+def corner_patterns(stages: int) -> list[tuple[str, list[tuple[float, float]]]]:
+    """(name, per-stage sign pairs) of every corner pattern for a row of `stages`."""
+    patterns = []
+    for sx, sy in SIGNS:
+        patterns.append((f"all at ({sx:+.0f}, {sy:+.0f})", [(sx, sy)] * stages))
+        patterns.append((f"alternating ({sx:+.0f}, {sy:+.0f})",
+                         [(sx, sy) if k % 2 == 0 else (-sx, -sy) for k in range(stages)]))
+        if stages >= 2:
+            only_second = [(0.0, 0.0)] * stages
+            only_second[1] = (sx, sy)
+            patterns.append((f"second at ({sx:+.0f}, {sy:+.0f})", only_second))
+    return patterns
+
+
+def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accuracy=None,
+                     seed: int = 0) -> dict:
+    """Simulate the corner patterns and `samples` uniform random builds inside the box."""
+    stages = spec.verification.stages
+    half = _half_widths(spec, tolerance)
+    rng = np.random.default_rng(seed)
+    builds = [(name, [(sx * half[0], sy * half[1]) for sx, sy in signs])
+              for name, signs in corner_patterns(stages)]
+    for i in range(samples):
+        draws = rng.uniform(-1.0, 1.0, size=(stages, 2)) * np.asarray(half)
+        builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws]))
+
+    failures = []
+    for name, errors in builds:
+        result = simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
+        if not result.outcome.completed:
+            f = result.outcome.failure
+            what = f"{f.kind} at stage {f.stage}" if f else "incomplete"
+            failures.append({"build": name, "errors": errors, "failure": what,
+                             "stages_passed": result.outcome.stages_passed})
+    return {"passed": not failures, "samples": len(builds), "failures": failures,
+            "box": dict(zip(_axes(spec), half, strict=True))}
+
+
+def _axes(spec: Spec) -> tuple[str, str]:
+    return ("rise", "tread") if spec.kind == "stairs" else ("dx", "dy")
+
+
+def _half_widths(spec: Spec, tolerance: dict) -> tuple[float, float]:
+    return tuple(float(tolerance.get(axis, 0.0)) for axis in _axes(spec))
+
+
+def _as_errors(spec: Spec, errors) -> dict:
+    """Per-stage (a, b) pairs as the simulator's offsets or step errors."""
+    if spec.kind == "stairs":
+        return {"step_errors": tuple(StepError(step=k + 1, rise=a, tread=b)
+                                     for k, (a, b) in enumerate(errors))}
+    return {"offsets": tuple(ManipulatorOffset(manipulator=k + 1, dx=a, dy=b)
+                             for k, (a, b) in enumerate(errors))}

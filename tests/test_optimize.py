@@ -1,0 +1,381 @@
+"""The designer: known optima, honest status, elastic diagnosis, robust tolerance vs an independent
+grid search, soundness of the robust box by independent stage-by-stage propagation, cvxpy boxes.
+
+Every reference number here is computed in this file with plain numpy/math formulas (the closed
+forms of docs/physics.md written afresh), never by the NLP's code path.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from pdm_design.analysis.stairs import nose_clearance
+from pdm_design.formulation import formulate
+from pdm_design.scenes import Body, ManipulatorsInitial, ManipulatorsScene, Palm
+from pdm_design.solve import map_status, optimize
+from pdm_design.solve.tolerance import linear_safe_set
+from pdm_design.spec import load_spec
+from pdm_design.spec.model import Bounds, Spec
+from pdm_design.status import Status
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+G = 9.81
+
+
+def paper_scene(friction=0.8):
+    return ManipulatorsScene(
+        body=Body(mass=1.0, width=0.4, height=0.2),
+        palm=Palm(width=1.6, friction=friction),
+        initial=ManipulatorsInitial(position=(-1.25, 3.05), velocity=(3.0, 0.0)),
+    )
+
+
+def beta_spec(objective, requirements, beta_max=1.2, beta_initial=0.5):
+    return Spec(source="test", scene=paper_scene(),
+                design={"alpha": 0.2, "beta": Bounds(min=0.2, max=beta_max, initial=beta_initial),
+                        "link_length": 2.0, "mass_ratio": 10.0},
+                objective=objective, requirements=requirements)
+
+
+# -- known optima -----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("slip_margin, beta_max", [(0.1, 1.2), (0.0, 1.2), (0.0, 0.55)])
+def test_fastest_convergence_with_beta_free_is_the_largest_beta_friction_allows(slip_margin,
+                                                                                beta_max):
+    # c = (m/(m+M))^2 cos^2(a + b) falls as b grows (a + b < pi/2), so the optimum is the largest
+    # beta allowed: friction during the carry, tan b <= mu (1 - margin), or the bound.
+    spec = beta_spec({"fastest_convergence": 1.0}, {"slip_carry": slip_margin}, beta_max)
+    expected = min(math.atan(0.8 * (1 - slip_margin)), beta_max)
+    result = optimize(spec)
+    assert result.status is Status.OPTIMAL
+    assert result.design["beta"] == pytest.approx(expected, abs=1e-6)
+
+
+def test_min_drop_with_beta_free_is_where_the_over_the_top_margin_binds():
+    # Drop l (cos a - cos b) grows with b; the smallest b keeps the periodic landing speed u*
+    # over the top with margin r: u*^2 (1 - r) = 2 g l (1 - cos a), with
+    # u*^2 = c s*^2, s*^2 = 2 g l (cos a - cos b) / (1 - c), c = (q/(1+q))^2 cos^2(a + b).
+    a, l, k, r = 0.2, 2.0, 10.0 / 11.0, 0.5
+
+    def u_star_sq(b):
+        c = (k * math.cos(a + b)) ** 2
+        return c * 2 * G * l * (math.cos(a) - math.cos(b)) / (1 - c)
+
+    b_star = brentq(lambda b: u_star_sq(b) * (1 - r) - 2 * G * l * (1 - math.cos(a)), a + 1e-9,
+                    0.6)
+    result = optimize(beta_spec({"min_drop": 1.0}, {"over_the_top": r}, 1.0, 0.8))
+    assert result.status is Status.OPTIMAL
+    assert result.design["beta"] == pytest.approx(b_star, abs=1e-6)
+    assert result.objectives["min_drop"] == pytest.approx(l * (math.cos(a) - math.cos(b_star)),
+                                                          abs=1e-6)
+
+
+# -- honest status ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("ipopt, status", [
+    ("Solve_Succeeded", Status.OPTIMAL),
+    ("Solved_To_Acceptable_Level", Status.ACCEPTABLE),
+    ("Maximum_Iterations_Exceeded", Status.ITERATION_LIMIT),
+    ("Infeasible_Problem_Detected", Status.INFEASIBLE),
+    ("Restoration_Failed", Status.SOLVER_ERROR),
+    ("Maximum_CpuTime_Exceeded", Status.SOLVER_ERROR),
+])
+def test_ipopt_return_status_maps_to_one_vocabulary(ipopt, status):
+    assert map_status(ipopt) is status
+
+
+def test_iteration_limit_is_reported_not_optimal():
+    result = optimize(beta_spec({"fastest_convergence": 1.0}, {}), max_iter=1, starts=2)
+    assert result.status is Status.ITERATION_LIMIT
+    assert not result.success
+
+
+def test_infeasible_spec_names_the_condition_and_how_far_it_is():
+    result = optimize(load_spec(PROBLEMS / "infeasible_manipulators.toml"))
+    assert result.status is Status.INFEASIBLE
+    names = {v.name for v in result.violations}
+    assert names == {"slip_carry"}
+    # Best achievable: beta at its lower bound 0.5, margin(mu, tan b) = (mu - tan b) / tan b.
+    expected = (0.3 - math.tan(0.5)) / math.tan(0.5)
+    (violation,) = result.violations
+    assert violation.achieved == pytest.approx(expected, abs=1e-5)
+    assert violation.required == 0.0
+    assert "friction" in violation.text and "beta at its lower bound" in result.message
+
+
+def test_requirements_are_parameters_of_one_built_nlp():
+    spec = beta_spec({"fastest_convergence": 1.0}, {"slip_carry": 0.0})
+    other = beta_spec({"fastest_convergence": 1.0}, {"slip_carry": 0.2})
+    assert formulate(spec) is formulate(other)
+    assert optimize(other).design["beta"] == pytest.approx(math.atan(0.8 * 0.8), abs=1e-6)
+
+
+def test_warm_start_reaches_the_same_optimum_in_fewer_iterations():
+    spec = load_spec(PROBLEMS / "manipulators_robust.toml")
+    cold = optimize(spec, starts=1, linearise=False)
+    warm = optimize(spec, starts=1, warm_start=cold, linearise=False)
+    assert warm.status is Status.OPTIMAL
+    assert warm.stats.return_statuses[0] == "Solve_Succeeded"
+    assert warm.objective == pytest.approx(cold.objective, abs=1e-8)
+    assert warm.stats.iterations <= cold.stats.iterations
+
+
+# -- robust tolerance: independent grid --------------------------------------------------------
+
+def robust_tolerance_grid(scene, alpha, beta, *, link_length, mass_ratio, stages, iters=32):
+    """The NLP's robust tolerance definition (docs/optimizer.md), written afresh in numpy and
+    solved by bisection on tau at every (alpha, beta): no CasADi, no pdm_design code."""
+    a, b = np.meshgrid(np.asarray(alpha, float), np.asarray(beta, float), indexing="ij")
+    lo = np.zeros_like(a)
+    hi = np.full_like(a, 0.5)
+    ok0 = _robust_ok(scene, a, b, lo, link_length, mass_ratio, stages)
+    for _ in range(iters):
+        mid = 0.5 * (lo + hi)
+        ok = _robust_ok(scene, a, b, mid, link_length, mass_ratio, stages)
+        lo = np.where(ok, mid, lo)
+        hi = np.where(ok, hi, mid)
+    return np.where(ok0, lo, -1.0)
+
+
+def _robust_ok(scene, a, b, tau, l, q, N):
+    with np.errstate(all="ignore"):
+        return _robust_ok_raw(scene, a, b, tau, l, q, N)
+
+
+def _robust_ok_raw(scene, a, b, tau, l, q, N):
+    g = scene.gravity
+    mu, W = scene.palm.friction, scene.palm.width
+    w, h = scene.body.width, scene.body.height
+    (x0, y0), (vx0, vy0) = scene.initial.position, scene.initial.velocity
+    k, B = q / (1 + q), 2 * g * l
+    ok = np.ones_like(a, dtype=bool)
+    cm, cp = np.cos(b) - 2 * tau / l, np.cos(b) + 2 * tau / l
+    th_hi, th_lo = np.arccos(cm), np.arccos(cp)
+    H, C0 = y0 - l * np.cos(a), x0 + l * np.sin(a)
+
+    def Q(dy):
+        return np.sqrt(vy0**2 + 2 * g * (H - dy))
+
+    def t(dy):
+        return (vy0 + Q(dy)) / g
+
+    def u1(Qv):
+        return k * (vx0 * np.cos(a) - Qv * np.sin(a))
+
+    ok &= (H - tau - 1e-3 * l >= 0) & (u1(Q(-tau)) >= 0) & (np.cos(a + th_hi) >= 0)
+    ok &= l * (np.cos(a) - np.cos(b)) - 2 * tau >= 0
+    ok &= (mu - np.tan(a) >= 0) & (mu - np.tan(th_hi) >= 0)
+    # Invariant interval of landing speeds.
+    curv = np.maximum((np.cos(th_lo) / np.sin(th_lo)) ** 2 / 8 - 1 / np.cos(a + th_lo) ** 2, 0)
+    sag = np.exp(-curv * (th_hi - th_lo) ** 2 / 8)
+    u_lo = u1(Q(-tau))
+    for th in (th_lo, th_hi):
+        kappa = k * np.cos(a + th) * sag
+        E = B * (np.cos(a) - np.cos(th))
+        u_lo = np.minimum(u_lo, np.where(kappa < 1, np.sqrt(kappa**2 * E / (1 - kappa**2)), np.inf))
+    ok &= u_lo**2 - B * (1 - np.cos(a)) >= 0
+    u1_hi = u1(Q(tau))
+    u_max = np.minimum(np.sqrt(g * l * np.cos(a)), np.sqrt(np.maximum(
+        g * l * cm - B * (np.cos(a) - cm), 0)))
+    D = B * (np.cos(a) - np.cos(b))
+
+    def high_ok(u):
+        lam = -np.tan(a + b) + 0.5 * B * np.sin(b) / (u**2 + D)
+        F_b = k * np.cos(a + b) * np.sqrt(u**2 + D)
+        worst = np.maximum(*(F_b * np.exp(lam * (th - b) + curv * (th - b) ** 2 / 2)
+                             for th in (th_lo, th_hi)))
+        return u - worst >= 0
+
+    any_high = np.zeros_like(ok)
+    for s in np.linspace(0.0, 1.0, 81):
+        u = u1_hi + s * (u_max - u1_hi)
+        any_high |= high_ok(u) & (u <= u_max)
+    ok &= any_high & (u1_hi <= u_max)
+    # Landing positions.
+    cot_b = np.cos(b) / np.sin(b)
+    o1_hi, o1_lo = C0 + vx0 * t(-tau) + tau, C0 + vx0 * t(tau) - tau
+    slope = cot_b - vx0 / Q(0)
+    o_hi = C0 + vx0 * t(0) + tau * (1 + cot_b) + np.abs(slope) * tau
+    phi_min = np.minimum(vx0 * t(tau) + cot_b * tau, vx0 * t(-tau) - cot_b * tau)
+    r_min = np.minimum(l * (np.sin(th_lo) - np.sin(b)) + 2 * tau * cot_b,
+                       l * (np.sin(th_hi) - np.sin(b)) - 2 * tau * cot_b)
+    o_lo = C0 + phi_min - tau * (1 + cot_b) + (N - 1) * r_min
+    ok &= (W / 2 - w / 2 - o_hi >= 0) & (W / 2 - w / 2 + o_lo >= 0)
+    ok &= (w / 2 - h / 2 * np.tan(a) >= 0) & (W / 2 - o_hi - h / 2 * np.tan(a) >= 0)
+    ok &= (w / 2 - h / 2 * np.tan(th_hi) >= 0) & (W / 2 + o_lo - h / 2 * np.tan(th_hi) >= 0)
+
+    def impact_ok(px, py, oh, ol):
+        return ((mu * py - np.abs(px) >= 0) & (w / 2 * py - h / 2 * np.abs(px) >= 0)
+                & ((W / 2 - oh) * py + h / 2 * px >= 0) & ((W / 2 + ol) * py - h / 2 * px >= 0))
+
+    for th in (th_lo, th_hi):
+        kc = k * np.cos(a + th)
+        ok &= impact_ok(kc * np.cos(a) - np.cos(th), kc * np.sin(a) + np.sin(th), o_hi, o_lo)
+    for Qv in (Q(tau), Q(-tau)):
+        u = u1(Qv)
+        ok &= impact_ok(u * np.cos(a) - vx0, u * np.sin(a) + Qv, o1_hi, o1_lo)
+    return ok
+
+
+@pytest.fixture(scope="module")
+def robust():
+    spec = load_spec(PROBLEMS / "manipulators_robust.toml")
+    return spec, optimize(spec)
+
+
+def test_robust_optimum_is_at_least_as_good_as_a_dense_grid(robust):
+    spec, result = robust
+    assert result.status is Status.OPTIMAL
+    alpha = np.linspace(spec.design["alpha"].min, spec.design["alpha"].max, 121)
+    beta = np.linspace(spec.design["beta"].min, spec.design["beta"].max, 201)
+    grid = robust_tolerance_grid(spec.scene, alpha, beta, link_length=2.0, mass_ratio=10.0,
+                                 stages=spec.verification.stages)
+    best = grid.max()
+    assert best > 0.0
+    tol = result.tolerance["dx"]
+    assert tol >= best - 1e-6
+    assert tol <= best * 1.05  # the two implementations agree on what the tolerance is
+
+
+# -- robust tolerance: soundness by independent propagation -----------------------------------
+
+@np.errstate(invalid="ignore")
+def propagate_offsets(scene, design, dx, dy, N):
+    """Exact stage-by-stage conditions for one offset sequence (numpy, afresh): the smallest
+    margin-like slack (>= 0 when every condition holds), vectorised over rows of dx, dy."""
+    g = scene.gravity
+    mu, W = scene.palm.friction, scene.palm.width
+    w, h = scene.body.width, scene.body.height
+    (x0, y0), (vx0, vy0) = scene.initial.position, scene.initial.velocity
+    a, b, l, q = design["alpha"], design["beta"], design["link_length"], design["mass_ratio"]
+    k = q / (1 + q)
+    worst = np.full(dx.shape[0], np.inf)
+
+    def need(x):  # nan: a quantity does not exist (e.g. no handover), a failure
+        nonlocal worst
+        worst = np.minimum(worst, np.where(np.isnan(x), -np.inf, x))
+
+    def impact(px, py, o):
+        need(mu * py - np.abs(px))
+        need(np.minimum(w / 2, W / 2 - o) * py + h / 2 * px)
+        need(np.minimum(w / 2, W / 2 + o) * py - h / 2 * px)
+
+    fall = y0 - (l * np.cos(a) + dy[:, 0])
+    Qv = np.sqrt(vy0**2 + 2 * g * fall)
+    u = k * (vx0 * np.cos(a) - Qv * np.sin(a))
+    o = x0 + vx0 * (vy0 + Qv) / g - (-l * np.sin(a) + dx[:, 0])
+    impact(u * np.cos(a) - vx0, u * np.sin(a) + Qv, o)
+    for K in range(N):
+        need(W / 2 - w / 2 - np.abs(o))
+        need(u**2 - 2 * g * l * (1 - np.cos(a)))
+        need(g * l * np.cos(a) - u**2)
+        need(np.minimum(w / 2, W / 2 - o) - h / 2 * np.tan(a))
+        delta = dy[:, K + 1] - dy[:, K]
+        need(l * (np.cos(a) - np.cos(b)) - delta)
+        cth = np.cos(b) + delta / l
+        th = np.arccos(cth)
+        v2 = u**2 + 2 * g * l * (np.cos(a) - cth)
+        need(g * l * cth - v2)
+        need(mu - np.tan(th))
+        need(np.minimum(w / 2, W / 2 + o) - h / 2 * np.tan(th))
+        if K == N - 1:
+            break
+        v = np.sqrt(v2)
+        u = k * v * np.cos(a + th)
+        o = o + l * (np.sin(th) - np.sin(b)) - (dx[:, K + 1] - dx[:, K])
+        impact(u * np.cos(a) - v * np.cos(th), u * np.sin(a) + v * np.sin(th), o)
+    return worst
+
+
+def test_robust_box_holds_for_offsets_sampled_inside_it(robust):
+    spec, result = robust
+    tau, N = result.tolerance["dx"], spec.verification.stages
+    rng = np.random.default_rng(7)
+    n = 4000
+    dx = tau * np.concatenate([rng.choice([-1.0, 1.0], (n, N)), rng.uniform(-1, 1, (n, N))])
+    dy = tau * np.concatenate([rng.choice([-1.0, 1.0], (n, N + 1)),
+                               rng.uniform(-1, 1, (n, N + 1))])
+    alt = np.where(np.arange(N + 1) % 2 == 0, 1.0, -1.0)
+    ramp = np.linspace(1.0, -1.0, N + 1)
+    patterns = [alt, -alt, ramp, -ramp, np.ones(N + 1), -np.ones(N + 1)]
+    for pat, sx in itertools.product(patterns, (-1.0, 1.0)):
+        dy = np.vstack([dy, tau * pat])
+        dx = np.vstack([dx, tau * sx * np.ones(N)])
+    worst = propagate_offsets(spec.scene, result.design, dx, dy, N)
+    assert np.all(worst >= -1e-9)
+
+
+def test_a_box_larger_than_the_robust_one_is_not_claimed_sound_by_accident(robust):
+    # The robust box is conservative, not arbitrary: three times the box breaks some condition.
+    spec, result = robust
+    tau, N = 3 * result.tolerance["dx"], spec.verification.stages
+    alt = np.where(np.arange(N + 1) % 2 == 0, 1.0, -1.0)
+    dy = tau * np.vstack([alt, -alt, np.linspace(1, -1, N + 1), np.linspace(-1, 1, N + 1)])
+    dx = tau * np.vstack([np.ones(N), -np.ones(N), -np.ones(N), np.ones(N)])
+    assert propagate_offsets(spec.scene, result.design, dx, dy, N).min() < 0
+
+
+# -- cvxpy in the linearised safe set ---------------------------------------------------------
+
+def test_cvxpy_box_corners_lie_in_the_linearised_safe_set(robust):
+    spec, result = robust
+    form = formulate(spec)
+    A, b, _ = linear_safe_set(form, result.solution.x, form.parameters(spec.requirements))
+    lin = result.linearised
+    groups = form.scenario.groups
+    half = np.zeros(A.shape[1])
+    for name, cols in groups.items():
+        half[list(cols)] = lin.box[name]
+    corners = np.array(list(itertools.product((-1.0, 1.0), repeat=A.shape[1]))) * half
+    assert np.all(b[:, None] + A @ corners.T >= -1e-6)
+    square = np.array(list(itertools.product((-1.0, 1.0), repeat=A.shape[1]))) * lin.square
+    assert np.all(b[:, None] + A @ square.T >= -1e-6)
+    # ... and it is the largest: a 1 % larger square leaves the set at some corner.
+    assert np.any(b[:, None] + A @ (1.01 * square.T) < 0)
+
+
+def test_cvxpy_ellipsoid_lies_in_the_linearised_safe_set(robust):
+    spec, result = robust
+    form = formulate(spec)
+    A, b, _ = linear_safe_set(form, result.solution.x, form.parameters(spec.requirements))
+    E = np.array(result.linearised.ellipsoid["matrix"])
+    rng = np.random.default_rng(3)
+    u = rng.normal(size=(A.shape[1], 2000))
+    u /= np.linalg.norm(u, axis=0)
+    assert np.all(b[:, None] + A @ (E @ u) >= -1e-5)
+
+
+# -- stairs ---------------------------------------------------------------------------------
+
+def test_stairs_design_is_optimal_and_its_error_box_is_sound():
+    spec = load_spec(PROBLEMS / "stairs_design.toml")
+    result = optimize(spec)
+    assert result.status is Status.OPTIMAL
+    tau = result.tolerance["rise"]
+    assert tau > 0
+    d = result.design
+    eps, vx, rise, tread, r = (d["restitution"], d["launch_speed"], d["rise"], d["tread"],
+                               spec.scene.ball.radius)
+    assert rise == pytest.approx((1 - eps**2) * 1.0)  # periodic from the first impact
+    assert tread == pytest.approx(vx * (1 + eps) * math.sqrt(2 * 1.0 / G))
+    N = spec.verification.stages
+    rng = np.random.default_rng(5)
+    sequences = [(np.full(N, s1 * tau), np.full(N, s2 * tau)) for s1 in (-1, 1) for s2 in (-1, 1)]
+    sequences += [(tau * rng.choice([-1.0, 1.0], N), tau * rng.choice([-1.0, 1.0], N))
+                  for _ in range(40)]
+    for er, et in sequences:
+        L, v = d["landing_offset"], math.sqrt(2 * G * 1.0)
+        for n in range(N):
+            assert L - r >= 0.02 * tread - 1e-9  # riser clearance with the required margin
+            gap = nose_clearance(vx, eps * v, G, r, tread + et[n], rise + er[n], L)
+            assert gap >= -1e-9  # the analysis' own clearance: the ball never touches a nose
+            up = eps * v
+            down = math.sqrt(up**2 + 2 * G * (rise + er[n]))
+            L = L + vx * (up + down) / G - (tread + et[n])
+            v = down
