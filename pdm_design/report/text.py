@@ -34,9 +34,10 @@ def _tolerance_rows(tolerance: dict) -> list[str]:
     linear = tolerance.get("linearised")
     if linear:
         per_axis = ", ".join(f"{k} +-{v * 1e3:.2f} mm" for k, v in linear["box"].items())
+        smallest_axis = linear["ellipsoid"].get("min_semi_axis", float("nan"))
         lines.append(f"  linearised safe set (cvxpy): square +-{linear['square'] * 1e3:.2f} mm; "
                      f"widest box {per_axis}; ellipsoid semi-axes "
-                     f"{linear['ellipsoid'].get('min_semi_axis', float('nan')) * 1e3:.2f} mm and up")
+                     f"{smallest_axis * 1e3:.2f} mm and up")
     return lines
 
 

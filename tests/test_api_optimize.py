@@ -1,0 +1,58 @@
+"""The designer end to end: optimise, then let the simulator judge the answer and its box."""
+
+import dataclasses
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+import pdm_design.solve
+from pdm_design.api import design
+from pdm_design.cli import main
+from pdm_design.spec import load_spec
+from pdm_design.status import Status
+
+ROBUST = Path(__file__).resolve().parents[1] / "problems" / "manipulators_robust.toml"
+
+
+@pytest.fixture(scope="module")
+def robust_outcome():
+    return design(load_spec(ROBUST))
+
+
+def test_robust_design_is_optimal_and_its_box_survives_simulation(robust_outcome):
+    assert robust_outcome.status is Status.OPTIMAL
+    verification = robust_outcome.verification
+    assert verification["passed"], verification["summary"]
+    # nominal run + 12 corner patterns + the spec's 16 random samples
+    assert verification["samples"] == 1 + 12 + 16
+    assert robust_outcome.tolerance["dx"] > 0.05
+
+
+def test_json_document_carries_objective_tolerance_and_solver():
+    result = CliRunner().invoke(main, ["optimize", str(ROBUST), "--format", "json"])
+    doc = json.loads(result.stdout)
+    assert result.exit_code == 0
+    assert doc["status"] == "optimal"
+    assert set(doc["free_variables"]) == {"alpha", "beta"}
+    assert doc["objective"]["weights"] == {"max_offset_tolerance": 1.0}
+    assert doc["tolerance"]["dx"] == doc["tolerance"]["dy"] > 0
+    assert doc["solver"]["iterations"] > 0 and doc["solver"]["starts"] == 8
+    assert doc["verification"]["passed"] is True
+
+
+def test_a_tolerance_the_simulator_refutes_is_not_reported_verified(monkeypatch):
+    real = pdm_design.solve.optimize
+
+    def overclaiming(spec, **kwargs):
+        result = real(spec, **kwargs)
+        inflated = {axis: 4 * value for axis, value in result.tolerance.items()}
+        return dataclasses.replace(result, tolerance=inflated)
+
+    monkeypatch.setattr(pdm_design.solve, "optimize", overclaiming)
+    outcome = design(load_spec(ROBUST))
+    assert outcome.verification["passed"] is False
+    assert outcome.verification["tolerance_failures"]
+    assert any("tolerance refuted" in f for f in outcome.verification["failures"])
+    assert outcome.exit_code == 1
