@@ -55,19 +55,32 @@ def design(spec: Spec, *, verify: bool = True, accuracy: str | None = None) -> D
     return optimize(spec, verify=verify, accuracy=accuracy)
 
 
-def optimize(spec: Spec, *, verify: bool = True, accuracy: str | None = None,
-             starts: int = 8) -> DesignOutcome:
+# What each accuracy preset asks of the optimizer and of the verification depth: IPOPT's
+# tolerance, the number of starts, and the multiple of the spec's random verification samples.
+SOLVE_PRESETS = {
+    "fast": {"tol": 1e-6, "starts": 4, "sample_factor": 0.25},
+    "default": {"tol": 1e-8, "starts": 8, "sample_factor": 1.0},
+    "precise": {"tol": 1e-10, "starts": 16, "sample_factor": 4.0},
+}
+
+
+def optimize(spec: Spec, *, verify: bool = True, accuracy: str | None = None) -> DesignOutcome:
     """Choose the free design variables with IPOPT (multistart), then verify the answer and
-    its claimed tolerance box in the simulator."""
+    its claimed tolerance box in the simulator. accuracy (default: the spec's) sets IPOPT's
+    tolerance, the starts, the simulator's tolerances and how many random builds are run."""
     from .solve import optimize as solve
 
-    result = solve(spec, starts=starts)
+    accuracy = accuracy or spec.verification.accuracy
+    preset = SOLVE_PRESETS[accuracy]
+    result = solve(spec, starts=preset["starts"], tol=preset["tol"])
     point = spec.design_at({name: result.design[name] for name in spec.free_variables})
     analysis = analyse(spec.scene, point)
     violations = tuple(v.text for v in result.violations) + tuple(analysis.problems)
     verification = None
     if verify and result.status.is_success:
-        verification = _verify_with_box(spec, point, analysis, result.tolerance, accuracy)
+        samples = round(spec.verification.samples * preset["sample_factor"])
+        verification = _verify_with_box(spec, point, analysis, result.tolerance, accuracy,
+                                        samples)
     solver = result.stats.to_json() | {"status": result.status.value, "message": result.message}
     objective = {"weights": dict(spec.objective), "value": result.objective,
                  "terms": result.objectives}
@@ -81,7 +94,7 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: str | None = None,
                          verification=verification, solver=solver)
 
 
-def _verify_with_box(spec, point, analysis, tolerance, accuracy) -> dict:
+def _verify_with_box(spec, point, analysis, tolerance, accuracy, samples) -> dict:
     """Nominal run plus, when a tolerance is claimed, its corners and random samples."""
     from .verify import verify_nominal
 
@@ -90,8 +103,7 @@ def _verify_with_box(spec, point, analysis, tolerance, accuracy) -> dict:
         return nominal
     from .verify_tolerance import verify_tolerance
 
-    box = verify_tolerance(spec, point, tolerance, samples=spec.verification.samples,
-                           accuracy=accuracy)
+    box = verify_tolerance(spec, point, tolerance, samples=samples, accuracy=accuracy)
     failures = nominal["failures"] + [
         f"tolerance refuted: {f['build']} fails ({f['failure']})" for f in box["failures"]]
     summary = nominal["summary"] if nominal["passed"] else "; ".join(nominal["failures"])
