@@ -1,0 +1,298 @@
+"""Build sheets: the numbers a workshop builds a device from, with the tolerance of each.
+
+Manipulators: the coordinates of every pivot (frame of the spec: origin at the first
+manipulator's nominal pivot when first_pivot_x = first_pivot_y = 0, x along the row, y up), the
+back-stop, handover and front-stop angles, link length, palm mass and size, and the box
+(+-dx, +-dy) each pivot may be placed within. Stairs: every step's rise and tread with their
+tolerance, and where each step's back, nose and tread surface are (frame: the ball is launched
+at x = 0; nominal tread 1 is at y = 0).
+
+The design comes from solving the spec (`pdm_design.api.design`) or from a saved design JSON
+(`pdm-design optimize --format json`). The tolerance is the optimizer's robust box
+(`max_offset_tolerance`): the design's own when its spec asks for it, otherwise solved for the
+finished design with that objective alone (which does not move a fixed design).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import PdmError, SpecError
+from ..spec import load_spec
+from ..spec.model import Bounds, Spec
+
+JSON_SCHEMA_PREFIX = "pdm-design/optimize/"
+MARKDOWN_ROWS = 100
+TOLERANCE_AXES = {"manipulators": ("dx", "dy"), "stairs": ("rise", "tread")}
+
+
+@dataclass(frozen=True)
+class BuildSheet:
+    """One design's build sheet. summary: (quantity, value, unit, tolerance or None) rows;
+    items: one dict per manipulator or step (CSV columns, SI units in the names)."""
+
+    spec: Spec
+    status: str
+    design: dict[str, float | None]
+    geometry: dict[str, float | None]
+    periodic: dict[str, float | None]
+    tolerance: dict[str, float] | None
+    tolerance_note: str
+    summary: list[tuple[str, float | str, str, float | None]]
+    items: list[dict[str, float | int]]
+    source: str = ""
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def kind(self) -> str:
+        return self.spec.kind
+
+    @property
+    def count(self) -> int:
+        return len(self.items)
+
+
+# --------------------------------------------------------------------------- the design
+
+def sheet_for(path: str | Path, *, count: int | None = None,
+              tolerance: bool = True) -> BuildSheet:
+    """The build sheet of a spec file (solved first) or of a saved design JSON (*.json).
+
+    count: manipulators or steps listed (default: the spec's verification.stages).
+    tolerance: find the placement tolerance when the design does not carry one.
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".json":
+        spec, values, status, tol = _from_json(path)
+    else:
+        from ..api import design
+
+        spec = load_spec(path)
+        outcome = design(spec)
+        values = dict(outcome.analysis.design)
+        status, tol = outcome.status.value, outcome.tolerance
+    fixed = fixed_spec(spec, values)
+    tol, note = _tolerance(fixed, tol, tolerance)
+    count = spec.verification.stages if count is None else count
+    try:
+        return make_sheet(fixed, status, tol, note, count, source=str(path))
+    except ValueError as exc:  # e.g. a staircase that cannot be built from this design
+        raise PdmError(f"{path}: no build sheet: {exc}") from None
+
+
+def fixed_spec(spec: Spec, values: dict[str, float | None]) -> Spec:
+    """The spec with each free variable fixed at `values` (the design to build)."""
+    design = {}
+    for name, value in spec.design.items():
+        if isinstance(value, Bounds):
+            found = values.get(name)
+            if found is None or not math.isfinite(float(found)):
+                raise SpecError(spec.source, f"design.{name}", "a value for this free variable "
+                                "in the design", "none")
+            design[name] = float(found)
+        else:
+            design[name] = value
+    spec.design_class(**design)  # validates the point
+    return dataclasses.replace(spec, design=design)
+
+
+def _from_json(path: Path):
+    """(spec, design values, status, tolerance) of a saved `optimize --format json` document."""
+    source = str(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SpecError(source, "", "an existing design JSON file", "no such file") from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise SpecError(source, "", "a JSON document from `pdm-design optimize --format json`",
+                        str(exc)) from None
+    if not isinstance(doc, dict) or not str(doc.get("schema", "")).startswith(
+            JSON_SCHEMA_PREFIX):
+        raise SpecError(source, "schema", f"'{JSON_SCHEMA_PREFIX}1' (a document from "
+                        "`pdm-design optimize --format json`)", repr(_get(doc, "schema")))
+    spec_path = doc.get("spec")
+    if not isinstance(spec_path, str):
+        raise SpecError(source, "spec", "the path of the spec file", repr(spec_path))
+    candidates = [Path(spec_path), path.parent / spec_path]
+    found = next((p for p in candidates if p.is_file()), None)
+    if found is None:
+        raise SpecError(source, "spec", "the path of the spec file the design was made from "
+                        "(as given, or relative to the JSON file)", f"'{spec_path}' (not found)")
+    spec = load_spec(found)
+    values = doc.get("design")
+    if not isinstance(values, dict):
+        raise SpecError(source, "design", "a table of design values", repr(values))
+    tol = doc.get("tolerance")
+    return spec, values, str(doc.get("status", "")), tol if isinstance(tol, dict) else None
+
+
+def _get(doc, key):
+    return doc.get(key) if isinstance(doc, dict) else doc
+
+
+def _tolerance(spec: Spec, tol: dict | None, wanted: bool) -> tuple[dict | None, str]:
+    """The placement tolerance (half-widths by axis) and a note on where it comes from."""
+    axes = TOLERANCE_AXES[spec.kind]
+    if tol and all(_finite(tol.get(a)) for a in axes):
+        return {a: float(tol[a]) for a in axes}, "robust tolerance of the optimised design"
+    if not wanted:
+        return None, "tolerance not computed (--no-tolerance)"
+    asked = dataclasses.replace(spec, objective={"max_offset_tolerance": 1.0})
+    try:
+        from ..api import design
+
+        outcome = design(asked)
+        found = outcome.tolerance
+        if not (found and all(_finite(found.get(a)) for a in axes)):
+            from ..solve.optimize import optimize
+
+            result = optimize(asked, starts=1, check_samples=0, linearise=False)
+            found = result.tolerance if result.status.is_success else None
+    except Exception as exc:  # the sheet is still useful without it: say why it is missing
+        return None, f"tolerance not found ({type(exc).__name__}: {exc})"
+    if not (found and all(_finite(found.get(a)) for a in axes)):
+        return None, "tolerance not found: the design has no robust margin to spare"
+    return ({a: float(found[a]) for a in axes},
+            "largest robust box for this design (objective max_offset_tolerance)")
+
+
+def _finite(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(
+        value)
+
+
+# --------------------------------------------------------------------------- the sheet
+
+def make_sheet(spec: Spec, status: str, tol: dict | None, note: str, count: int, *,
+               source: str = "") -> BuildSheet:
+    """The sheet of a fixed-design spec (every variable a number)."""
+    from ..analysis import analyse
+
+    if count < 1:
+        raise SpecError("command line", "--count", "an integer >= 1", str(count))
+    analysis = analyse(spec.scene, spec.design_at())
+    maker = _manipulators if spec.kind == "manipulators" else _stairs
+    summary, items = maker(spec, analysis, tol, count)
+    return BuildSheet(spec=spec, status=status, design=dict(analysis.design),
+                      geometry=dict(analysis.geometry), periodic=dict(analysis.periodic),
+                      tolerance=tol, tolerance_note=note, summary=summary, items=items,
+                      source=source, notes=tuple(analysis.problems))
+
+
+def _manipulators(spec, analysis, tol, count):
+    d, scene = analysis.design, spec.scene
+    a, b, l = d["alpha"], d["beta"], d["link_length"]
+    px, py = analysis.geometry["pitch_x"], analysis.geometry["pitch_y"]  # py: downward
+    x0, y0 = d["first_pivot_x"], d["first_pivot_y"]
+    palm_mass = scene.body.mass / d["mass_ratio"]
+    tx, ty = (tol["dx"], tol["dy"]) if tol else (None, None)
+    items = []
+    for k in range(1, count + 1):
+        x, y = x0 + (k - 1) * px, y0 - (k - 1) * py
+        items.append({
+            "manipulator": k, "pivot_x_m": x, "pivot_y_m": y,
+            "pivot_x_tolerance_m": tx, "pivot_y_tolerance_m": ty,
+            "back_stop_rad": -a, "handover_rad": b, "front_stop_rad": scene.palm.front_stop,
+            "link_length_m": l, "palm_mass_kg": palm_mass,
+            "palm_at_back_stop_x_m": x - l * math.sin(a),
+            "palm_at_back_stop_y_m": y + l * math.cos(a),
+            "handover_x_m": x + l * math.sin(b), "handover_y_m": y + l * math.cos(b),
+        })
+    summary = [
+        ("manipulators", count, "", None),
+        ("pitch x (pivot to pivot, along the row)", px, "m", None),
+        ("pitch y (pivot to pivot, downward)", py, "m", None),
+        ("pivot k x = first pivot x + (k - 1) pitch x", x0, "m", tx),
+        ("pivot k y = first pivot y - (k - 1) pitch y", y0, "m", ty),
+        ("link length l", l, "m", None),
+        ("back stop -alpha (clockwise from vertical)", -a, "rad", None),
+        ("handover angle beta", b, "rad", None),
+        ("front stop", scene.palm.front_stop, "rad", None),
+        ("palm mass M = m / mass_ratio", palm_mass, "kg", None),
+        ("palm width x thickness", f"{scene.palm.width:g} x {scene.palm.thickness:g}", "m",
+         None),
+        ("object mass, width x height", f"{scene.body.mass:g} kg, {scene.body.width:g} x "
+         f"{scene.body.height:g}", "m", None),
+        ("handover speed (periodic)", analysis.periodic.get("handover_speed"), "m/s", None),
+    ]
+    return summary, items
+
+
+def _stairs(spec, analysis, tol, count):
+    from ..sim.stairs import stairs_geometry
+
+    geo = stairs_geometry(spec.scene, spec.design_at())
+    tr, tt = (tol["rise"], tol["tread"]) if tol else (None, None)
+    items = []
+    for k in range(1, count + 1):
+        items.append({
+            "step": k, "rise_m": geo.rise_height(k), "tread_m": geo.tread_length(k),
+            "rise_tolerance_m": tr, "tread_tolerance_m": tt,
+            "back_x_m": geo.back_x(k), "nose_x_m": geo.nose_x(k), "level_m": geo.level(k),
+            "landing_from_back_m": geo.landing_offset,
+        })
+    d = analysis.design
+    summary = [
+        ("steps", count, "", None),
+        ("rise (every step)", geo.rise, "m", tr),
+        ("tread (every step)", geo.tread, "m", tt),
+        ("landing point from the back of each tread", geo.landing_offset, "m", None),
+        ("launch height above tread 1", geo.launch_height, "m", None),
+        ("launch speed (horizontal)", d["launch_speed"], "m/s", None),
+        ("back of tread 1 (launch at x = 0)", geo.x_back_1, "m", None),
+        ("restitution", d["restitution"], "", None),
+        ("ball radius", spec.scene.ball.radius, "m", None),
+        ("impact speed (periodic)", analysis.periodic.get("impact_speed"), "m/s", None),
+    ]
+    return summary, items
+
+
+# --------------------------------------------------------------------------- text
+
+def sheet_csv(sheet: BuildSheet) -> str:
+    """Every manipulator or step, one row each (exact floats)."""
+    from ..sweep.tables import cell, csv_line
+
+    header = list(sheet.items[0])
+    return csv_line(header) + "".join(csv_line([cell(item[c]) for c in header])
+                                      for item in sheet.items)
+
+
+def sheet_markdown(sheet: BuildSheet, drawing: str | None = None) -> str:
+    spec = sheet.spec
+    unit_word = "manipulator" if sheet.kind == "manipulators" else "step"
+    lines = [f"# Build sheet: {spec.name or Path(spec.source).stem}", "",
+             f"Spec: `{spec.source}` ({sheet.kind}); from `{sheet.source}`; status: "
+             f"{sheet.status}.", "",
+             f"Tolerance: {sheet.tolerance_note}"
+             + (" (half-widths: build each within +- this of its nominal)." if sheet.tolerance
+                else "."), ""]
+    if drawing:
+        lines += [f"![drawing]({drawing})", ""]
+    lines += ["| quantity | value | unit | tolerance (+-) |", "|---|---|---|---|"]
+    for name, value, unit, tol in sheet.summary:
+        lines.append(f"| {name} | {_show(value)} | {unit} | {_show(tol) if tol else '-'} |")
+    header = list(sheet.items[0])
+    lines += ["", f"## Every {unit_word}", "",
+              "| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    for item in sheet.items[:MARKDOWN_ROWS]:
+        lines.append("| " + " | ".join(_show(item[c]) for c in header) + " |")
+    if sheet.count > MARKDOWN_ROWS:
+        lines.append(f"\n... {sheet.count - MARKDOWN_ROWS} more {unit_word}s in the CSV.")
+    if sheet.notes:
+        lines += ["", "## Problems", "", *(f"- {n}" for n in sheet.notes)]
+    return "\n".join(lines) + "\n"
+
+
+def _show(value) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, int) and not isinstance(value, bool):
+        return str(value)
+    if isinstance(value, float):
+        return f"{value:.6g}" if math.isfinite(value) else "-"
+    return str(value)

@@ -1,0 +1,128 @@
+"""Plots of a design table: how the optimum and its tolerance move across the sweep.
+
+x is the first swept parameter; each further combination of the other swept parameters is one
+line. Points whose status is not a success are drawn as red crosses. Figures are made with
+matplotlib's object API (Figure + Agg canvas, no pyplot state) and returned as PNG and SVG bytes.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+
+from .grid import SweepAxis, grid_points
+from .tables import DESIGN, GEOMETRY, PERIODIC, TOLERANCE_AXES, number
+
+MAX_PANELS = 6
+MAX_LINES = 8
+SUCCESS = ("optimal", "evaluated")
+_LABELS = {
+    "objective": "objective", "tolerance": "tolerance (smallest half-width, m)",
+    "min_margin": "smallest margin", "handover_speed": "handover speed (m/s)",
+    "pitch_x": "pitch x (m)", "pitch_y": "pitch y, down (m)", "rise": "rise (m)",
+    "tread": "tread (m)", "impact_speed": "impact speed (m/s)", "alpha": "alpha (rad)",
+    "beta": "beta (rad)", "link_length": "link length (m)", "palm_mass": "palm mass (kg)",
+    "landing_offset": "landing offset (m)", "landing_speed": "landing speed (m/s)",
+    "contraction": "contraction factor", "drop_per_stage": "drop per stage (m)",
+    "nose_clearance": "nose clearance (m)", "flight_time": "flight time (s)",
+    "launch_speed": "launch speed (m/s)", "horizontal_speed": "horizontal speed (m/s)",
+    "vertical_impact_speed": "vertical impact speed (m/s)", "spin": "spin (rad/s)",
+    "tolerance.dx": "tolerance dx (m)", "tolerance.dy": "tolerance dy (m)",
+    "tolerance.rise": "tolerance rise (m)", "tolerance.tread": "tolerance tread (m)",
+}
+
+
+def sweep_figures(kind: str, axes: tuple[SweepAxis, ...], rows: list[dict[str, str]]
+                  ) -> dict[str, bytes]:
+    """{file name: bytes} of the optimum and tolerance figures (PNG and SVG each)."""
+    swept = {a.path[1] for a in axes if a.path[0] == "design"}
+    optimum = [c for c in (*DESIGN[kind], "objective", *GEOMETRY[kind], *PERIODIC[kind])
+               if c not in swept and _varies(rows, c)][:MAX_PANELS]
+    tolerance = ["tolerance", *(f"tolerance.{a}" for a in TOLERANCE_AXES[kind])]
+    tolerance = [c for c in tolerance if _present(rows, c)] + ["min_margin"]
+    out = {}
+    for name, panels, empty in (
+        ("optimum", optimum, "no design quantity changes across this sweep"),
+        ("tolerance", tolerance, ""),
+    ):
+        figure = _figure(axes, rows, panels, empty, f"{name} across the sweep")
+        if name == "tolerance" and len(tolerance) == 1:
+            figure.axes[0].set_title("smallest margin (tolerance not computed: the spec's "
+                                     "objective does not ask for max_offset_tolerance)",
+                                     fontsize=8)
+        for fmt in ("png", "svg"):
+            out[f"{name}.{fmt}"] = _render(figure, fmt)
+    return out
+
+
+def _present(rows, column) -> bool:
+    return any(number(r.get(column, "")) is not None for r in rows)
+
+
+def _varies(rows, column) -> bool:
+    values = {number(r.get(column, "")) for r in rows} - {None}
+    return len(values) > 1
+
+
+def _series(axes, rows, column):
+    """[(label, xs, ys, ok flags)] with one entry per combination of the other axes."""
+    points = grid_points(axes)
+    groups: dict[tuple[int, ...], list[int]] = {}
+    for i, point in enumerate(points):
+        groups.setdefault(point.index[1:], []).append(i)
+    keys = sorted(groups)
+    if len(keys) > MAX_LINES:  # evenly spaced subset of the lines
+        step = (len(keys) - 1) / (MAX_LINES - 1)
+        keys = [keys[round(j * step)] for j in range(MAX_LINES)]
+    out = []
+    for key in keys:
+        members = groups[key]
+        label = ", ".join(f"{a.column} = {a.values[i]:g}" for a, i in zip(axes[1:], key))
+        xs = [points[i].values[0] for i in members]
+        ys = [number(rows[i].get(column, "")) for i in members]
+        ok = [rows[i].get("status") in SUCCESS for i in members]
+        out.append((label, xs, [math.nan if y is None else y for y in ys], ok))
+    return out
+
+
+def _figure(axes, rows, panels, empty, title):
+    from matplotlib.figure import Figure
+
+    count = max(1, len(panels))
+    cols = 1 if count == 1 else 2
+    nrows = math.ceil(count / cols)
+    figure = Figure(figsize=(5.0 * cols, 2.8 * nrows + 0.6), layout="constrained")
+    figure.suptitle(title)
+    grid = figure.subplots(nrows, cols, squeeze=False)
+    flat = [a for row in grid for a in row]
+    for extra in flat[count:]:
+        extra.set_visible(False)
+    if not panels:
+        flat[0].text(0.5, 0.5, empty, ha="center", va="center", transform=flat[0].transAxes)
+        flat[0].set_xlabel(axes[0].column)
+        return figure
+    for ax, column in zip(flat, panels):
+        for label, xs, ys, ok in _series(axes, rows, column):
+            ax.plot(xs, ys, marker="o", markersize=3, label=label or None)
+            bad = [(x, y) for x, y, good in zip(xs, ys, ok) if not good and not math.isnan(y)]
+            if bad:
+                ax.plot(*zip(*bad), linestyle="none", marker="x", color="tab:red",
+                        markersize=6)
+        ax.set_xlabel(axes[0].column)
+        ax.set_ylabel(_LABELS.get(column, column), fontsize=8)
+        ax.grid(True, alpha=0.3)
+        if len(axes) > 1:
+            ax.legend(fontsize=6)
+    return figure
+
+
+def _render(figure, fmt: str) -> bytes:
+    from matplotlib import rc_context
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(figure)
+    buffer = io.BytesIO()
+    metadata = {"Date": None} if fmt == "svg" else {"Software": None}
+    with rc_context({"svg.hashsalt": "pdm-design"}):  # the same bytes for the same figure
+        figure.savefig(buffer, format=fmt, dpi=110, metadata=metadata)
+    return buffer.getvalue()

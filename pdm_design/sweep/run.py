@@ -1,0 +1,386 @@
+"""Running a sweep: every grid point solved through `pdm_design.api.design`, in parallel local
+worker processes or on a Dask distributed cluster, rows appended to the CSV as they finish,
+`resume` continuing an interrupted sweep, the final tables and plots written at the end.
+
+Warm starts: the grid is cut into chains along the last axis (`grid.chains`); a chain's points
+are solved in order, each with the free design variables' `initial` set to the design found at
+the point before it. Chains run in parallel. The chains do not depend on the number of workers
+or on the scheduler, so neither do the results.
+
+Files in the output folder:
+    table.csv     one row per grid point; appended row by row while the sweep runs (a row is a
+                  whole line or absent), rewritten in grid order at the end
+    table.md      the design table in Markdown (written at the end)
+    optimum.png/.svg, tolerance.png/.svg   plots (written at the end)
+    sweep.json    what the table was made from (spec digest, sweeps, columns): `resume`
+                  refuses a folder made from another spec or other sweeps
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tomllib
+from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, Future
+from concurrent.futures import wait as wait_futures
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import SpecError
+from ..io import write_atomic
+from ..spec import load_spec, parse_spec
+from . import tables
+from .grid import GridPoint, SweepAxis, chains, grid_points, point_data, sweep_axes
+from .progress import progress_bar
+
+SCHEMA = "pdm-design/table/1"
+CSV_NAME, MARKDOWN_NAME, META_NAME = "table.csv", "table.md", "sweep.json"
+PLOT_NAMES = tuple(f"{n}.{e}" for n in ("optimum", "tolerance") for e in ("png", "svg"))
+DEFAULT_CHAIN = 4
+WARM_STATUSES = ("optimal", "evaluated", "acceptable")
+DASK_TIMEOUT = "20s"
+
+
+@dataclass(frozen=True)
+class PointTask:
+    """Everything a worker needs to solve one grid point (plain data: it travels by pickle)."""
+
+    data: dict
+    source: str
+    paths: tuple[tuple[str, ...], ...]
+    values: tuple[float, ...]
+    warm: dict[str, float] | None = None
+
+
+def solve_point(task: PointTask) -> dict[str, str]:
+    """Solve one grid point; its table cells (no sweep columns). Never raises for a bad point:
+    an exception becomes a row with status `error` and the exception as its reason."""
+    from ..api import design
+
+    try:
+        spec = parse_spec(point_data(task.data, task.paths, task.values, task.warm), task.source)
+        return tables.outcome_cells(design(spec), spec.kind)
+    except Exception as error:  # one point's failure must not end the sweep
+        return tables.error_cells(error)
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """A finished sweep: its rows in grid order and the files written."""
+
+    folder: Path
+    axes: tuple[SweepAxis, ...]
+    columns: tuple[str, ...]
+    rows: list[dict[str, str]]
+    computed: int
+    reused: int
+    files: tuple[Path, ...] = field(default=())
+
+    @property
+    def errors(self) -> int:
+        return sum(r.get("status") == tables.ERROR for r in self.rows)
+
+
+def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
+              out: str | os.PathLike, *, workers: int | None = None,
+              scheduler: str | None = None, resume: bool = False, chain: int = DEFAULT_CHAIN,
+              show_progress: bool | None = None, plots: bool = True,
+              on_row: Callable[[GridPoint, dict[str, str]], None] | None = None) -> SweepResult:
+    """Solve the spec at every point of the grid the `--sweep` texts describe; write the table.
+
+    workers: local worker processes (default: the machine's cores; 1 solves in this process).
+    scheduler: address of a Dask distributed scheduler: run the points there instead.
+    resume: keep the rows already in `out`/table.csv (made from the same spec and sweeps) and
+        solve only the others (rows with status `error` are solved again).
+    chain: grid points per warm-start chain. on_row: called after each row is written.
+    Raises SpecError for bad input (the spec, a sweep, a grid value out of a parameter's domain,
+    a folder that does not match on resume).
+    """
+    source = str(spec_path)
+    base = load_spec(spec_path)  # the spec itself must be valid (a clear error if not)
+    data = tomllib.loads(Path(spec_path).read_text(encoding="utf-8-sig"))  # as load_spec did
+    axes = sweep_axes(data, list(sweeps))
+    points = grid_points(axes)
+    paths = tuple(a.path for a in axes)
+    labels = [_label(source, axes, p) for p in points]
+    for point, label in zip(points, labels):  # every point must be a valid spec, before solving
+        parse_spec(point_data(data, paths, point.values), label)
+    if chain < 1:
+        raise SpecError("command line", "--chain", "an integer >= 1", str(chain))
+    sweep_columns = tuple(a.column for a in axes)
+    header = tables.columns(base.kind, sweep_columns)
+    folder = Path(out)
+    meta = {"schema": SCHEMA, "spec": source, "spec_sha256": _digest(data),
+            "sweeps": [a.to_json() for a in axes], "chain": chain, "columns": list(header)}
+    done = _prepare_folder(folder, meta, header, resume)
+    reused = len(done)
+    free = [n for n, v in (data.get("design") or {}).items()
+            if isinstance(v, dict) and ("design", n) not in paths]
+
+    todo = [p for p in points if p.key not in done]
+    all_chains = chains(points, chain)
+    executor = _executor(workers, scheduler, len(all_chains)) if todo else None
+    csv_path = folder / CSV_NAME
+    with _closing(executor), open(csv_path, "a", encoding="utf-8", newline="") as stream, \
+            progress_bar(len(points), f"sweep {Path(source).name}", enabled=show_progress,
+                         completed=reused) as advance:
+
+        def record(i: int, cells: dict[str, str]) -> None:
+            row = {**dict(zip(sweep_columns, points[i].key)), **cells}
+            stream.write(tables.csv_line([row.get(c, "") for c in header]))
+            stream.flush()
+            done[points[i].key] = row
+            advance(1)
+            if on_row is not None:
+                on_row(points[i], row)
+
+        def task(i: int, warm: dict | None) -> PointTask:
+            return PointTask(data, labels[i], paths, points[i].values, warm)
+
+        if todo:
+            _execute(executor, all_chains, points, done, free, task, record)
+
+    rows = [done[p.key] for p in points]
+    files = _write_outputs(folder, base, source, axes, header, rows, plots)
+    return SweepResult(folder, axes, header, rows, computed=len(todo), reused=reused,
+                       files=files)
+
+
+def _label(source: str, axes, point: GridPoint) -> str:
+    where = ", ".join(f"{a.column} = {v:g}" for a, v in zip(axes, point.values))
+    return f"{source} (sweep point {where})"
+
+
+def _digest(data: dict) -> str:
+    text = json.dumps(data, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+# --------------------------------------------------------------------------- the folder
+
+def _prepare_folder(folder: Path, meta: dict, header, resume: bool) -> dict:
+    """Rows already computed (by grid key) when resuming; a fresh table otherwise."""
+    csv_path, meta_path = folder / CSV_NAME, folder / META_NAME
+    if folder.exists() and not folder.is_dir():
+        raise SpecError("command line", "--out", "a folder", f"'{folder}' is a file")
+    done: dict[tuple[str, ...], dict[str, str]] = {}
+    if resume and csv_path.exists():
+        try:
+            old = json.loads(meta_path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            old = None
+        if not isinstance(old, dict) or any(old.get(k) != meta[k] for k in
+                                            ("spec_sha256", "sweeps", "chain", "columns")):
+            raise SpecError("command line", "--resume", f"a table in {folder} made from the "
+                            "same spec, sweeps and chain length", "one made from others (run "
+                            "without --resume to start it again)")
+        found, rows = tables.read_csv(csv_path.read_text(encoding="utf-8"))
+        if found != list(header):
+            raise SpecError("command line", "--resume", f"{csv_path} with this table's "
+                            "columns", "other columns")
+        width = len(meta["sweeps"])
+        for row in rows:
+            if row.get("status") != tables.ERROR:
+                done[tuple(row[c] for c in header[:width])] = row
+        # the file again, whole rows only (a cut-short last line is dropped), errors left out
+        write_atomic(csv_path, tables.csv_text(header, list(done.values())))
+        return done
+    write_atomic(meta_path, json.dumps(meta, indent=1) + "\n")
+    write_atomic(csv_path, tables.csv_text(header, []))
+    for name in (MARKDOWN_NAME, *PLOT_NAMES):
+        (folder / name).unlink(missing_ok=True)  # stale outputs of an earlier run
+    return done
+
+
+def _write_outputs(folder, spec, source, axes, header, rows, plots) -> tuple[Path, ...]:
+    sweep_columns = tuple(a.column for a in axes)
+    write_atomic(folder / CSV_NAME, tables.csv_text(header, rows))
+    described = [f"Spec: `{source}` ({spec.kind})."]
+    for a in axes:
+        described.append(f"Swept: `{a.column}` from {a.values[0]:g} to {a.values[-1]:g} "
+                         f"({len(a.values)} values).")
+    described.append(f"Regenerate: `pdm-design table {source} "
+                     + " ".join(f"--sweep {a.name}={a.values[0]:g}:{a.values[-1]:g}:"
+                                f"{len(a.values)}" for a in axes) + "`.")
+    title = f"Design table: {spec.name or Path(source).stem}"
+    text = tables.markdown(spec.kind, title, described, sweep_columns, rows)
+    files = [folder / CSV_NAME, folder / MARKDOWN_NAME]
+    write_atomic(files[-1], text)
+    if plots:
+        from .plots import sweep_figures
+
+        for name, payload in sweep_figures(spec.kind, axes, rows).items():
+            write_atomic(folder / name, payload)
+            files.append(folder / name)
+    return tuple(files)
+
+
+# --------------------------------------------------------------------------- executing chains
+
+def _warm(row: dict[str, str] | None, free: list[str]) -> dict[str, float] | None:
+    if not row or not free or row.get("status") not in WARM_STATUSES:
+        return None
+    warm = {n: tables.number(row.get(n, "")) for n in free}
+    return {n: v for n, v in warm.items() if v is not None} or None
+
+
+@contextmanager
+def _closing(executor):
+    try:
+        yield executor
+    finally:
+        if executor is not None:
+            executor.close()
+
+
+def _execute(executor, all_chains, points, done, free, task, record) -> None:
+    """Solve every point not in `done`, chain by chain, warm-starting along each chain."""
+    position = dict.fromkeys(range(len(all_chains)), 0)  # chain -> index of its next point
+    pending: dict[object, tuple[int, int]] = {}
+
+    def submit_next(c: int) -> None:
+        members = all_chains[c]
+        k = position[c]
+        while k < len(members) and points[members[k]].key in done:
+            k += 1
+        position[c] = k
+        if k < len(members):
+            before = done.get(points[members[k - 1]].key) if k else None
+            future = executor.submit(task(members[k], _warm(before, free)))
+            pending[future] = (c, members[k])
+
+    try:
+        for c in range(len(all_chains)):
+            submit_next(c)
+        while pending:
+            finished = executor.wait(list(pending))
+            for future in finished:
+                c, i = pending.pop(future)
+                record(i, future.result())
+                position[c] += 1
+                submit_next(c)
+    except BaseException:
+        executor.cancel(list(pending))
+        raise
+
+
+def _executor(workers, scheduler, chains_count):
+    if scheduler:
+        return _DaskExecutor(scheduler)
+    workers = default_workers() if workers is None else workers
+    if workers < 1:
+        raise SpecError("command line", "--workers", "an integer >= 1", str(workers))
+    workers = min(workers, chains_count)
+    return _SerialExecutor() if workers <= 1 else _ProcessExecutor(workers)
+
+
+def default_workers() -> int:
+    """The machine's cores available to this process."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class _SerialExecutor:
+    """Solves in this process, one point per wait (the oldest submitted first)."""
+
+    def __init__(self):
+        self.tasks: dict[Future, PointTask] = {}
+
+    def submit(self, point_task):
+        future: Future = Future()
+        self.tasks[future] = point_task
+        return future
+
+    def wait(self, futures):
+        first = futures[0]
+        first.set_result(solve_point(self.tasks.pop(first)))
+        return [first]
+
+    def cancel(self, futures):
+        pass
+
+    def close(self):
+        pass
+
+
+class _ProcessExecutor:
+    """Local worker processes: forked (fast start) when this process runs no other thread,
+    else started from a fork server (never fork a process whose threads may hold locks)."""
+
+    def __init__(self, workers: int):
+        import multiprocessing
+        import threading
+        from concurrent.futures import ProcessPoolExecutor
+
+        methods = multiprocessing.get_all_start_methods()
+        if "fork" in methods and threading.active_count() == 1:
+            context = multiprocessing.get_context("fork")
+        elif "forkserver" in methods:
+            context = multiprocessing.get_context("forkserver")
+            context.set_forkserver_preload(["pdm_design.sweep.run", "pdm_design.api"])
+        else:
+            context = multiprocessing.get_context("spawn")
+        self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=context,
+                                        initializer=_ignore_interrupts)
+        self.pool.submit(int).result()  # start the workers now, before any progress thread
+
+    def submit(self, point_task):
+        return self.pool.submit(solve_point, point_task)
+
+    def wait(self, futures):
+        return wait_futures(futures, return_when=FIRST_COMPLETED).done
+
+    def cancel(self, futures):
+        for future in futures:
+            future.cancel()
+
+    def close(self):
+        self.pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _ignore_interrupts() -> None:
+    """Workers leave Ctrl-C to the main process, which stops the sweep and shuts them down
+    (each finishes the point it is solving; the rows already written stay)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class _DaskExecutor:
+    """An existing Dask distributed cluster, by its scheduler's address."""
+
+    def __init__(self, address: str):
+        try:
+            import distributed
+        except ImportError:  # pragma: no cover - a dependency of the package
+            raise SpecError("command line", "--scheduler", "Dask distributed installed "
+                            "(pip install 'dask[distributed]')", "it is not") from None
+        try:
+            self.client = distributed.Client(address, timeout=DASK_TIMEOUT,
+                                             set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as error:
+            raise SpecError("command line", "--scheduler", "the address of a running Dask "
+                            "scheduler (e.g. tcp://127.0.0.1:8786)",
+                            f"'{address}' ({error})") from None
+        self.finished = distributed.as_completed(loop=self.client.loop)
+
+    def submit(self, point_task):
+        future = self.client.submit(solve_point, point_task, pure=False)
+        self.finished.add(future)
+        return future
+
+    def wait(self, futures):
+        return [next(self.finished)]
+
+    def cancel(self, futures):
+        if futures:
+            self.client.cancel(futures)
+
+    def close(self):
+        self.client.close()
+

@@ -1,0 +1,147 @@
+"""`pdm-design sheet`: build sheets of the paper's problems, checked against the geometry written
+out here by hand and, for the tolerances, against the event simulator."""
+
+import csv
+import io
+import json
+import math
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from pdm_design.cli import main
+from pdm_design.sheet import sheet_for
+from pdm_design.spec.model import ManipulatorOffset, StepError
+from pdm_design.verify import simulate_spec
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+MANIP = PROBLEMS / "paper_manipulators.toml"
+STAIRS = PROBLEMS / "paper_stairs_frictionless.toml"
+
+
+def run(*args):
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    return result.exit_code, result.stdout, result.stderr
+
+
+def csv_rows(path):
+    return list(csv.DictReader(io.StringIO(Path(path).read_text())))
+
+
+@pytest.fixture(scope="module")
+def manip_sheet():
+    return sheet_for(MANIP)
+
+
+def test_pivots_are_multiples_of_the_pitch(manip_sheet):
+    a, b, l = 0.2, 0.6, 2.0
+    pitch = (l * (math.sin(a) + math.sin(b)), -l * (math.cos(a) - math.cos(b)))
+    assert manip_sheet.count == 6  # the spec's verification.stages
+    for k, item in enumerate(manip_sheet.items):
+        assert item["manipulator"] == k + 1
+        assert item["pivot_x_m"] == pytest.approx(k * pitch[0], abs=1e-12)
+        assert item["pivot_y_m"] == pytest.approx(k * pitch[1], abs=1e-12)
+
+
+def test_paper_pitch_on_the_sheet(manip_sheet):
+    second = manip_sheet.items[1]
+    assert second["pivot_x_m"] == pytest.approx(1.5266, abs=5e-5)   # the paper's x
+    assert second["pivot_y_m"] == pytest.approx(-0.3095, abs=5e-5)  # and y, downward
+
+
+def test_stop_angles_link_and_palm_mass(manip_sheet):
+    for item in manip_sheet.items:
+        assert item["back_stop_rad"] == -0.2 and item["handover_rad"] == 0.6
+        assert item["front_stop_rad"] == pytest.approx(math.pi / 2, abs=1e-7)
+        assert item["link_length_m"] == 2.0
+        assert item["palm_mass_kg"] == pytest.approx(1.0 / 10.0)  # M = m / (m/M)
+
+
+def test_handover_point_is_the_next_palm_at_its_back_stop(manip_sheet):
+    for item, after in zip(manip_sheet.items, manip_sheet.items[1:]):
+        assert item["handover_x_m"] == pytest.approx(after["palm_at_back_stop_x_m"], abs=1e-12)
+        assert item["handover_y_m"] == pytest.approx(after["palm_at_back_stop_y_m"], abs=1e-12)
+
+
+def test_pivot_tolerance_survives_the_simulator(manip_sheet):
+    tol = manip_sheet.tolerance
+    assert tol["dx"] > 0 and tol["dy"] > 0
+    # every pivot moved by 90 % of its tolerance, in an alternating pattern
+    offsets = tuple(ManipulatorOffset(manipulator=k, dx=0.9 * tol["dx"] * (-1) ** k,
+                                      dy=-0.9 * tol["dy"] * (-1) ** k) for k in range(1, 7))
+    spec = manip_sheet.spec
+    result = simulate_spec(spec, spec.design_at(), offsets=offsets)
+    assert result.outcome.completed
+
+
+def test_stairs_steps_have_the_periodic_rise_and_tread():
+    sheet = sheet_for(STAIRS)
+    rise = (1 - 0.8**2) * 1.0
+    tread = 2.0 * (1 + 0.8) * math.sqrt(2 * 9.81 * 1.0) / 9.81
+    assert sheet.count == 20
+    first_back = sheet.items[0]["back_x_m"]
+    for k, step in enumerate(sheet.items):
+        assert step["rise_m"] == pytest.approx(rise, rel=1e-12)
+        assert step["tread_m"] == pytest.approx(tread, rel=1e-12)
+        assert step["level_m"] == pytest.approx(-k * rise, abs=1e-12)
+        assert step["back_x_m"] == pytest.approx(first_back + k * tread, rel=1e-12)
+    # the first landing is mid-tread: the ball flies V0 sqrt(2 h0 / g) to it
+    assert first_back + tread / 2 == pytest.approx(2.0 * math.sqrt(2 / 9.81), rel=1e-12)
+
+
+def test_step_tolerance_survives_the_simulator():
+    sheet = sheet_for(STAIRS)
+    tol = sheet.tolerance
+    assert tol["rise"] > 0 and tol["tread"] > 0
+    errors = tuple(StepError(step=k, rise=0.9 * tol["rise"] * (-1) ** k,
+                             tread=0.9 * tol["tread"]) for k in range(1, 21))
+    result = simulate_spec(sheet.spec, sheet.spec.design_at(), step_errors=errors)
+    assert result.outcome.completed
+
+
+def test_sheet_command_writes_markdown_csv_and_drawing(tmp_path):
+    code, out, err = run("sheet", MANIP, "--out", tmp_path)
+    assert code == 0, err
+    rows = csv_rows(tmp_path / "sheet.csv")
+    assert [int(r["manipulator"]) for r in rows] == [1, 2, 3, 4, 5, 6]
+    assert float(rows[2]["pivot_x_m"]) == pytest.approx(2 * 2 * (math.sin(0.2) + math.sin(0.6)))
+    text = (tmp_path / "sheet.md").read_text()
+    assert "![drawing](sheet.svg)" in text and "| 6 |" in text
+    assert (tmp_path / "sheet.png").read_bytes().startswith(b"\x89PNG")
+    assert b"<svg" in (tmp_path / "sheet.svg").read_bytes()
+
+
+def test_csv_lists_every_step_the_drawing_only_some(tmp_path):
+    code, _, err = run("sheet", STAIRS, "--out", tmp_path, "--count", "40", "--no-tolerance")
+    assert code == 0, err
+    assert len(csv_rows(tmp_path / "sheet.csv")) == 40
+    assert b"first 8 of 40" in (tmp_path / "sheet.svg").read_bytes()
+
+
+def test_sheet_of_a_saved_design_json_matches_the_spec(tmp_path):
+    code, out, _ = run("optimize", MANIP, "--format", "json")
+    assert code == 0
+    saved = tmp_path / "design.json"
+    saved.write_text(out)
+    assert run("sheet", saved, "--out", tmp_path / "a", "--no-drawing")[0] == 0
+    assert run("sheet", MANIP, "--out", tmp_path / "b", "--no-drawing")[0] == 0
+    assert (tmp_path / "a" / "sheet.csv").read_text() == (tmp_path / "b" / "sheet.csv").read_text()
+
+
+@pytest.mark.parametrize("content", ["not json", json.dumps({"schema": "other"}),
+                                     json.dumps({"schema": "pdm-design/optimize/1",
+                                                 "spec": "missing.toml", "design": {}})])
+def test_bad_design_json_is_bad_input(tmp_path, content):
+    path = tmp_path / "design.json"
+    path.write_text(content)
+    code, _, err = run("sheet", path, "--out", tmp_path / "out")
+    assert code == 2 and str(path) in err
+
+
+def test_sheet_of_a_design_that_does_not_work_exits_1(tmp_path):
+    spec = tmp_path / "slip.toml"
+    spec.write_text(MANIP.read_text().replace("friction = 0.8", "friction = 0.3"))
+    code, _, err = run("sheet", spec, "--out", tmp_path / "out", "--no-tolerance")
+    assert code == 1 and "infeasible" in err
+    assert (tmp_path / "out" / "sheet.csv").exists()

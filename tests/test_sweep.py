@@ -1,0 +1,282 @@
+"""`pdm-design table`: sweep names and grids, rows against the API and the closed forms, row-by-row
+writing, resume after an interruption, local workers and a Dask cluster on the loopback
+interface giving the same table."""
+
+import math
+import tomllib
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from pdm_design.api import design
+from pdm_design.cli import main
+from pdm_design.errors import SpecError
+from pdm_design.spec import parse_spec
+from pdm_design.sweep import run as sweep_run
+from pdm_design.sweep.grid import point_data, resolve_name
+from pdm_design.sweep.progress import progress_enabled
+from pdm_design.sweep.run import run_sweep
+from pdm_design.sweep.tables import read_csv
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+MANIP = PROBLEMS / "paper_manipulators.toml"
+STAIRS = PROBLEMS / "paper_stairs_frictionless.toml"
+ROBUST = PROBLEMS / "manipulators_robust.toml"
+# 3 x 2 grid: mass ratio and palm friction (0.3 makes the paper design slip: infeasible rows)
+GRID = ["mass_ratio=4:16:3", "friction=0.3:0.8:2"]
+
+
+def raw(path):
+    return tomllib.loads(Path(path).read_text())
+
+
+def run(*args):
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    return result.exit_code, result.stdout, result.stderr
+
+
+def rows_of(folder):
+    return read_csv((Path(folder) / "table.csv").read_text())[1]
+
+
+# --------------------------------------------------------------------------- names and grids
+
+@pytest.mark.parametrize("path, name, expected", [
+    (MANIP, "mass_ratio", ("design", "mass_ratio")),
+    (MANIP, "friction", ("scene", "palm", "friction")),
+    (STAIRS, "friction", ("scene", "friction")),
+    (MANIP, "gravity", ("scene", "gravity")),
+    (MANIP, "scene.body.width", ("scene", "body", "width")),
+    (STAIRS, "spin", ("initial", "spin")),  # not written in the file: its default is swept
+])
+def test_sweep_name_resolves_to_one_key(path, name, expected):
+    assert resolve_name(raw(path), name) == expected
+
+
+def test_ambiguous_name_is_bad_input_listing_the_matches(tmp_path):
+    code, _, err = run("table", MANIP, "--sweep", "width=1:2:2", "--out", tmp_path)
+    assert code == 2
+    assert "--sweep" in err and "scene.body.width" in err and "scene.palm.width" in err
+
+
+def test_unknown_name_is_bad_input_with_close_matches(tmp_path):
+    code, _, err = run("table", MANIP, "--sweep", "frction=0.1:0.2:2", "--out", tmp_path)
+    assert code == 2
+    assert "unknown parameter 'frction'" in err and "friction" in err
+
+
+def test_malformed_sweep_is_bad_input(tmp_path):
+    code, _, err = run("table", MANIP, "--sweep", "mass_ratio=1:2", "--out", tmp_path)
+    assert code == 2 and "NAME=START:STOP:COUNT" in err
+
+
+def test_grid_value_outside_domain_is_bad_input_before_solving(tmp_path):
+    out = tmp_path / "t"
+    code, _, err = run("table", STAIRS, "--sweep", "restitution=0.5:1.5:3", "--out", out)
+    assert code == 2
+    assert "design.restitution" in err and "<= 1" in err
+    assert not (out / "table.csv").exists()
+
+
+def test_sweeping_a_free_variable_fixes_it():
+    data = point_data(raw(ROBUST), [("design", "alpha")], [0.3])
+    spec = parse_spec(data, "robust")
+    assert spec.design["alpha"] == 0.3
+    assert spec.free_variables == ("beta",)
+
+
+def test_warm_start_sets_the_free_variables_initial_within_bounds():
+    data = point_data(raw(ROBUST), [("design", "link_length")], [2.5],
+                      warm={"alpha": 0.35, "beta": 5.0})
+    spec = parse_spec(data, "robust")
+    assert spec.design["alpha"].initial == 0.35
+    assert spec.design["beta"].initial == spec.design["beta"].max  # clipped to its bound
+
+
+# --------------------------------------------------------------------------- rows
+
+def test_rows_equal_each_grid_point_solved_through_the_api(tmp_path):
+    result = run_sweep(MANIP, GRID, tmp_path, workers=1, plots=False)
+    data = raw(MANIP)
+    assert len(result.rows) == 6
+    for row in result.rows:
+        q, mu = float(row["design.mass_ratio"]), float(row["scene.palm.friction"])
+        data["design"]["mass_ratio"], data["scene"]["palm"]["friction"] = q, mu
+        outcome = design(parse_spec(data, "point"))
+        assert row["status"] == outcome.status.value
+        assert float(row["handover_speed"]) == outcome.analysis.periodic["handover_speed"]
+        assert float(row["margin.slip_carry"]) == outcome.analysis.margins["slip_carry"]
+        assert (row["verified"] == "true") == outcome.verification["passed"]
+
+
+def test_optimised_rows_equal_each_point_optimised_on_its_own(tmp_path):
+    # alpha and beta free, max_offset_tolerance: the second point is warm-started from the
+    # first, yet must reach the optimum a cold solve of that point reaches
+    result = run_sweep(ROBUST, ["mass_ratio=4:12:2"], tmp_path, workers=1, plots=False)
+    data = raw(ROBUST)
+    for row in result.rows:
+        assert row["status"] == "optimal"
+        data["design"]["mass_ratio"] = float(row["mass_ratio"])
+        alone = design(parse_spec(data, "point"))
+        assert float(row["tolerance"]) == pytest.approx(alone.tolerance["dx"], rel=1e-6)
+        assert float(row["objective"]) == pytest.approx(alone.objective["value"], rel=1e-6)
+        for name in ("alpha", "beta"):
+            assert float(row[name]) == pytest.approx(alone.analysis.design[name], abs=1e-5)
+
+
+def test_rows_match_the_closed_form_handover_speed(tmp_path):
+    result = run_sweep(MANIP, ["mass_ratio=2:20:4"], tmp_path, workers=1, plots=False)
+    a, b, l, g = 0.2, 0.6, 2.0, 9.81
+    for row in result.rows:
+        q = float(row["mass_ratio"])
+        c = (q / (1 + q) * math.cos(a + b)) ** 2
+        speed = math.sqrt(2 * g * l * (math.cos(a) - math.cos(b)) / (1 - c))
+        assert float(row["handover_speed"]) == pytest.approx(speed, rel=1e-12)
+        assert float(row["palm_mass"]) == pytest.approx(1.0 / q, rel=1e-15)
+
+
+def test_stairs_rows_follow_the_periodic_rise(tmp_path):
+    result = run_sweep(STAIRS, ["restitution=0.5:0.9:3"], tmp_path, workers=1, plots=False)
+    for row in result.rows:
+        eps = float(row["design.restitution"])
+        assert float(row["rise"]) == pytest.approx((1 - eps**2) * 1.0, rel=1e-12)
+        tread = 2.0 * (1 + eps) * math.sqrt(2 * 9.81) / 9.81
+        assert float(row["tread"]) == pytest.approx(tread, rel=1e-12)
+
+
+def test_infeasible_rows_carry_the_reason(tmp_path):
+    result = run_sweep(MANIP, ["friction=0.3:0.3:1"], tmp_path, workers=1, plots=False)
+    (row,) = result.rows
+    assert row["status"] == "infeasible"
+    # demand tan(beta) = tan(0.6) = 0.684 > 0.3: slip during the carry
+    assert "slip_carry" in row["reason"]
+    assert float(row["margin.slip_carry"]) == pytest.approx(-(1 - 0.3 / math.tan(0.6)))
+    assert "Why points fail" in (tmp_path / "table.md").read_text()
+
+
+def test_rows_are_appended_as_they_finish(tmp_path):
+    seen = []
+
+    def on_row(point, row):
+        seen.append(len(rows_of(tmp_path)))
+
+    run_sweep(MANIP, GRID, tmp_path, workers=1, plots=False, on_row=on_row)
+    assert seen == [1, 2, 3, 4, 5, 6]
+
+
+def test_warm_start_passes_each_design_along_its_chain(tmp_path, monkeypatch):
+    warm_seen = {}
+
+    def fake_solve(task):
+        warm_seen[task.values] = task.warm
+        alpha = 0.1 + task.values[0]  # a "design" that depends on the grid point
+        return {"status": "optimal", "alpha": repr(alpha), "beta": "0.5"}
+
+    monkeypatch.setattr(sweep_run, "solve_point", fake_solve)
+    run_sweep(ROBUST, ["link_length=1:4:4"], tmp_path, workers=1, chain=2, plots=False)
+    assert warm_seen[(1.0,)] is None and warm_seen[(3.0,)] is None  # chain heads
+    assert warm_seen[(2.0,)] == {"alpha": 1.1, "beta": 0.5}
+    assert warm_seen[(4.0,)] == {"alpha": 3.1, "beta": 0.5}
+
+
+# --------------------------------------------------------------------------- resume
+
+def _interrupt_after(n):
+    def on_row(point, row):
+        on_row.count += 1
+        if on_row.count == n:
+            raise KeyboardInterrupt
+    on_row.count = 0
+    return on_row
+
+
+def test_interrupted_sweep_keeps_its_rows_and_resume_gives_the_same_table(tmp_path):
+    whole, cut = tmp_path / "whole", tmp_path / "cut"
+    run_sweep(MANIP, GRID, whole, workers=1)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(MANIP, GRID, cut, workers=1, on_row=_interrupt_after(4))
+    assert len(rows_of(cut)) == 4 and not (cut / "table.md").exists()
+    result = run_sweep(MANIP, GRID, cut, workers=1, resume=True)
+    assert (result.computed, result.reused) == (2, 4)
+    for name in ("table.csv", "table.md"):
+        assert (cut / name).read_text() == (whole / name).read_text()
+
+
+def test_resume_drops_a_row_cut_short_mid_write(tmp_path):
+    whole, cut = tmp_path / "whole", tmp_path / "cut"
+    run_sweep(MANIP, GRID, whole, workers=1, plots=False)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(MANIP, GRID, cut, workers=1, plots=False, on_row=_interrupt_after(3))
+    with open(cut / "table.csv", "a") as stream:
+        stream.write("16.0,0.8,evaluated,0.2,0.6")  # a kill in the middle of a write
+    result = run_sweep(MANIP, GRID, cut, workers=1, plots=False, resume=True)
+    assert (result.computed, result.reused) == (3, 3)
+    assert (cut / "table.csv").read_text() == (whole / "table.csv").read_text()
+
+
+def test_resume_from_the_command_line_solves_only_the_missing_rows(tmp_path):
+    whole, cut = tmp_path / "whole", tmp_path / "cut"
+    run_sweep(MANIP, GRID, whole, workers=1)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(MANIP, GRID, cut, workers=1, on_row=_interrupt_after(5))
+    code, out, err = run("table", MANIP, *(f"--sweep={g}" for g in GRID), "--out", cut,
+                         "--resume", "--workers", "1")
+    assert code == 0, err
+    assert "1 solved now, 5 kept from before" in out
+    assert (cut / "table.md").read_text() == (whole / "table.md").read_text()
+
+
+def test_resume_refuses_a_folder_made_by_other_sweeps(tmp_path):
+    run_sweep(MANIP, ["mass_ratio=4:16:3"], tmp_path, workers=1, plots=False)
+    with pytest.raises(SpecError, match="--resume"):
+        run_sweep(MANIP, ["mass_ratio=4:16:4"], tmp_path, workers=1, plots=False, resume=True)
+
+
+# --------------------------------------------------------------------------- parallel
+
+def test_local_worker_processes_give_the_same_table(tmp_path):
+    run_sweep(MANIP, GRID, tmp_path / "one", workers=1, plots=False)
+    run_sweep(MANIP, GRID, tmp_path / "two", workers=2, chain=1, plots=False)
+    assert (tmp_path / "two" / "table.csv").read_text() == (
+        tmp_path / "one" / "table.csv").read_text()
+
+
+def test_dask_cluster_on_loopback_gives_the_same_table(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    run_sweep(MANIP, GRID, tmp_path / "local", workers=1, plots=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  protocol="tcp://", host="127.0.0.1",
+                                  dashboard_address="127.0.0.1:0") as cluster:
+        code, out, err = run("table", MANIP, *(f"--sweep={g}" for g in GRID), "--scheduler",
+                             cluster.scheduler_address, "--chain", "1", "--no-plots",
+                             "--out", tmp_path / "dask")
+    assert code == 0, err
+    assert "6 solved now" in out
+    assert (tmp_path / "dask" / "table.csv").read_text() == (
+        tmp_path / "local" / "table.csv").read_text()
+
+
+# --------------------------------------------------------------------------- the command
+
+def test_table_command_writes_tables_and_plots(tmp_path):
+    code, out, err = run("table", STAIRS, "--sweep", "restitution=0.6:0.8:3", "--out", tmp_path,
+                         "--workers", "1")
+    assert code == 0, err
+    assert "3 points (3 evaluated)" in out
+    assert err == ""  # no progress bar when stderr is not a terminal
+    assert (tmp_path / "table.md").read_text().count("| evaluated |") == 3
+    for name in ("optimum", "tolerance"):
+        assert (tmp_path / f"{name}.png").read_bytes().startswith(b"\x89PNG")
+        assert b"<svg" in (tmp_path / f"{name}.svg").read_bytes()
+
+
+def test_progress_bar_only_on_a_terminal():
+    class Stream:
+        def __init__(self, tty):
+            self.tty = tty
+
+        def isatty(self):
+            return self.tty
+
+    assert progress_enabled(Stream(True)) and not progress_enabled(Stream(False))
