@@ -17,6 +17,7 @@ import itertools
 
 import numpy as np
 
+from .progress import progress_bar
 from .spec.model import ManipulatorOffset, Spec, StepError
 from .verify import simulate_spec
 
@@ -50,13 +51,15 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
         builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws]))
 
     failures = []
-    for name, errors in builds:
-        result = simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
-        if not result.outcome.completed:
-            f = result.outcome.failure
-            what = f"{f.kind} at stage {f.stage}" if f else "incomplete"
-            failures.append({"build": name, "errors": errors, "failure": what,
-                             "stages_passed": result.outcome.stages_passed})
+    with progress_bar(len(builds), "verifying the tolerance box") as advance:
+        for name, errors in builds:
+            result = simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
+            advance()
+            if not result.outcome.completed:
+                f = result.outcome.failure
+                what = f"{f.kind} at stage {f.stage}" if f else "incomplete"
+                failures.append({"build": name, "errors": errors, "failure": what,
+                                 "stages_passed": result.outcome.stages_passed})
     return {"passed": not failures, "samples": len(builds), "failures": failures,
             "box": dict(zip(_axes(spec), half, strict=True))}
 

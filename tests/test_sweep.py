@@ -12,10 +12,10 @@ from click.testing import CliRunner
 from pdm_design.api import design
 from pdm_design.cli import main
 from pdm_design.errors import SpecError
+from pdm_design.progress import progress_enabled
 from pdm_design.spec import parse_spec
 from pdm_design.sweep import run as sweep_run
 from pdm_design.sweep.grid import point_data, resolve_name
-from pdm_design.sweep.progress import progress_enabled
 from pdm_design.sweep.run import run_sweep
 from pdm_design.sweep.tables import read_csv
 

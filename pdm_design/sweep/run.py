@@ -31,10 +31,10 @@ from pathlib import Path
 
 from ..errors import SpecError
 from ..io import write_atomic
+from ..progress import progress_bar
 from ..spec import load_spec, parse_spec
 from . import tables
 from .grid import GridPoint, SweepAxis, chains, grid_points, point_data, sweep_axes
-from .progress import progress_bar
 
 SCHEMA = "pdm-design/table/1"
 CSV_NAME, MARKDOWN_NAME, META_NAME = "table.csv", "table.md", "sweep.json"
