@@ -73,7 +73,10 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: str | None = None) ->
     accuracy = accuracy or spec.verification.accuracy
     preset = SOLVE_PRESETS[accuracy]
     result = solve(spec, starts=preset["starts"], tol=preset["tol"])
-    point = spec.design_at({name: result.design[name] for name in spec.free_variables})
+    # IPOPT honours bounds only to its tolerance (e.g. -1e-8 for a bound at 0): clip to them.
+    point = spec.design_at({name: min(max(result.design[name], spec.design[name].min),
+                                      spec.design[name].max)
+                            for name in spec.free_variables})
     analysis = analyse(spec.scene, point)
     violations = tuple(v.text for v in result.violations) + tuple(analysis.problems)
     verification = None

@@ -370,12 +370,16 @@ def test_stairs_design_is_optimal_and_its_error_box_is_sound():
     sequences += [(tau * rng.choice([-1.0, 1.0], N), tau * rng.choice([-1.0, 1.0], N))
                   for _ in range(40)]
     for er, et in sequences:
-        L, v = d["landing_offset"], math.sqrt(2 * G * 1.0)
+        # step n = tread n and the riser at its back (the simulator's numbering): er[0] is the
+        # first riser, below the fixed launcher, so the first fall is h0 + er[0]
+        v = math.sqrt(2 * G * (1.0 + er[0]))
+        L = d["landing_offset"] + vx * (v - math.sqrt(2 * G * 1.0)) / G
         for n in range(N):
             assert L - r >= 0.02 * tread - 1e-9  # riser clearance with the required margin
-            gap = nose_clearance(vx, eps * v, G, r, tread + et[n], rise + er[n], L)
+            next_rise = rise + (er[n + 1] if n + 1 < N else 0.0)
+            gap = nose_clearance(vx, eps * v, G, r, tread + et[n], next_rise, L)
             assert gap >= -1e-9  # the analysis' own clearance: the ball never touches a nose
             up = eps * v
-            down = math.sqrt(up**2 + 2 * G * (rise + er[n]))
+            down = math.sqrt(up**2 + 2 * G * next_rise)
             L = L + vx * (up + down) / G - (tread + et[n])
             v = down

@@ -4,27 +4,37 @@ Decision vector x = [free design variables (restitution, launch_speed, rise, tre
 landing_offset: whichever the spec leaves free), V (periodic vertical impact speed, when the rise
 is not derived), tau (error box half-width, when robust), t (margin epigraph)].
 
-Stage recursion from the first impact (the approach is part of the problem): the ball reaches
-tread 1 with vertical speed v_1 = sqrt(2 g h0), `landing_offset` L_1 from its riser, horizontal
-speed vx (the launch speed, or after the first rolling impact with friction). Flight n leaves
-tread n upward at eps v_n, falls rise_n = rise + er_n below, lasts
-    T_n = (eps v_n + sqrt(eps^2 v_n^2 + 2 g rise_n)) / g,
+Stage recursion from the launch (the approach is part of the problem). Step n is tread n with the
+riser at its back (from tread n-1, or from the top landing for n = 1), as in the simulator; its
+construction errors (er_n, et_n) make that riser rise + er_n high and the tread tread + et_n long.
+The launcher is fixed: the ball starts drop_height h0 above the designed tread 1 and reaches the
+built one (er_1 lower) with vertical speed v_1 = sqrt(2 g (h0 + er_1)) at
+    L_1 = landing_offset + v0 (t(er_1) - t(0)),   t(e) = sqrt(2 (h0 + e) / g)
+from its riser (v0 the launch speed). Then horizontal speed vx (the launch speed, or after the
+first rolling impact with friction); flight n leaves tread n upward at eps v_n, falls
+rise_{n+1} = rise + er_{n+1} to tread n+1, lasts
+    T_n = (eps v_n + sqrt(eps^2 v_n^2 + 2 g rise_{n+1})) / g,
 and lands at L_{n+1} = L_n + vx T_n - tread_n (tread_n = tread + et_n), v_{n+1}^2 = eps^2 v_n^2 +
-2 g rise_n. Periodicity: V^2 (1 - eps^2) = 2 g rise and tread = vx (1 + eps) V / g.
+2 g rise_{n+1}. Periodicity: V^2 (1 - eps^2) = 2 g rise and tread = vx (1 + eps) V / g.
 
 Nose clearance, smooth and sound: with d the distance from the landing point to the nose, the ball
 (radius r) is horizontally over the nose while its centre is in [d - r, d + r]; its centre height
 above the take-off level is concave in time, so the ball stays above the nose level (and over the
 tread before it) iff its lowest point is above that level at the two ends, x = d - r and d + r:
     eps v vx z - g z^2 / 2 >= 0  for z = d - r, d + r   (times vx^2 > 0).
-After x = d + r it is clear of the riser; it then lands on the next tread.
+After x = d + r it is clear of the riser; it then lands on the next tread. The launch must also
+clear the top landing's nose (the simulator's step 0, one design rise above tread 1, without
+errors): `launch_slack`. With the derived rise and no friction it is flight 1's row at zero error;
+with friction the launch flies at v0 and the later flights at the rolling speed, and it is not.
 
-Robust errors |er_n|, |et_n| <= tau: L_n increases with every er_j and decreases with every et_j
-(j < n), v_n increases with every er_j: so L_n is largest on the corner (er, et) = (+tau, -tau),
-smallest on (-tau, +tau), v_n smallest on er = -tau (the latter corner). The nose condition is
-increasing in v and concave in d, so its worst case over d in [d_lo, d_hi] is at an end: checking
-both ends with the smallest v is sound. Errors accumulate (the horizontal landing is neutrally
-stable), so the tolerance shrinks with the number of stages checked.
+Robust errors |er_n|, |et_n| <= tau: L_n increases with every er_j (j <= n, the first riser's
+included) and decreases with every et_j (j < n), v_n increases with every er_j (j <= n): so L_n is
+largest on the corner (er, et) = (+tau, -tau), smallest on (-tau, +tau), v_n smallest on
+er = -tau (the latter corner). The nose condition is increasing in v and concave in d, so its
+worst case over d in [d_lo, d_hi] is at an end: checking both ends with the smallest v is sound.
+With friction, the first impact's demand falls with v_1: it is checked at er_1 = -tau. Errors
+accumulate (the horizontal landing is neutrally stable), so the tolerance shrinks with the number
+of stages checked.
 """
 
 from __future__ import annotations
@@ -113,15 +123,27 @@ class _Model:
         down = ca.sqrt(up**2 + 2 * self.g * rise_n)
         return (up + down) / self.g, down
 
+    def first_landing(self, er1):
+        """(L_1, v_1) when the first riser is er1 too high: tread 1 is er1 below its design
+        level and the launcher is not, so the ball falls h0 + er1, further and faster.
+        L_1 - landing_offset = v0 (t(er1) - t(0)), written without cancellation."""
+        h0 = self.scene.initial.drop_height
+        v1 = phys.impact_speed_vertical(self.g, h0 + er1)
+        return self.L1 + self.v0 * 2 * er1 / (v1 + self.vy1), v1
+
     def trajectory(self, er, et):
         """Landing offsets L_1..L_N and vertical impact speeds v_1..v_N with every step's errors
-        (er, et) (numbers, symbols or per-step sequences)."""
-        L, v = [self.L1], [self.vy1]
+        (er, et) (numbers, symbols or per-step sequences): er[n] is step n+1's riser (er[0] the
+        first, from the top landing), et[n] tread n+1."""
+
+        def at(e, n):
+            return e[n] if isinstance(e, (list, tuple)) else e
+
+        L1, v1 = self.first_landing(at(er, 0))
+        L, v = [L1], [v1]
         for n in range(self.stages - 1):
-            e_r = er[n] if isinstance(er, (list, tuple)) else er
-            e_t = et[n] if isinstance(et, (list, tuple)) else et
-            T, v_next = self.flight(v[-1], self.rise + e_r)
-            L.append(L[-1] + self.vx * T - (self.tread + e_t))
+            T, v_next = self.flight(v[-1], self.rise + at(er, n + 1))
+            L.append(L[-1] + self.vx * T - (self.tread + at(et, n)))
             v.append(v_next)
         return L, v
 
@@ -132,6 +154,19 @@ class _Model:
         if r == 0.0:
             ends = [("over the nose", dist)]
         return [(where, self.eps * v * vx * z - g * z**2 / 2) for where, z in ends]
+
+    def launch_slack(self):
+        """The launch clears the top landing (step 0, one design rise above the designed tread 1;
+        neither it nor the launcher has construction errors). The ball starts at its apex,
+        a = h0 - rise above that landing, horizontal speed v0, and the landing's nose is
+        x_n = v0 t(0) - landing_offset ahead. The lowest point falls for x > 0, so it is above the
+        nose level while the centre is within r of the nose iff it is at x_n + r (nothing to
+        check when x_n + r <= 0): a v0^2 - g max(x_n + r, 0)^2 / 2 >= 0 (the height times v0^2;
+        C1). Conservative when the launch is below the top landing (a < 0) but already past it."""
+        h0, r = self.scene.initial.drop_height, self.scene.ball.radius
+        a = h0 - self.rise
+        x = self.v0 * self.vy1 / self.g - self.L1 + r
+        return a * self.v0**2 - self.g * ca.fmax(x, 0.0) ** 2 / 2
 
     def conditions(self, tau, robust):
         g, r = self.g, self.scene.ball.radius
@@ -148,7 +183,9 @@ class _Model:
                 self.tread - self.orbit_tread, self.tread, equality=True)
         if not self.scene.frictionless:
             ball = self.scene.ball
-            demand = phys.rolling_impulse_ratio(self.v0, self.scene.initial.spin, self.vy1,
+            # the normal impulse grows with the fall: the worst first riser is tau too low
+            vy1 = self.first_landing(-tau)[1] if robust else self.vy1
+            demand = phys.rolling_impulse_ratio(self.v0, self.scene.initial.spin, vy1,
                                                 self.eps, radius=ball.radius, mass=ball.mass,
                                                 inertia=ball.inertia)
             add("first_impact_friction", "first impact ends rolling",
@@ -156,8 +193,13 @@ class _Model:
         add("forward_flight", "the ball keeps moving down the stairs",
             self.vx - MIN_FORWARD_SPEED, 1.0, kind=VALIDITY)
         add("step_down", "every step goes down", self.rise - tau, self.tread, kind=VALIDITY)
+        if robust:
+            add("step_down", "tread 1 stays below the launch",
+                self.scene.initial.drop_height - tau, self.tread, kind=VALIDITY)
 
         tread = self.tread
+        add("nose_clearance", "launch, over the top landing's nose", self.launch_slack(),
+            tread * self.v0**2)
         scale = tread * self.vx**2
         if robust:
             L_long, _ = self.trajectory(tau, -tau)
@@ -167,10 +209,8 @@ class _Model:
             L_short = L_long
         for n in range(self.stages):
             stage = n + 1
-            if n == 0 or robust is False:
-                add("riser_clearance", f"landing {stage}", L_short[n] - r, tread)
-            else:
-                add("riser_clearance", f"landing {stage}, shortest drift", L_short[n] - r, tread)
+            where = f"landing {stage}, shortest drift" if robust else f"landing {stage}"
+            add("riser_clearance", where, L_short[n] - r, tread)
             ends = [("", tread - L_long[n])] if not robust else [
                 ("nose nearest, ", tread - tau - L_long[n]),
                 ("nose furthest, ", tread + tau - L_short[n]),

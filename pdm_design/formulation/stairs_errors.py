@@ -1,8 +1,11 @@
 """The stairs' conditions as explicit functions of every step's construction errors.
 
-d = (er_1..er_N, et_1..et_N): step n's rise and tread differ from the design by (er_n, et_n).
-The recursion is the one in stairs.py, step by step with each step's own errors; used to linearise
-the safe set of errors (cvxpy) and to check a robust box by sampling errors inside it.
+d = (er_1..er_N, et_1..et_N): step n's rise and tread differ from the design by (er_n, et_n),
+numbered as the simulator and the spec's step_errors number them: er_n is the riser at the back of
+tread n (er_1 the first, below the fixed top landing and launcher), et_n tread n's length. The
+recursion is the one in stairs.py, step by step with each step's own errors; used to linearise the
+safe set of errors (cvxpy) and to check a robust box by sampling errors inside it. (The launch row
+does not depend on the errors and is not repeated here.)
 """
 
 from __future__ import annotations

@@ -1,0 +1,131 @@
+"""The stairs optimizer's robust error box against the event simulator (the judge).
+
+Regression: at restitution 0.85 and 0.9 the NLP's box was refuted by the simulator (the build
+with every step at (rise + tol, tread - tol) hit the nose of step 20). The NLP gave step n's rise
+error to the drop in front of tread n (to tread n+1), while the simulator (and the spec's
+step_errors) give step n the riser at the back of tread n, the first one between the fixed top
+landing and tread 1: the first riser's error, which moves the first landing, was missing from the
+worst case. Also: the launch must clear the top landing's nose (step 0), which with friction the
+flights' rows do not imply. Every number asserted here comes from the simulator; the design and
+the claimed box from the optimizer.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pdm_design.formulation import formulate
+from pdm_design.sim.stairs import simulate_stairs
+from pdm_design.solve import optimize
+from pdm_design.spec import load_spec
+from pdm_design.spec.model import StepError
+from pdm_design.status import Status
+from pdm_design.verify_tolerance import verify_tolerance
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+
+
+def spec_variant(tmp_path, old, new, name="stairs.toml"):
+    text = (PROBLEMS / "stairs_design.toml").read_text()
+    assert old in text
+    path = tmp_path / name
+    path.write_text(text.replace(old, new))
+    return load_spec(path)
+
+
+def solved(spec):
+    result = optimize(spec, starts=2)
+    assert result.status is Status.OPTIMAL
+    point = spec.design_at({name: result.design[name] for name in spec.free_variables})
+    return result, point
+
+
+def run(spec, point, rise_errors, tread_errors):
+    errors = tuple(StepError(step=k + 1, rise=a, tread=b)
+                   for k, (a, b) in enumerate(zip(rise_errors, tread_errors, strict=True)))
+    return simulate_stairs(spec.scene, point, stages=spec.verification.stages, step_errors=errors)
+
+
+@pytest.mark.parametrize("restitution", [0.85, 0.9])
+def test_claimed_error_box_passes_the_simulator(tmp_path, restitution):
+    spec = spec_variant(tmp_path, "restitution = 0.8", f"restitution = {restitution}")
+    result, point = solved(spec)
+    tol = result.tolerance["rise"]
+    assert result.tolerance["tread"] == tol > 0.0
+    N, r = spec.verification.stages, spec.scene.ball.radius
+    tread = result.design["tread"]
+
+    # the build that refuted the old box: every riser high, every tread short (longest drift)
+    long = run(spec, point, [tol] * N, [-tol] * N)
+    assert long.outcome.completed, long.outcome.failure
+    # the NLP's binding row is flight N's leading edge over the nose of step N (L_N = tread_N - r):
+    # the simulated last landing sits exactly there, so both count the same risers
+    assert long.stages[-1]["landing_x"] == pytest.approx(tread - tol - r, abs=1e-6)
+    # the shortest drift: every riser low, every tread long, stays clear of the risers
+    short = run(spec, point, [-tol] * N, [tol] * N)
+    assert short.outcome.completed, short.outcome.failure
+    assert min(s["landing_x"] for s in short.stages) >= r + 0.02 * tread - 1e-6
+
+    # the verification the CLI runs: corner patterns and random builds inside the box
+    box = verify_tolerance(spec, point, result.tolerance, samples=4)
+    assert box["passed"], box["failures"]
+
+
+def test_nlp_and_simulator_number_the_step_errors_alike(tmp_path):
+    # The NLP's explicit-error conditions (formulation/stairs_errors.py, used for the sampled
+    # re-check and the linearised boxes) land the ball where the simulator does, step by step,
+    # for the first riser alone (tread 1 lower, the launcher fixed: the first landing moves by
+    # v0 (t(h0 + e) - t(h0))) and for a random build inside the box.
+    spec = spec_variant(tmp_path, "restitution = 0.8", "restitution = 0.85")
+    result, point = solved(spec)
+    tol, N, r = result.tolerance["rise"], spec.verification.stages, spec.scene.ball.radius
+    scenario = formulate(spec).scenario
+    landing_rows = [i for i, c in enumerate(scenario.conditions) if c.name == "riser_clearance"]
+    rng = np.random.default_rng(7)
+    builds = [([tol] + [0.0] * (N - 1), [0.0] * N),
+              tuple(list(rng.uniform(-tol, tol, N)) for _ in range(2))]
+    for rises, treads in builds:
+        simulated = run(spec, point, rises, treads)
+        assert simulated.outcome.completed, simulated.outcome.failure
+        slack, _ = scenario.function(result.solution.x, np.r_[rises, treads])
+        nlp = np.asarray(slack).ravel()[landing_rows] + r  # riser row: L_n - r
+        sim = [s["landing_x"] for s in simulated.stages]
+        assert sim == pytest.approx(list(nlp), abs=1e-7)
+    g, h0, v0 = spec.scene.gravity, spec.scene.initial.drop_height, point.launch_speed
+    exact = run(spec, point, [0.0] * N, [0.0] * N)
+    first = run(spec, point, *builds[0])
+    shift = v0 * (math.sqrt(2 * (h0 + tol) / g) - math.sqrt(2 * h0 / g))
+    assert first.stages[0]["landing_x"] - exact.stages[0]["landing_x"] == pytest.approx(shift,
+                                                                                         rel=1e-6)
+
+
+@pytest.mark.parametrize("restitution, spin", [(0.3, 0.0), (0.3, 30.0), (0.2, 0.0)])
+def test_launch_must_clear_the_top_landing(tmp_path, restitution, spin):
+    # With friction the launch flies at v0 but every later flight at the (smaller) rolling
+    # speed, so the flights' nose rows do not imply that the launch clears the top landing's
+    # nose (step 0); small restitution and backspin make the gap large. Without the launch row
+    # the NLP claimed all three designs (the last two then came down again on the top landing in
+    # the simulator's nominal run). Whatever it claims now, the simulator must confirm.
+    body = ((PROBLEMS / "stairs_design.toml").read_text()
+            .replace("friction = 0.0", "friction = 0.5")
+            .replace("radius = 0.05           # m", "radius = 0.05\nmass = 1.0\ninertia = 0.001 #")
+            .replace("drop_height = 1.0       # m (h0)", f"drop_height = 1.0\nspin = {spin}")
+            .replace("restitution = 0.8", f"restitution = {restitution}")
+            .replace("stages = 20", "stages = 5"))
+    path = tmp_path / "friction.toml"
+    path.write_text(body)
+    spec = load_spec(path)
+    result = optimize(spec, starts=2)
+    if not result.status.is_success:
+        assert result.status is Status.INFEASIBLE
+        assert any("top landing" in v.text for v in result.violations)
+        return
+    point = spec.design_at({name: result.design[name] for name in spec.free_variables})
+    nominal = simulate_stairs(spec.scene, point, stages=5)
+    assert nominal.outcome.completed, nominal.outcome.failure
+    box = verify_tolerance(spec, point, result.tolerance, samples=4)
+    assert box["passed"], box["failures"]
