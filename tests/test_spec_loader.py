@@ -191,8 +191,8 @@ BAD_VALUES = [
     # (kind, path, value, key in the error, gist of what was expected)
     ("manipulators", ("scene", "body", "mass"), "1", "scene.body.mass", "a number"),
     ("manipulators", ("scene", "body", "mass"), True, "scene.body.mass", "a number"),
-    ("manipulators", ("scene", "body", "mass"), -1.0, "scene.body.mass", "a number > 0"),
-    ("stairs", ("scene", "ball", "mass"), -0.2, "scene.ball.mass", "a number > 0"),
+    ("manipulators", ("scene", "body", "mass"), -1.0, "scene.body.mass", "a number >= 1e-06"),
+    ("stairs", ("scene", "ball", "mass"), -0.2, "scene.ball.mass", "a number >= 1e-06"),
     ("manipulators", ("scene", "palm", "restitution"), 1.5, "scene.palm.restitution",
      "a number <= 1"),
     ("manipulators", ("scene", "palm", "restitution"), -0.1, "scene.palm.restitution",

@@ -13,9 +13,15 @@ from pydantic import ConfigDict, Field, Strict
 
 CONFIG = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-Number = Annotated[float, Strict()]
-Positive = Annotated[float, Strict(), Field(gt=0)]
-NonNegative = Annotated[float, Strict(), Field(ge=0)]
+# Every physical magnitude is bounded: from micrometres, milligrams and mm/s to a thousand
+# kilometres, a thousand tonnes and 1000 km/s. Outside that, squares and products in the closed
+# forms would overflow or underflow long before a design could mean anything, so such input is
+# refused at the spec's key rather than answered with inf or NaN.
+LARGEST = 1e6
+SMALLEST = 1e-6
+Number = Annotated[float, Strict(), Field(ge=-LARGEST, le=LARGEST)]
+Positive = Annotated[float, Strict(), Field(ge=SMALLEST, le=LARGEST)]
+NonNegative = Annotated[float, Strict(), Field(ge=0, le=LARGEST)]
 Fraction = Annotated[float, Strict(), Field(ge=0, le=1)]
 # Angles of a manipulator measured from the vertical: the palm must stay above its pivot.
 QuarterTurn = Annotated[float, Strict(), Field(ge=0, lt=math.pi / 2)]
