@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics import manipulators as phys
+from .core import SimulationRefused
 
 
 @dataclass(frozen=True)
@@ -70,14 +71,15 @@ def build_row(scene, design, stages: int, offsets=()) -> Row:
     offsets: objects with .manipulator (1-based), .dx, .dy (m, y up). Offsets of manipulators
     beyond the row are an error (they would silently do nothing)."""
     if stages < 1:
-        raise ValueError(f"stages must be at least 1, not {stages}")
+        raise SimulationRefused(f"stages must be at least 1, not {stages}")
     l = design.link_length
     pitch_x, pitch_y = (float(p) for p in phys.pitch(design.alpha, design.beta, l))
     shift = [[0.0, 0.0] for _ in range(stages)]
     for off in offsets:
         k = int(off.manipulator)
         if not 1 <= k <= stages:
-            raise ValueError(f"offset for manipulator {k} but the row has {stages} manipulators")
+            raise SimulationRefused(f"offset for manipulator {k} but the row has {stages} "
+                                    "manipulators")
         shift[k - 1][0] += float(off.dx)
         shift[k - 1][1] += float(off.dy)
     pivots = tuple(
@@ -133,6 +135,16 @@ class Ballistic:
         x, y, _, _ = self.at(t)
         return x, y
 
+    def bounds(self, a, b):
+        """(x_min, x_max, y_min, y_max) of the path over [a, b] (b may be inf: no bound)."""
+        xa, ya, _, _ = self.at(a)
+        if not math.isfinite(b):
+            return -math.inf, math.inf, -math.inf, math.inf
+        xb, yb, _, _ = self.at(b)
+        apex = self.t0 + self.vy / self.g
+        y_top = self.at(apex)[1] if a < apex < b else max(ya, yb)
+        return min(xa, xb), max(xa, xb), min(ya, yb), y_top
+
     def roots_x(self, c, a, b):
         if self.vx == 0.0:
             return []
@@ -164,9 +176,26 @@ class Arc:
     def point(self, th):
         return self.x0 + self.l * math.sin(th), self.y0 + self.l * math.cos(th)
 
+    def bounds(self, a, b):
+        """(x_min, x_max, y_min, y_max) of the arc over [a, b]: its ends and the angles where
+        x (th = +-pi/2) or y (th = 0, +-pi) is extreme."""
+        x0, y0, l = self.x0, self.y0, self.l
+        sa, sb, ca, cb = math.sin(a), math.sin(b), math.cos(a), math.cos(b)
+        x_lo, x_hi = x0 + l * min(sa, sb), x0 + l * max(sa, sb)
+        y_lo, y_hi = y0 + l * min(ca, cb), y0 + l * max(ca, cb)
+        if a < 0.0 < b:
+            y_hi = y0 + l
+        if a < -0.5 * math.pi < b:
+            x_lo = x0 - l
+        if a < 0.5 * math.pi < b:
+            x_hi = x0 + l
+        if a < -math.pi < b or a < math.pi < b:
+            y_lo = y0 - l
+        return x_lo, x_hi, y_lo, y_hi
+
     @staticmethod
     def _in(values, a, b):
-        return sorted({v for v in values if a < v < b})
+        return [v for v in values if a < v < b]  # (first_entry sorts and merges the cuts)
 
     def roots_x(self, c, a, b):
         q = (c - self.x0) / self.l
@@ -218,12 +247,22 @@ def _start_kind(box: Box, x: float, y: float) -> str:
 
 
 def first_contact(path, boxes, a: float, b: float) -> Entry | None:
-    """Earliest entry of `path` into any of `boxes` on [a, b)."""
+    """Earliest entry of `path` into any of `boxes` on [a, b). Boxes the path's bounding box
+    stays clear of (by more than a rounding margin) are skipped unexamined, and once an entry
+    is found the later boxes are searched only before it (a tie keeps the earlier box)."""
     best = None
+    x_lo, x_hi, y_lo, y_hi = path.bounds(a, b)
     for box in boxes:
+        margin = 1e-9 * (box.half_width + box.y_high - box.y_low)
+        if (x_hi < box.cx - box.half_width - margin or x_lo > box.cx + box.half_width + margin
+                or y_hi < box.y_low - margin or y_lo > box.y_high + margin):
+            continue
         e = first_entry(path, box, a, b)
-        if e is not None and (best is None or e.tau < best.tau):
-            best = e
+        if e is not None:
+            best, b = e, e.tau
+            if b <= a:
+                break
+            x_lo, x_hi, y_lo, y_hi = path.bounds(a, b)
     return best
 
 

@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from . import manip_phases as ph
 from .manip_geometry import face_guards
@@ -34,9 +33,15 @@ class OdePhases:
         for fun, kind in physics:
             if fun(t0, z0) < 0.0:
                 return t0, np.asarray(z0, dtype=float), kind, None
+        from scipy.integrate import solve_ivp  # 0.4 s to import: only when a phase needs it
+
         events = [_event(fun, -1, True) for fun, _ in physics]
         events += [_event(fun, direction, False) for fun, direction, _, _ in faces]
-        method = "DOP853" if self.acc.rtol < 1e-8 else "RK45"
+        # Free steps (the sliding carry): DOP853 from rtol 1e-6 down - at 1e-8 RK45 took twice
+        # its steps and more time than DOP853 at 1e-9. Steps capped by max_step (bouncing):
+        # RK45 down to 1e-8, its cheaper steps win there (results/bench_accuracy.py).
+        loosest = 1e-6 if max_step == math.inf else 1e-9
+        method = "DOP853" if self.acc.rtol <= loosest else "RK45"
         sol = solve_ivp(rhs, (t0, t0 + self.phase_time), z0, method=method, rtol=self.acc.rtol,
                         atol=self.acc.atol, events=events, dense_output=self.record,
                         max_step=max_step)
@@ -132,7 +137,7 @@ class OdePhases:
     def _jam(self, t, k, theta, omega, s, sd):
         """The sliding contact cannot continue (M + m c sin th <= 0): a tangential impact."""
         st = self._on_palm(k, theta, omega, s, sd)
-        imp = ph.impact(st["vx"], st["vy"], self.l * omega, theta, m=self.m, inv_M=1.0 / self.M,
+        imp = ph.impact(st["vx"], st["vy"], self.l * omega, theta, m=self.m, mass_ratio=self.q,
                         mu=self.mu, eps=0.0)
         if imp.jam or not imp.stick or imp.w <= 0.0:
             return self._fail(t, "impact_jam", k + 1, st,

@@ -13,10 +13,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from scipy.integrate import quad
-
-from ..physics.manipulators import cos_difference
 from .core import locate
+from .numerics import carlson_rf
 
 # ---------------------------------------------------------------- impacts
 
@@ -37,7 +35,7 @@ class Impact:
     jam: bool = False
 
 
-def impact(vx, vy, w, theta, *, m, inv_M, mu, eps) -> Impact:
+def impact(vx, vy, w, theta, *, m, inv_M=None, mu, eps, mass_ratio=None) -> Impact:
     """Impact of the object (velocity vx, vy) on a palm at angle theta moving at speed w along t.
 
     Relative contact velocity: tangential g_t = vx - w cos th, normal g_n = vy + w sin th (< 0:
@@ -54,12 +52,17 @@ def impact(vx, vy, w, theta, *, m, inv_M, mu, eps) -> Impact:
     palm), else Coulomb sliding throughout. In one contact mode the separation speed is
     eps |g_n| (Newton's rule); where the mode changes during the impact Newton's rule can create
     energy and this one cannot. A compression that can neither stop slipping nor reduce the
-    approach (k_n <= 0) has no solution: `jam` (Painleve)."""
+    approach (k_n <= 0) has no solution: `jam` (Painleve).
+
+    The palm's mass enters as inv_M = 1/M or, equivalently and safe for any size of m,
+    mass_ratio = m/M (one of them; 0 is a palm held by a stop)."""
     s, c = math.sin(theta), math.cos(theta)
     g_t, g_n = vx - w * c, vy + w * s
-    w_tt, w_tn, w_nn = 1.0 / m + c * c * inv_M, -s * c * inv_M, 1.0 / m + s * s * inv_M
+    # m W, with q = m / M: the impact in velocity units (impulses / m), whatever the masses' size
+    q = m * inv_M if mass_ratio is None else mass_ratio
+    w_tt, w_tn, w_nn = 1.0 + c * c * q, -s * c * q, 1.0 + s * s * q
     scale = abs(g_t) + abs(g_n) + 1e-300
-    p_t = p_n = 0.0
+    p_t = p_n = palm = 0.0
     work_c = 0.0  # work of the normal impulse in compression (<= 0)
     restitution, remaining = False, 0.0
     for _ in range(12):
@@ -75,8 +78,14 @@ def impact(vx, vy, w, theta, *, m, inv_M, mu, eps) -> Impact:
         else:
             sigma = math.copysign(1.0, g_t)
             rate_t = -sigma * mu
-        dg_t = w_tt * rate_t + w_tn if sigma != 0.0 else 0.0
-        dg_n = w_tn * rate_t + w_nn
+        if sigma != 0.0:
+            dg_t = w_tt * rate_t + w_tn
+            dg_n = w_tn * rate_t + w_nn
+            palm_rate = rate_t * c - s  # palm impulse per unit P (times -1/M)
+        else:  # sticking: the Schur complement det(mW) / (mW)_tt with det(mW) = 1 + q exactly
+            dg_t = 0.0  # (w_nn - w_tn^2 / w_tt cancels to 1e-16 q for a light palm)
+            dg_n = (1.0 + q) / w_tt
+            palm_rate = -s / w_tt  # rate_t c - s without the same cancellation
         steps = []
         if slipping and dg_t * sigma < 0.0:
             steps.append((-g_t / dg_t, "stick"))
@@ -98,6 +107,7 @@ def impact(vx, vy, w, theta, *, m, inv_M, mu, eps) -> Impact:
         work = g_n * dp + 0.5 * dg_n * dp * dp
         p_t += rate_t * dp
         p_n += dp
+        palm += palm_rate * dp
         g_t, g_n = g_t + dg_t * dp, g_n + dg_n * dp
         if what == "stick":
             g_t = 0.0
@@ -115,7 +125,7 @@ def impact(vx, vy, w, theta, *, m, inv_M, mu, eps) -> Impact:
         elif what == "done":
             break
     stick = g_t == 0.0
-    return Impact(vx + p_t / m, vy + p_n / m, w - (p_t * c - p_n * s) * inv_M, p_t, p_n, stick)
+    return Impact(vx + p_t, vy + p_n, w - palm * q, m * p_t, m * p_n, stick)
 
 
 def impact_force_point(pt, pn, height):
@@ -126,56 +136,110 @@ def impact_force_point(pt, pn, height):
 # ---------------------------------------------------------------- the palm as a pendulum
 
 def speed_squared(theta, theta0, v0, *, gravity, link_length):
-    """v(th)^2 = v0^2 + 2 g l (cos th0 - cos th): palm (with a stuck object, or alone)."""
-    return v0 * v0 + 2.0 * gravity * link_length * cos_difference(theta0, theta)
+    """v(th)^2 = v0^2 + 2 g l (cos th0 - cos th): palm (with a stuck object, or alone).
+
+    cos th0 - cos th = 2 sin((th0 + th)/2) sin((th - th0)/2) (physics.manipulators.
+    cos_difference, here in scalar math: this is evaluated inside the root finder)."""
+    diff = 2.0 * math.sin(0.5 * (theta0 + theta)) * math.sin(0.5 * (theta - theta0))
+    return v0 * v0 + 2.0 * gravity * link_length * diff
+
+
+def energy_gap(theta0, v0, *, gravity, link_length):
+    """E = C - 1 with C = cos th0 + v0^2 / (2 g l): v(th)^2 = 2 g l (E + 2 sin^2(th/2)).
+
+    E > 0: the swing passes the top; E < 0: it turns where sin(th/2)^2 = -E/2. Written as
+    v0^2 / (2 g l) - 2 sin^2(th0/2), without the cancellation of cos th0 - 1."""
+    half = math.sin(0.5 * theta0)
+    return v0 * v0 / (2.0 * gravity * link_length) - 2.0 * half * half
 
 
 def turning_angle(theta0, v0, *, gravity, link_length, forward=True):
     """Angle where the swing from th0 at speed v0 stops (v = 0), or None if it passes the top.
 
     Moving forward from th0 < 0 the swing turns at -acos(cos th0 + v0^2 / (2 g l)); moving
-    backward from th0 > 0 at +acos(...)."""
-    k = math.cos(theta0) + v0 * v0 / (2.0 * gravity * link_length)
-    if (forward and theta0 >= 0.0) or (not forward and theta0 <= 0.0) or k >= 1.0:
+    backward from th0 > 0 at +acos(...). Computed as 2 asin(sqrt(-E / 2)) (E = energy_gap),
+    which keeps full relative accuracy for turning points near the top."""
+    e = energy_gap(theta0, v0, gravity=gravity, link_length=link_length)
+    if (forward and theta0 >= 0.0) or (not forward and theta0 <= 0.0) or e >= 0.0:
         return None
-    return -math.acos(k) if forward else math.acos(k)
+    turn = 2.0 * math.asin(min(1.0, math.sqrt(-0.5 * e)))
+    return -turn if forward else turn
 
 
-def swing_time(a, b, theta0, v0, *, gravity, link_length, tol, turn=None):
+def swing_time(a, b, theta0, v0, *, gravity, link_length, tol=0.0, turn=None):
     """Time to swing from angle a to b (|v| > 0 inside), energy fixed by (th0, v0).
 
-    dt = l dth / v(th); where an end is the turning point `turn` the integrand has a 1/sqrt
-    singularity, integrated exactly by quad's algebraic weight."""
+    dt = l dth / v(th) with v^2 = 2 g l (E + 2 sin^2(th/2)) integrates in closed form to
+    Carlson's R_F (exact to rounding; `tol` is accepted for the callers' symmetry and unused):
+      E > 0 (over the top): T(th) = sqrt(2 l / g) sin(th/2) R_F(E cos^2(th/2), E + 2 sin^2(th/2),
+            E), the time from the top to th (odd in th); the swing time is |T(b) - T(a)|.
+      E < 0 (turning at |th| = th_t, r = sin(th_t/2)): with s = sin(|th|/2), the time from the
+            turning point is S(th) = 2 sqrt(l / g) sqrt(s - r) R_F((1 - r^2)(s + r),
+            2 r (1 + r)(1 - s), 2 r (1 - r)(1 + s)) (Carlson's formula for a quartic with the
+            turning point as a root), so the 1/sqrt singularity there is exact; s - r is taken
+            as a product of sines. a and b lie on one side of the turning point.
+      E = 0 (the top reached in infinite time): sqrt(l / g) |ln tan(|b|/4) - ln tan(|a|/4)|.
+    `turn`, when given, is the turning angle the caller located (it fixes r)."""
     if a == b:
         return 0.0
-    lo, hi = (a, b) if a < b else (b, a)
     g, l = gravity, link_length
+    e = energy_gap(theta0, v0, gravity=g, link_length=l)
+    if turn is not None:
+        half = math.sin(0.5 * abs(turn))
+        e = -2.0 * half * half
+    if e > 0.0:
+        return math.sqrt(2.0 * l / g) * abs(_time_between(a, b, e))
+    if e < 0.0:
+        th_t = 2.0 * math.asin(min(1.0, math.sqrt(-0.5 * e))) if turn is None else abs(turn)
+        return (2.0 * math.sqrt(l / g)
+                * abs(_time_from_turn(b, th_t) - _time_from_turn(a, th_t)))
+    if a * b <= 0.0:
+        return math.inf
+    return math.sqrt(l / g) * abs(math.log(math.tan(0.25 * abs(b)) / math.tan(0.25 * abs(a))))
 
-    def v2(th):
-        return speed_squared(th, theta0, v0, gravity=g, link_length=l)
 
-    opts = dict(epsabs=max(tol, 1e-15), epsrel=1e-12, limit=200)
-    if turn is not None and (turn == lo or turn == hi):
-        # v^2 = 2 g l (cos turn - cos th), written without cancellation. On x in [0, 1] with
-        # |th - turn| = span (1 - x), dt = sqrt(span) * smooth(x) * (1 - x)^(-1/2) dx.
-        span = hi - lo
-
-        sign = 1.0 if turn == lo else -1.0
-
-        def smooth(x):
-            gap = (1.0 - x) * span
-            if gap == 0.0:
-                return l / math.sqrt(2.0 * g * l * abs(math.sin(turn)))
-            delta = sign * gap  # th - turn
-            k = 4.0 * g * l * math.sin(turn + 0.5 * delta) * math.sin(0.5 * delta)
-            return l * math.sqrt(gap / abs(k))
-
-        opts["epsabs"] = opts["epsabs"] / math.sqrt(span)
-        value, _ = quad(smooth, 0.0, 1.0, weight="alg", wvar=(0.0, -0.5), **opts)
-        value *= math.sqrt(span)
+def _time_between(a, b, e):
+    """_time_from_top(b, e) - _time_from_top(a, e) with one R_F: by the addition theorem of
+    F(phi | m), m = -2/E, F(phi_b) - F(phi_a) = F(sigma) with (D = E + 2 sa^2 sb^2, sx, cx the
+    sine and cosine of phi_x = th_x / 2, Dx = sqrt(E + 2 sx^2))
+        sin sigma = sqrt(E) (sb ca Da - sa cb Db) / D,  cos sigma = (E ca cb + sa sb Da Db) / D,
+    and F(sigma) / sqrt(E) = sin sigma R_F(E cos^2 sigma, E + 2 sin^2 sigma, E) while
+    |sigma| <= pi/2; beyond, F(sigma) = 2 K - F(pi - sigma). On one side of the top the
+    numerator of sin(sigma) cancels; there it is sin(pb - pa) sin(pb + pa) D / (sb ca Da +
+    sa cb Db) (multiply by the conjugate: ca^2 - cb^2 = sb^2 - sa^2 = sin(pb - pa) sin(pb + pa)).
+    """
+    sa, ca = math.sin(0.5 * a), math.cos(0.5 * a)
+    sb, cb = math.sin(0.5 * b), math.cos(0.5 * b)
+    da, db = math.sqrt(e + 2.0 * sa * sa), math.sqrt(e + 2.0 * sb * sb)
+    d = e + 2.0 * sa * sa * sb * sb
+    if sa * sb > 0.0:  # same side of the top: sb ca Da - sa cb Db = sin(pb - pa) sin(pb + pa) d
+        s_unit = (math.sin(0.5 * (b - a)) * math.sin(0.5 * (b + a))
+                  / (sb * ca * da + sa * cb * db))  # (sin(sigma) / sqrt(E), no cancellation)
     else:
-        value, _ = quad(lambda th: l / math.sqrt(max(v2(th), 1e-300)), lo, hi, **opts)
+        s_unit = (sb * ca * da - sa * cb * db) / d  # sin(sigma) / sqrt(E): the terms add
+    c = (e * ca * cb + sa * sb * da * db) / d
+    s2 = e * s_unit * s_unit  # sin^2(sigma)
+    value = math.sqrt(e) * s_unit * carlson_rf(e * c * c, e + 2.0 * s2, e)
+    if c < 0.0:  # |sigma| > pi/2
+        value = math.copysign(2.0 * carlson_rf(0.0, e + 2.0, e), s_unit) - value
     return value
+
+
+def _time_from_top(theta, e):
+    """sin(th/2) R_F(E cos^2(th/2), E + 2 sin^2(th/2), E): see swing_time."""
+    s, c = math.sin(0.5 * theta), math.cos(0.5 * theta)
+    return s * carlson_rf(e * c * c, e + 2.0 * s * s, e)
+
+
+def _time_from_turn(theta, th_t):
+    """sqrt(s - r) R_F(...) of swing_time, s = sin(|th|/2), r = sin(th_t/2); 0 at the turn."""
+    x = abs(theta)
+    if x <= th_t:
+        return 0.0
+    s, r = math.sin(0.5 * x), math.sin(0.5 * th_t)
+    gap = 2.0 * math.cos(0.25 * (x + th_t)) * math.sin(0.25 * (x - th_t))  # s - r
+    return math.sqrt(gap) * carlson_rf((1.0 - r * r) * (s + r), 2.0 * r * (1.0 + r) * (1.0 - s),
+                                       2.0 * r * (1.0 - r) * (1.0 + s))
 
 
 def free_palm_arrival(theta0, w0, *, gravity, link_length, back_stop, front_stop, tol):
@@ -211,6 +275,52 @@ def lift_off_guard(theta, theta0, v0, *, gravity, link_length):
 def stuck_force_point(theta, height):
     """Where the contact force m (g cos th - v^2/l) r crosses the base, from its centre."""
     return -0.5 * height * math.tan(theta)
+
+
+def stuck_crossings(theta0, v0, cap, *, gravity, link_length, height, support, mu):
+    """First crossings of the stuck carry's guards on [theta0, cap] (cap < pi/2), in closed form:
+    [(angle, priority, kind)] for lift-off (0), tip (1) and slip (2), each as first_crossing
+    would report it (the start if already violated; else the root, on its violated side).
+
+      lift-off  v^2 - g l cos th = v0^2 + 2 g l cos th0 - 3 g l cos th: falls until th = 0, then
+                rises through 0 at sin^2(th/2) = (g l (1 + 4 sin^2(th0/2)) - v0^2) / (6 g l);
+      tip       the force point -h tan(th)/2 leaves the support [lo, hi]: -h tan th / 2 - hi
+                falls (fires at the start or never), lo + h tan th / 2 rises through 0 at
+                th = atan(-2 lo / h);
+      slip      tan th - mu rises through 0 at atan(mu); -tan th - mu falls."""
+    g, l = gravity, link_length
+    lo, hi = support
+    gl = g * l
+    half = math.sin(0.5 * theta0)
+
+    def lift(th):
+        return lift_off_guard(th, theta0, v0, gravity=g, link_length=l)
+
+    guards = [
+        (lift, 0, "lift_off", None),
+        (lambda th: stuck_force_point(th, height) - hi, 1, "tip", "falls"),
+        (lambda th: lo - stuck_force_point(th, height), 1, "tip", math.atan(-2.0 * lo / height)),
+        (lambda th: math.tan(th) - mu, 2, "slip", math.atan(mu)),
+        (lambda th: -math.tan(th) - mu, 2, "slip", "falls"),
+    ]
+    share = (gl * (1.0 + 4.0 * half * half) - v0 * v0) / (6.0 * gl)
+    lift_root = 2.0 * math.asin(math.sqrt(share)) if 0.0 <= share <= 1.0 else None
+    out = []
+    for guard, prio, kind, root in guards:
+        if guard(theta0) >= 0.0:
+            out.append((theta0, prio, kind))
+            continue
+        if root is None:
+            root = lift_root
+        if root == "falls" or root is None or not theta0 < root <= cap:
+            continue
+        for _ in range(16):  # the violated side of the root (a few ulp away at most)
+            if guard(root) >= 0.0 or root >= cap:
+                break
+            root = math.nextafter(root, math.inf)
+        if guard(root) >= 0.0:
+            out.append((root, prio, kind))
+    return out
 
 
 def first_crossing(guard, a, b, tol, breaks=()):

@@ -32,6 +32,7 @@ class Run(OdePhases):
         self.g, self.l = scene.gravity, design.link_length
         self.m = scene.body.mass
         self.M = scene.body.mass / design.mass_ratio
+        self.q = design.mass_ratio
         self.mu, self.eps = scene.palm.friction, scene.palm.restitution
         self.alpha, self.beta, self.fs = design.alpha, design.beta, scene.palm.front_stop
         self.h = scene.body.height
@@ -42,6 +43,8 @@ class Run(OdePhases):
         self.y_floor = min(p[1] for p in self.row.pivots) - FALL_DEPTH * self.l
         self._pivot_order = sorted(range(stages), key=lambda j: self.row.pivots[j][0])
         self._pivot_x = [self.row.pivots[j][0] for j in self._pivot_order]
+        self._boxes: dict = {}
+        self._reach = 2.0 * self.l + 1.5 * self.row.palm_width + self.row.body_width
         self.events: list[Event] = []
         self.palm_events: list[Event] = []
         self.stages: list[dict] = []
@@ -70,7 +73,8 @@ class Run(OdePhases):
         outcome = Outcome(completed=self.completed, stages_passed=self.passed,
                           failure=self.failure)
         traj = {k: list(v) for k, v in self.traj.items()} if self.record else {}
-        stages = [{k: _plain(v) for k, v in rec.items()} for rec in self.stages]
+        stages = [rec if all(type(v) in _PLAIN for v in rec.values())
+                  else {k: _plain(v) for k, v in rec.items()} for rec in self.stages]
         return SimulationResult("manipulators", outcome, stages, log, self.acc, traj)
 
     def _log(self, time, kind, stage, before, after, detail="", failure=False):
@@ -99,15 +103,20 @@ class Run(OdePhases):
         if near is None:
             candidates = range(self.n)
         else:
-            reach = 2.0 * self.l + 1.5 * self.row.palm_width + self.row.body_width
+            reach = self._reach
             lo = bisect.bisect_left(self._pivot_x, near - reach)
             hi = bisect.bisect_right(self._pivot_x, near + reach)
             candidates = self._pivot_order[lo:hi]
         out = []
+        cache = self._boxes
         for j in candidates:
             if j == carrier or self.rest_since[j] > t:
                 continue
-            out.append(self.row.box(j, self.rest_angle[j]))
+            key = (j, self.rest_angle[j])
+            box = cache.get(key)
+            if box is None:  # a palm at rest has the same box until it moves again
+                box = cache[key] = self.row.box(j, self.rest_angle[j])
+            out.append(box)
         return out
 
     def _release(self, k, t, theta, w):
@@ -166,7 +175,7 @@ class Run(OdePhases):
     def _resolve(self, vx, vy, w, theta, eps, at_rest):
         """Impact on palm at theta; a palm at rest on a stop that the impulse pushes into the stop
         is held there (the stop takes the impulse: infinite effective mass)."""
-        imp = ph.impact(vx, vy, w, theta, m=self.m, inv_M=1.0 / self.M, mu=self.mu, eps=eps)
+        imp = ph.impact(vx, vy, w, theta, m=self.m, mass_ratio=self.q, mu=self.mu, eps=eps)
         if imp.jam or not at_rest:
             return imp, False
         if (theta <= -self.alpha and imp.w < 0.0) or (theta >= self.fs and imp.w > 0.0):
@@ -218,12 +227,18 @@ class Run(OdePhases):
             self._log(t, "bounce", j + 1, before, after, f"separating at {gn:.4g} m/s")
             if held:
                 self.rest_angle[j], self.rest_since[j] = theta, t
+                if self._bouncing_in_place(j, x, y, imp.vx, t):
+                    hops = self._hops_left(imp.vy)
+                    if hops > EVENTS_PER_STAGE // 2:  # fewer are followed event by event
+                        return self._settle_in_place(t, j, theta, offset, imp.vy, hops, after)
                 return lambda: self._flight(t, x, y, imp.vx, imp.vy, stage=j + 1)
             self.rest_since[j] = math.inf
             return lambda: self._bouncing(t, j, x, y, imp.vx, imp.vy, theta, imp.w / self.l)
         if held:
             self.rest_angle[j], self.rest_since[j] = theta, t
-            return self._held_slide(t, j, theta, offset, imp.vx, after)
+            # a sticking impact leaves the object at rest on the held palm: exactly 0, not the
+            # rounding residue of vx + p_t (1e-17 m/s would be read as a slide)
+            return self._held_slide(t, j, theta, offset, 0.0 if imp.stick else imp.vx, after)
         if imp.w < 0.0:
             return self._fail(t, "stall", j + 1, after,
                               f"the impact drives palm {j + 1} backwards with the object")
@@ -232,6 +247,45 @@ class Run(OdePhases):
             return lambda: self._stuck(t, j, theta, imp.w, offset)
         sd = imp.vx - imp.w * math.cos(theta)
         return lambda: self._sliding(t, j, theta, imp.w / self.l, offset, sd)
+
+    def _bouncing_in_place(self, j, x, y, vx, t):
+        """True when the object has just bounced straight up off palm j, held by a stop, at the
+        point where its previous bounce (also straight up, off the same held palm) left it, and
+        no palm is still swinging: every later flight is then the same vertical hop, lower by
+        the restitution, and nothing can change that (the free palms are all at rest)."""
+        here = (j, x, y) if vx == 0.0 else None
+        again = here is not None and here == getattr(self, "_hop", None)
+        self._hop = here
+        return again and all(r <= t or r == math.inf for r in self.rest_since)
+
+    def _hops_left(self, vy):
+        """Hops in place still to come, this one included: those leaving faster than the Zeno
+        speed (vy eps^k > zeno_speed); inf with restitution 1."""
+        if self.eps >= 1.0:
+            return math.inf
+        return math.floor(math.log(self.zeno_speed / vy) / math.log(self.eps)) + 1
+
+    def _settle_in_place(self, t, j, theta, offset, vy, hops, state):
+        """Closed form of an object hopping in place on a held palm: the same vertical hop at
+        vy, eps vy, eps^2 vy, ... until a hop would leave slower than the Zeno speed (as the
+        event loop would do hop by hop, in 2 vy (1 - eps^n) / (g (1 - eps)) for n hops); then
+        the object rests on the held palm. With restitution 1 it hops forever: refused."""
+        where = "back" if theta <= -self.alpha else "front"
+        kind = "stall" if where == "back" else "stranded"
+        if math.isinf(hops):
+            return self._fail(t, kind, j + 1, state,
+                              f"restitution 1: the object hops in place on palm {j + 1}, held by "
+                              f"its {where} stop, at {vy:.4g} m/s forever")
+        # 1 - eps^n without cancellation for eps near 1
+        rest = -math.expm1(hops * math.log1p(self.eps - 1.0))
+        t_rest = t + 2.0 * vy * rest / (self.g * (1.0 - self.eps))
+        rec = self._stage(j)
+        if rec is not None:
+            rec["bounces"] = int(rec["bounces"]) + hops
+        return self._fail(t_rest, kind, j + 1, state,
+                          f"the object hops in place on palm {j + 1}, held by its {where} stop: "
+                          f"{hops} hops from {vy:.4g} m/s (restitution {self.eps:.12g}), then it "
+                          "rests on the palm")
 
     def _new_stage(self, j, t, offset, vx, vy, imp):
         loss = (0.5 * self.m * (vx * vx + vy * vy - imp.vx ** 2 - imp.vy ** 2)
@@ -311,8 +365,10 @@ class Run(OdePhases):
 
     # ------------------------------------------------------------ stuck carry (closed form)
     def _stuck(self, t0, k, theta0, v0, s):
-        """Object stuck on palm k from (theta0, speed v0): every guard is a function of theta,
-        located by root finding; the time of an angle is the quadrature of l dth / v(th)."""
+        """Object stuck on palm k from (theta0, speed v0): every guard is a function of theta
+        whose crossing is closed form (manip_phases.stuck_crossings), contacts are closed-form
+        roots of the arc (manip_geometry), and the time of an angle is the closed-form
+        integral of l dth / v(th) (manip_phases.swing_time)."""
         g, l, tol = self.g, self.l, self.acc.event_tol
         if v0 <= 0.0:
             return self._fail(t0, "stall", k + 1, self._on_palm(k, theta0, v0 / l, s),
@@ -330,20 +386,12 @@ class Run(OdePhases):
         candidates = [(theta_end, 5, end_kind)]
         if entry is not None:
             candidates.append((entry.tau, 4, "handover" if entry.kind == "top" else "blocked"))
-        cap = min(theta_end, 0.5 * math.pi - 1e-9)  # slip and lift-off always come before pi/2
+        # slip and lift-off always come before pi/2; a guard crossing after the handover or the
+        # end cannot end the carry (ties go to the guard: it has the lower priority number)
+        cap = min(theta_end, 0.5 * math.pi - 1e-9, entry.tau if entry is not None else math.inf)
         lo, hi = self.row.support(s)
-        guards = [
-            (lambda th: ph.lift_off_guard(th, theta0, v0, gravity=g, link_length=l), 0,
-             "lift_off"),
-            (lambda th: ph.stuck_force_point(th, self.h) - hi, 1, "tip"),
-            (lambda th: lo - ph.stuck_force_point(th, self.h), 1, "tip"),
-            (lambda th: math.tan(th) - self.mu, 2, "slip"),
-            (lambda th: -math.tan(th) - self.mu, 2, "slip"),
-        ]
-        for fun, prio, kind in guards:
-            th = ph.first_crossing(fun, theta0, cap, tol, breaks=(0.0,))
-            if th is not None:
-                candidates.append((th, prio, kind))
+        candidates += ph.stuck_crossings(theta0, v0, cap, gravity=g, link_length=l,
+                                         height=self.h, support=(lo, hi), mu=self.mu)
         theta_e, _, kind = min(candidates)
         te = t0 + ph.swing_time(theta0, theta_e, theta0, v0, gravity=g, link_length=l, tol=tol,
                                 turn=turn if kind == "stall" else None)
@@ -387,12 +435,13 @@ class Run(OdePhases):
             self._rec(t, st["x"], st["y"], st["vx"], st["vy"], th, k + 1)
 
 
+_PLAIN = frozenset({bool, int, str, float, type(None)})
+
+
 def _plain(value):
     """Stage-record values as plain Python values (JSON-ready)."""
-    if isinstance(value, (bool, int, str)) or value is None:
-        return value
-    return float(value)
+    return value if type(value) in _PLAIN else float(value)
 
 
 def _floats(state: dict) -> dict:
-    return {k: float(v) for k, v in state.items() if v is not None}
+    return {k: v if type(v) is float else float(v) for k, v in state.items() if v is not None}

@@ -17,9 +17,11 @@ completion.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from .core import SimulationResult
+from .core import SimulationResult, check_scales
 from .core import accuracy as resolve_accuracy
 from .manip_run import Run
 
@@ -57,7 +59,30 @@ def simulate_manipulators(scene, design, *, stages: int = 6, offsets=(), accurac
     docs/manipulators_model.md for the fields), the event log, and, if asked for, trajectories
     (time, x, y, vx, vy of the object's bottom centre; theta and manipulator of its carrier).
     """
-    return Run(scene, design, stages, offsets, resolve_accuracy(accuracy), record_trajectory).run()
+    acc = resolve_accuracy(accuracy)
+    check_manipulators_scales(scene, design, offsets)
+    return Run(scene, design, stages, offsets, acc, record_trajectory).run()
+
+
+def check_manipulators_scales(scene, design, offsets=()) -> None:
+    """Refuse (core.SimulationRefused) a scene whose lengths, speeds or mass ratio are so far
+    from the link length, sqrt(g l) and 1 that double precision cannot follow the motion."""
+    l, g = design.link_length, scene.gravity
+    check_scales(("the gravity", g), {})
+    check_scales(("the body mass", scene.body.mass), {})
+    (x, y), (vx, vy) = scene.initial.position, scene.initial.velocity
+    lengths = {
+        "body width": scene.body.width, "body height": scene.body.height,
+        "palm width": scene.palm.width, "palm thickness": scene.palm.thickness,
+        "initial x": x - design.first_pivot_x, "initial y": y - design.first_pivot_y,
+    }
+    for off in offsets:
+        lengths[f"offset dx of manipulator {off.manipulator}"] = float(off.dx)
+        lengths[f"offset dy of manipulator {off.manipulator}"] = float(off.dy)
+    check_scales(("the link length", l), lengths)
+    check_scales(("sqrt(g l)", math.sqrt(g) * math.sqrt(l)),
+                 {"initial speed x": vx, "initial speed y": vy})
+    check_scales(("1", 1.0), {"mass_ratio": design.mass_ratio, "friction": scene.palm.friction})
 
 
 def handover_angle(beta, rise, link_length):

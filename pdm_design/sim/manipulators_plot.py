@@ -3,6 +3,7 @@ and its path in the x-y plane with the mechanisms (pivots, links, palms) drawn a
 
 from __future__ import annotations
 
+from ..io import atomic_path
 from .manip_geometry import build_row, palm_outline
 
 SNAPSHOT_KINDS = ("landing", "handover", "complete")
@@ -57,7 +58,8 @@ def plot_manipulators(result, scene, design, path, *, offsets=(), stages=None, t
     fig.suptitle(title or f"manipulators run: {outcome.stages_passed} manipulators passed, "
                  f"{status}")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    with atomic_path(path) as tmp:  # the file is whole or absent, never half written
+        fig.savefig(tmp, dpi=120)
     plt.close(fig)
     return path
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..io import atomic_path
+
 
 def plot_stairs_run(result, path, *, title: str | None = None, dpi: int = 120) -> Path:
     """Draw the recorded trajectory of a stairs run into a PNG at `path`; returns the path.
@@ -53,8 +55,8 @@ def plot_stairs_run(result, path, *, title: str | None = None, dpi: int = 120) -
     if title:
         fig.suptitle(title)
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
+    with atomic_path(path) as tmp:  # the file is whole or absent, never half written
+        fig.savefig(tmp, dpi=dpi)
     return path
 
 
