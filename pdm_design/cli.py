@@ -90,8 +90,9 @@ def _not_yet(name: str):
     return EXIT_FAILED
 
 
-def _parse_pairs(values, label, what):
-    """Parse 'K:A,B' options into (K, A, B) with a clear error naming the option."""
+def _parse_pairs(values, label, what, count):
+    """Parse 'K:A,B' options (1 <= K <= count) into (K, A, B), or a clear error naming the
+    option."""
     from .errors import SpecError
 
     parsed = []
@@ -100,11 +101,11 @@ def _parse_pairs(values, label, what):
             index, pair = text.split(":", 1)
             first, second = (float(v) for v in pair.split(","))
             index = int(index)
-            if index < 1 or not all(math.isfinite(v) for v in (first, second)):
+            if not 1 <= index <= count or not all(math.isfinite(v) for v in (first, second)):
                 raise ValueError
         except ValueError:
-            raise SpecError("command line", label, f"{what}, e.g. 2:0.1,-0.2",
-                            repr(text)) from None
+            raise SpecError("command line", label, f"{what} with K from 1 to {count}, "
+                            "e.g. 2:0.1,-0.2", repr(text)) from None
         parsed.append((index, first, second))
     return parsed
 
@@ -131,15 +132,18 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
     from .verify import simulate_spec
 
     loaded = load_spec(spec)
-    point = loaded.design_at(design(loaded).analysis.design) if loaded.free_variables else (
-        loaded.design_at())
+    point = loaded.design_at()
+    if loaded.free_variables:
+        point = loaded.design_at(design(loaded, verify=False).analysis.design)
+    row = stages or loaded.verification.stages
     kwargs = {}
     if offsets:
-        kwargs["offsets"] = tuple(ManipulatorOffset(manipulator=k, dx=a, dy=b)
-                                  for k, a, b in _parse_pairs(offsets, "--offset", "K:DX,DY"))
+        kwargs["offsets"] = tuple(ManipulatorOffset(manipulator=k, dx=a, dy=b) for k, a, b in
+                                  _parse_pairs(offsets, "--offset", "K:DX,DY", row))
     if step_errors:
         kwargs["step_errors"] = tuple(StepError(step=k, rise=a, tread=b) for k, a, b in
-                                      _parse_pairs(step_errors, "--step-error", "K:DRISE,DTREAD"))
+                                      _parse_pairs(step_errors, "--step-error", "K:DRISE,DTREAD",
+                                                   row))
     result = simulate_spec(loaded, point, stages=stages, accuracy=accuracy,
                            record_trajectory=plot is not None, **kwargs)
     if plot:

@@ -125,3 +125,15 @@ def test_console_script_runs_as_a_newcomer_would():
     )
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["scene"] == "manipulators"
+
+
+def test_fixed_rise_stairs_verify_against_the_closed_form_transient(tmp_path):
+    # With a rise that does not match h0 the vertical impact speed converges by eps^2 per
+    # bounce; the verification must compare the simulator with that transient, not the limit.
+    text = (PROBLEMS / "paper_stairs_frictionless.toml").read_text().replace(
+        "launch_speed = 2.0 ", "launch_speed = 2.0\nrise = 0.3 ")
+    code, out, _ = run("optimize", _write(tmp_path, text), "--format", "json")
+    doc = json.loads(out)
+    assert code == 0, doc["verification"]
+    assert doc["verification"]["passed"]
+    assert doc["verification"]["agreement"]["compared"] == 20

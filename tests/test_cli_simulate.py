@@ -68,3 +68,9 @@ def test_malformed_offset_is_bad_input():
     code, _, err = run(PAPER, "--offset", "two:0.1")
     assert code == 2
     assert "--offset" in err and "K:DX,DY" in err
+
+
+def test_offset_beyond_the_row_is_bad_input():
+    code, _, err = run(PAPER, "--stages", "6", "--offset", "7:0.1,0")
+    assert code == 2
+    assert "--offset" in err and "from 1 to 6" in err
