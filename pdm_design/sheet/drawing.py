@@ -9,9 +9,9 @@ simulated. At most MAX_DRAWN manipulators or steps are drawn; the CSV lists all.
 
 from __future__ import annotations
 
-import io
 import math
 
+from ..report.render import render_figure
 from .build import BuildSheet
 
 MAX_DRAWN = 8
@@ -250,12 +250,4 @@ def _dimension(ax, p, q, label, *, offset=0.0, below=False, left=False):
 
 
 def _render(figure, fmt: str) -> bytes:
-    from matplotlib import rc_context
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-    FigureCanvasAgg(figure)
-    buffer = io.BytesIO()
-    metadata = {"Date": None} if fmt == "svg" else {"Software": None}
-    with rc_context({"svg.hashsalt": "pdm-design"}):  # the same bytes for the same figure
-        figure.savefig(buffer, format=fmt, dpi=120, metadata=metadata)
-    return buffer.getvalue()
+    return render_figure(figure, fmt, dpi=120)

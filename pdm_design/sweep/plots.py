@@ -7,9 +7,9 @@ matplotlib's object API (Figure + Agg canvas, no pyplot state) and returned as P
 
 from __future__ import annotations
 
-import io
 import math
 
+from ..report.render import render_figure
 from .grid import SweepAxis, grid_points
 from .tables import DESIGN, GEOMETRY, PERIODIC, TOLERANCE_AXES, number
 
@@ -117,12 +117,4 @@ def _figure(axes, rows, panels, empty, title):
 
 
 def _render(figure, fmt: str) -> bytes:
-    from matplotlib import rc_context
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-    FigureCanvasAgg(figure)
-    buffer = io.BytesIO()
-    metadata = {"Date": None} if fmt == "svg" else {"Software": None}
-    with rc_context({"svg.hashsalt": "pdm-design"}):  # the same bytes for the same figure
-        figure.savefig(buffer, format=fmt, dpi=110, metadata=metadata)
-    return buffer.getvalue()
+    return render_figure(figure, fmt, dpi=110)
