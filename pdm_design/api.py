@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from .analysis import Analysis, analyse
 from .spec.model import Spec
@@ -22,7 +22,6 @@ class DesignOutcome:
     tolerance: dict | None = None
     verification: dict | None = None
     solver: dict | None = None
-    notes: tuple[str, ...] = field(default=())
 
     @property
     def exit_code(self) -> int:
