@@ -57,9 +57,9 @@ def design(spec: Spec, *, verify: bool = True, accuracy: str | None = None) -> D
 # What each accuracy preset asks of the optimizer and of the verification depth: IPOPT's
 # tolerance, the number of starts, and the multiple of the spec's random verification samples.
 SOLVE_PRESETS = {
-    "fast": {"tol": 1e-6, "starts": 4, "sample_factor": 0.25},
-    "default": {"tol": 1e-8, "starts": 8, "sample_factor": 1.0},
-    "precise": {"tol": 1e-10, "starts": 16, "sample_factor": 4.0},
+    "fast": {"tol": 1e-5, "starts": 4, "sample_factor": 0.25, "bound_relax_factor": 1e-8},
+    "default": {"tol": 1e-8, "starts": 8, "sample_factor": 1.0, "bound_relax_factor": 1e-8},
+    "precise": {"tol": 1e-11, "starts": 16, "sample_factor": 4.0, "bound_relax_factor": 0.0},
 }
 
 
@@ -71,7 +71,8 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: str | None = None) ->
 
     accuracy = accuracy or spec.verification.accuracy
     preset = SOLVE_PRESETS[accuracy]
-    result = solve(spec, starts=preset["starts"], tol=preset["tol"])
+    result = solve(spec, starts=preset["starts"], tol=preset["tol"],
+                   bound_relax_factor=preset["bound_relax_factor"])
     # IPOPT honours bounds only to its tolerance (e.g. -1e-8 for a bound at 0): clip to them.
     point = spec.design_at({name: min(max(result.design[name], spec.design[name].min),
                                       spec.design[name].max)

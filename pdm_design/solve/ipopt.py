@@ -34,6 +34,9 @@ class SolverOptions:
     tol: float = 1e-8
     acceptable_tol: float = 1e-6
     warm: bool = False
+    # IPOPT relaxes every bound by this much; at its default 1e-8 the optimum sits ~1e-8 off
+    # whatever tol is (results/accuracy.md), so the precise preset sets it to 0.
+    bound_relax_factor: float = 1e-8
 
     def casadi(self) -> dict:
         opts = {
@@ -46,6 +49,7 @@ class SolverOptions:
             "ipopt.tol": self.tol,
             "ipopt.acceptable_tol": self.acceptable_tol,
             "ipopt.mu_strategy": "adaptive",
+            "ipopt.bound_relax_factor": self.bound_relax_factor,
             # MUMPS' own scaling costs ~20 % of a solve on these small, well-scaled KKT systems.
             "ipopt.mumps_scaling": 0,
             "ipopt.mumps_permuting_scaling": 0,

@@ -25,6 +25,7 @@ def optimize(
     seed: int = 0,
     max_iter: int = 500,
     tol: float = 1e-8,
+    bound_relax_factor: float = 1e-8,
     requirements: dict[str, float] | None = None,
     warm_start: OptimizeResult | None = None,
     diagnose: bool = True,
@@ -41,6 +42,7 @@ def optimize(
     diagnose: when no start succeeds, solve the elastic problem and report what cannot be met.
     linearise: compute the cvxpy box / ellipsoid in the linearised safe set.
     check_samples: offsets sampled inside the robust box for the independent check (0: skip).
+    bound_relax_factor: IPOPT's bound relaxation; 0 puts the optimum on its bounds exactly.
     """
     tic = time.perf_counter()
     was_cached = _is_cached(spec)
@@ -48,7 +50,7 @@ def optimize(
     build_time = 0.0 if was_cached else form.build_time
     reqs = dict(spec.requirements if requirements is None else requirements)
     p = form.parameters(reqs)
-    options = SolverOptions(max_iter=max_iter, tol=tol)
+    options = SolverOptions(max_iter=max_iter, tol=tol, bound_relax_factor=bound_relax_factor)
     solver = solver_for(form.key, form.nlp, options)
 
     names = form.design_names
@@ -61,7 +63,8 @@ def optimize(
     runs = []
     if warm_start is not None and warm_start.solution is not None \
             and warm_start.solution.key == form.key:
-        warm = solver_for(form.key, form.nlp, SolverOptions(max_iter=max_iter, tol=tol, warm=True))
+        warm = solver_for(form.key, form.nlp, SolverOptions(
+            max_iter=max_iter, tol=tol, warm=True, bound_relax_factor=bound_relax_factor))
         ws = warm_start.solution
         runs.append(solve_once(warm, ws.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
                                lam_x0=ws.lam_x, lam_g0=ws.lam_g, start=-1))
