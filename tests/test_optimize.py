@@ -57,18 +57,22 @@ def test_fastest_convergence_with_beta_free_is_the_largest_beta_friction_allows(
     assert result.design["beta"] == pytest.approx(expected, abs=1e-6)
 
 
-def test_min_drop_with_beta_free_is_where_the_over_the_top_margin_binds():
-    # Drop l (cos a - cos b) grows with b; the smallest b keeps the periodic landing speed u*
-    # over the top with margin r: u*^2 (1 - r) = 2 g l (1 - cos a), with
-    # u*^2 = c s*^2, s*^2 = 2 g l (cos a - cos b) / (1 - c), c = (q/(1+q))^2 cos^2(a + b).
-    a, l, k, r = 0.2, 2.0, 10.0 / 11.0, 0.5
+def _min_drop_beta(a=0.2, l=2.0, k=10.0 / 11.0, r=0.5):
+    """Drop l (cos a - cos b) grows with b; the smallest b keeps the periodic landing speed u*
+    over the top with margin r: u*^2 (1 - r) = 2 g l (1 - cos a), with
+    u*^2 = c s*^2, s*^2 = 2 g l (cos a - cos b) / (1 - c), c = (q/(1+q))^2 cos^2(a + b)."""
 
     def u_star_sq(b):
         c = (k * math.cos(a + b)) ** 2
         return c * 2 * G * l * (math.cos(a) - math.cos(b)) / (1 - c)
 
-    b_star = brentq(lambda b: u_star_sq(b) * (1 - r) - 2 * G * l * (1 - math.cos(a)), a + 1e-9,
-                    0.6)
+    return brentq(lambda b: u_star_sq(b) * (1 - r) - 2 * G * l * (1 - math.cos(a)), a + 1e-9,
+                  0.6, xtol=1e-15)
+
+
+def test_min_drop_with_beta_free_is_where_the_over_the_top_margin_binds():
+    a, l, r = 0.2, 2.0, 0.5
+    b_star = _min_drop_beta(a, l, r=r)
     result = optimize(beta_spec({"min_drop": 1.0}, {"over_the_top": r}, 1.0, 0.8))
     assert result.status is Status.OPTIMAL
     assert result.design["beta"] == pytest.approx(b_star, abs=1e-6)
@@ -79,15 +83,8 @@ def test_min_drop_with_beta_free_is_where_the_over_the_top_margin_binds():
 def test_zero_bound_relaxation_puts_the_optimum_on_its_constraint():
     # Same closed-form optimum as above; IPOPT's default bound relaxation (1e-8) leaves the
     # answer ~1e-8 off it, the precise preset's bound_relax_factor = 0 does not.
-    a, l, k, r = 0.2, 2.0, 10.0 / 11.0, 0.5
-
-    def u_star_sq(b):
-        c = (k * math.cos(a + b)) ** 2
-        return c * 2 * G * l * (math.cos(a) - math.cos(b)) / (1 - c)
-
-    b_star = brentq(lambda b: u_star_sq(b) * (1 - r) - 2 * G * l * (1 - math.cos(a)), a + 1e-9,
-                    0.6, xtol=1e-15)
-    result = optimize(beta_spec({"min_drop": 1.0}, {"over_the_top": r}, 1.0, 0.8),
+    b_star = _min_drop_beta(r=0.5)
+    result = optimize(beta_spec({"min_drop": 1.0}, {"over_the_top": 0.5}, 1.0, 0.8),
                       tol=1e-11, bound_relax_factor=0.0)
     assert result.status is Status.OPTIMAL
     assert result.design["beta"] == pytest.approx(b_star, abs=1e-9)
