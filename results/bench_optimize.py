@@ -142,6 +142,17 @@ def bench_grid(spec, repeats):
             "beta": beta[j], "points": grid.size}
 
 
+def _slsqp_rows(slsqp):
+    """The two SLSQP rows of a comparison table (one solve, the 8-start run)."""
+    return [
+        f"| SLSQP + finite differences, one solve | {slsqp['median_solve'] * 1e3:.2f} ms | – | "
+        f"median {slsqp['median_iterations']:.0f} iterations, "
+        f"{slsqp['median_evaluations']:.0f} function evaluations |",
+        f"| SLSQP + finite differences, 8 starts | {slsqp['median_run'] * 1e3:.1f} ms | "
+        f"{slsqp['best_objective']:.6f} | {slsqp['succeeded']} converged feasible |",
+    ]
+
+
 def bench_stairs(reps):
     """Second problem (IPOPT vs SLSQP only): problems/stairs_design.toml."""
     spec = load_spec(ROOT / "problems/stairs_design.toml")
@@ -163,11 +174,7 @@ def bench_stairs(reps):
         f"{ipopt['succeeded']} Solve_Succeeded |",
         f"| IPOPT, `optimize` (8 starts) | {run * 1e3:.1f} ms | {res.objective:.6f} | "
         f"status {res.status.value} |",
-        f"| SLSQP + finite differences, one solve | {slsqp['median_solve'] * 1e3:.2f} ms | – | "
-        f"median {slsqp['median_iterations']:.0f} iterations, "
-        f"{slsqp['median_evaluations']:.0f} function evaluations |",
-        f"| SLSQP + finite differences, 8 starts | {slsqp['median_run'] * 1e3:.1f} ms | "
-        f"{slsqp['best_objective']:.6f} | {slsqp['succeeded']} converged feasible |",
+        *_slsqp_rows(slsqp),
         "",
         f"Ratio SLSQP / IPOPT: per solve **{slsqp['median_solve'] / ipopt['median_solve']:.1f}x** "
         f"(paired: **{slsqp['paired_ratio']:.1f}x**),"
@@ -240,11 +247,7 @@ def main():
         f"{ipopt['best_objective']:.6f} | exact Hessian (CasADi AD) |",
         f"| IPOPT, `optimize` (8 starts) | {run_bare * 1e3:.1f} ms | {nlp_obj:.6f} | "
         f"status {res.status.value} |",
-        f"| SLSQP + finite differences, one solve | {slsqp['median_solve'] * 1e3:.2f} ms | – | "
-        f"median {slsqp['median_iterations']:.0f} iterations, "
-        f"{slsqp['median_evaluations']:.0f} function evaluations |",
-        f"| SLSQP + finite differences, 8 starts | {slsqp['median_run'] * 1e3:.1f} ms | "
-        f"{slsqp['best_objective']:.6f} | {slsqp['succeeded']} converged feasible |",
+        *_slsqp_rows(slsqp),
         f"| grid search, {grid['points']} points x bisection (numpy, vectorised) | "
         f"{grid['seconds'] * 1e3:.0f} ms | {grid['best_objective']:.6f} | best at "
         f"alpha {grid['alpha']:.3f}, beta {grid['beta']:.3f} |",
