@@ -24,13 +24,14 @@ def _guarded(command):
 
     @functools.wraps(command)
     def wrapper(*args, **kwargs):
-        from .errors import PdmError, SpecError
+        from .errors import OutputError, PdmError, SpecError
 
         try:
             code = command(*args, **kwargs)
-        except SpecError as error:
+        except (SpecError, OutputError) as error:
             click.echo(f"error: {error}", err=True)
-            sys.exit(EXIT_BAD_INPUT)
+            machine = isinstance(error, OutputError) and not error.bad_input  # a full disk
+            sys.exit(EXIT_FAILED if machine else EXIT_BAD_INPUT)
         except PdmError as error:
             click.echo(f"error: {error}", err=True)
             sys.exit(EXIT_FAILED)

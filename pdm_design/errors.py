@@ -18,3 +18,20 @@ class SpecError(PdmError):
         if found is not None:
             text += f", found {found}"
         super().__init__(text)
+
+
+class OutputError(PdmError):
+    """An output file that could not be written (the path given cannot hold a file, or the disk
+    refused it). `bad_input` says whether the path itself is at fault (exit 2) rather than the
+    machine (a full disk: exit 1)."""
+
+    _MACHINE = {28, 122, 5}  # ENOSPC, EDQUOT, EIO
+
+    def __init__(self, path, error: OSError):
+        self.path, self.bad_input = str(path), error.errno not in self._MACHINE
+        reason = error.strerror or str(error)
+        if isinstance(error, FileExistsError):  # mkdir of the folder met a file of that name
+            reason = f"{error.filename} is a file, not a folder"
+        elif error.filename and str(error.filename) != self.path:
+            reason += f" ({error.filename})"
+        super().__init__(f"cannot write {self.path}: {reason}")

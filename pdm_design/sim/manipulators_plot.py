@@ -58,9 +58,11 @@ def plot_manipulators(result, scene, design, path, *, offsets=(), stages=None, t
     fig.suptitle(title or f"manipulators run: {outcome.stages_passed} manipulators passed, "
                  f"{status}")
     fig.tight_layout()
-    with atomic_path(path) as tmp:  # the file is whole or absent, never half written
-        fig.savefig(tmp, dpi=120)
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:  # the file is whole or absent, never half written
+            fig.savefig(tmp, dpi=120)
+    finally:
+        plt.close(fig)
     return path
 
 
