@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .accuracy import Accuracy, AccuracySetting
+from .accuracy import accuracy as resolve_accuracy
 from .analysis import Analysis, analyse
 from .spec.model import Spec
 from .status import Status
@@ -12,7 +14,7 @@ from .status import Status
 @dataclass(frozen=True)
 class DesignOutcome:
     """The answer to `pdm-design optimize`: the design, what the closed forms say about it, and
-    (when run) the solver's statistics and the simulator's verification."""
+    (when run) the solver's statistics and the simulator's verification, at `accuracy`."""
 
     spec: Spec
     status: Status
@@ -22,6 +24,7 @@ class DesignOutcome:
     tolerance: dict | None = None
     verification: dict | None = None
     solver: dict | None = None
+    accuracy: Accuracy | None = None
 
     @property
     def exit_code(self) -> int:
@@ -29,11 +32,13 @@ class DesignOutcome:
         return 0 if self.status.is_success and verified else 1
 
 
-def evaluate(spec: Spec, *, verify: bool = True, accuracy: str | None = None) -> DesignOutcome:
+def evaluate(spec: Spec, *, verify: bool = True,
+             accuracy: AccuracySetting | None = None) -> DesignOutcome:
     """Evaluate a spec whose design is fully fixed: closed forms, then (unless verify=False)
     the event simulator from the spec's initial state."""
     if spec.free_variables:
         raise ValueError("evaluate() needs a fixed design; use design() for free variables")
+    accuracy = resolve_accuracy(accuracy or spec.verification.accuracy)
     point = spec.design_at()
     analysis = analyse(spec.scene, point)
     violations = tuple(analysis.problems) + tuple(analysis.violations(spec.requirements))
@@ -44,10 +49,11 @@ def evaluate(spec: Spec, *, verify: bool = True, accuracy: str | None = None) ->
 
         verification = verify_nominal(spec, point, analysis, accuracy=accuracy)
     return DesignOutcome(spec=spec, status=status, analysis=analysis, violations=violations,
-                         verification=verification)
+                         verification=verification, accuracy=accuracy)
 
 
-def design(spec: Spec, *, verify: bool = True, accuracy: str | None = None) -> DesignOutcome:
+def design(spec: Spec, *, verify: bool = True,
+           accuracy: AccuracySetting | None = None) -> DesignOutcome:
     """Solve the spec: evaluate a fixed design, or optimise the free variables; verify."""
     if not spec.free_variables:
         return evaluate(spec, verify=verify, accuracy=accuracy)
@@ -56,6 +62,7 @@ def design(spec: Spec, *, verify: bool = True, accuracy: str | None = None) -> D
 
 # What each accuracy preset asks of the optimizer and of the verification depth: IPOPT's
 # tolerance, the number of starts, and the multiple of the spec's random verification samples.
+# A custom accuracy takes its base preset's.
 SOLVE_PRESETS = {
     "fast": {"tol": 1e-5, "starts": 4, "sample_factor": 0.25, "bound_relax_factor": 1e-8},
     "default": {"tol": 1e-8, "starts": 8, "sample_factor": 1.0, "bound_relax_factor": 1e-8},
@@ -63,14 +70,16 @@ SOLVE_PRESETS = {
 }
 
 
-def optimize(spec: Spec, *, verify: bool = True, accuracy: str | None = None) -> DesignOutcome:
+def optimize(spec: Spec, *, verify: bool = True,
+             accuracy: AccuracySetting | None = None) -> DesignOutcome:
     """Choose the free design variables with IPOPT (multistart), then verify the answer and
-    its claimed tolerance box in the simulator. accuracy (default: the spec's) sets IPOPT's
-    tolerance, the starts, the simulator's tolerances and how many random builds are run."""
+    its claimed tolerance box in the simulator. accuracy (default: the spec's) sets the
+    simulator's tolerances and, through its base preset, IPOPT's tolerance, the starts and how
+    many random builds are run."""
     from .solve import optimize as solve
 
-    accuracy = accuracy or spec.verification.accuracy
-    preset = SOLVE_PRESETS[accuracy]
+    accuracy = resolve_accuracy(accuracy or spec.verification.accuracy)
+    preset = SOLVE_PRESETS[accuracy.base]
     result = solve(spec, starts=preset["starts"], tol=preset["tol"],
                    bound_relax_factor=preset["bound_relax_factor"])
     # IPOPT honours bounds only to its tolerance (e.g. -1e-8 for a bound at 0): clip to them.
@@ -94,7 +103,7 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: str | None = None) ->
             tolerance["linearised"] = result.linearised.to_json()
     return DesignOutcome(spec=spec, status=result.status, analysis=analysis,
                          violations=violations, objective=objective, tolerance=tolerance,
-                         verification=verification, solver=solver)
+                         verification=verification, solver=solver, accuracy=accuracy)
 
 
 def _verify_with_box(spec, point, analysis, tolerance, accuracy, samples) -> dict:

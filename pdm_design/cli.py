@@ -59,8 +59,28 @@ def main():
     """Design passive dynamic object manipulation systems (stairs, passive manipulator rows)."""
 
 
-ACCURACY = click.option("--accuracy", type=click.Choice(["fast", "default", "precise"]),
-                        default=None, help="Simulator accuracy preset (default: the spec's).")
+class _AccuracyType(click.ParamType):
+    """--accuracy: a preset name or KEY=VALUE tolerances. A bad value is a usage error (exit 2)
+    raised while click parses the options, before any command (or _guarded) runs."""
+
+    name = "accuracy"
+
+    def convert(self, value, param, ctx):
+        from .accuracy import Accuracy, AccuracyError, accuracy_from_text
+
+        if isinstance(value, Accuracy):
+            return value
+        try:
+            return accuracy_from_text(value)
+        except AccuracyError as error:
+            self.fail(error.detail, param, ctx)
+
+
+ACCURACY = click.option(
+    "--accuracy", type=_AccuracyType(), default=None, metavar="PRESET|KEY=VALUE,...",
+    help="Simulator tolerances: fast, default or precise, or KEY=VALUE pairs (keys rtol, atol, "
+    "event_tol, agreement; base: the preset giving the rest and the optimizer's settings, "
+    "default 'default'), e.g. rtol=1e-10,agreement=1e-8. Default: the spec's.")
 
 
 @main.command()

@@ -2,9 +2,21 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 
 class PdmError(Exception):
     """Base class for errors with a message meant for the user."""
+
+
+def did_you_mean(word: Any, known) -> str:
+    """"; did you mean 'x'?" for the closest of `known` to a mistyped word, else ""."""
+    if not isinstance(word, str):
+        return ""
+    import difflib  # only on error paths
+
+    close = difflib.get_close_matches(word, list(known), n=1, cutoff=0.6)
+    return f"; did you mean '{close[0]}'?" if close else ""
 
 
 class SpecError(PdmError):

@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import math
 
+from .accuracy import ACCURACY_PRESETS
+from .accuracy import accuracy as accuracy_preset
 from .analysis import Analysis
-from .sim.core import ACCURACY_PRESETS, SimulationRefused
-from .sim.core import accuracy as accuracy_preset
+from .sim.core import SimulationRefused
 from .spec.model import Spec
 
 # Relative agreement demanded between simulator and closed form, per accuracy preset
@@ -50,6 +51,7 @@ def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> 
             "passed": False,
             "summary": f"the simulator refuses this design: {refusal}",
             "accuracy": acc.name,
+            "accuracy_settings": acc.settings(),
             "outcome": {"completed": False, "stages_passed": 0,
                         "failure": {"event": "refused", "stage": 0, "time": 0.0,
                                     "detail": str(refusal)}},
@@ -74,6 +76,7 @@ def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> 
         "passed": not failures,
         "summary": summary if not failures else "; ".join(failures),
         "accuracy": acc.name,
+        "accuracy_settings": acc.settings(),
         "outcome": outcome.to_json(),
         "agreement": agreement,
         "samples": 1,

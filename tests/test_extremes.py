@@ -620,7 +620,7 @@ def test_vectorised_impact_map_is_the_scalar_one(vx, vy, omega, eps, mu, r, m, j
 # ============================================================ accuracy presets
 
 def test_presets_and_custom_tolerances():
-    from pdm_design.sim.core import ACCURACY_PRESETS, accuracy
+    from pdm_design.accuracy import ACCURACY_PRESETS, accuracy
 
     assert accuracy("fast") is ACCURACY_PRESETS["fast"]
     custom = accuracy({"base": "precise", "rtol": 1e-10})
@@ -633,7 +633,7 @@ def test_presets_and_custom_tolerances():
     ({"agreement": 2.0}, "agreement"), ({"rtoll": 1e-9}, "rtoll"), ({"atol": "1e-9"}, "atol"),
 ])
 def test_bad_tolerances_are_refused_by_name(tolerances, key):
-    from pdm_design.sim.core import accuracy
+    from pdm_design.accuracy import accuracy
 
     with pytest.raises(ValueError, match=key):
         accuracy(tolerances)
@@ -643,8 +643,8 @@ def test_verification_demands_the_presets_agreement():
     """verify_nominal compares the simulated handover speeds with the closed forms to the
     accuracy's `agreement`: the paper's design agrees to ~1e-16, so it passes every preset and
     fails only an agreement below that."""
+    from pdm_design.accuracy import accuracy
     from pdm_design.analysis import analyse
-    from pdm_design.sim.core import accuracy
     from pdm_design.spec import load_spec
     from pdm_design.verify import AGREEMENT, verify_nominal
 

@@ -331,24 +331,6 @@ def test_classic_broken_files(tmp_path, content, key):
     check_refused(tmp_path, content, key)
 
 
-def test_output_file_is_written_atomically(tmp_path, monkeypatch):
-    # `check --junit` writes through pdm_design.io.write_atomic: a failure while writing leaves
-    # the old file untouched and no temporary file behind.
-    from pdm_design import io
-
-    target = tmp_path / "report.xml"
-    target.write_text("old", encoding="utf-8")
-
-    def boom(tmp, path):
-        raise OSError("disk full")
-
-    monkeypatch.setattr(io, "_publish", boom)
-    with pytest.raises(OSError):
-        io.write_atomic(target, "new")
-    assert target.read_text(encoding="utf-8") == "old"
-    assert [p.name for p in tmp_path.iterdir()] == ["report.xml"]
-
-
 def test_a_plot_that_fails_half_way_leaves_no_file(tmp_path, monkeypatch):
     # `simulate --plot` writes through io.atomic_path: a figure whose writing fails after some
     # bytes leaves neither the target nor a temporary file behind.

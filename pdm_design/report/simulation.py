@@ -24,7 +24,7 @@ def simulation_text(spec, result) -> str:
     outcome = result.outcome
     verdict = "completed" if outcome.completed else "FAILED"
     lines = [f"{spec.name or spec.source} ({spec.kind}): {verdict}, "
-             f"{outcome.stages_passed} stages passed (accuracy {result.accuracy.name})"]
+             f"{outcome.stages_passed} stages passed (accuracy {result.accuracy.describe()})"]
     if outcome.failure is not None:
         f = outcome.failure
         lines.append(f"failure: {f.kind} at stage {f.stage}, t = {f.time:.6g} s: {f.detail}")

@@ -62,7 +62,8 @@ def optimize_text(outcome: DesignOutcome) -> str:
         lines += _tolerance_rows(outcome.tolerance)
     if outcome.verification is not None:
         v = outcome.verification
-        lines += ["", f"verification: {'passed' if v.get('passed') else 'FAILED'}"
+        accuracy = f" (accuracy {outcome.accuracy.describe()})" if outcome.accuracy else ""
+        lines += ["", f"verification: {'passed' if v.get('passed') else 'FAILED'}{accuracy}"
                   f" - {v.get('summary', '')}"]
     if outcome.solver:
         stats = outcome.solver

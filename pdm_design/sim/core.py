@@ -1,4 +1,4 @@
-"""The hybrid-simulation vocabulary shared by every scene: accuracy, events, outcomes.
+"""The hybrid-simulation vocabulary shared by every scene: events, outcomes, scale checks.
 
 A run is a sequence of phases. Each phase has its dynamics (closed form where the physics
 allows, numerical integration otherwise), guard functions with a crossing direction, and a
@@ -8,9 +8,9 @@ reset map applied at the event that ends it. Every event goes into one log.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from ..accuracy import Accuracy
 from ..errors import PdmError
 from .numerics import BRENT_RTOL, brentq
 
@@ -48,72 +48,6 @@ def check_scales(reference: tuple[str, float], quantities: dict[str, float]) -> 
                 f"{name} = {value:g} is {ratio:.3g} times {what} ({scale:g}): a scene spread "
                 f"over more than {math.log10(SCALE_LIMIT):.0f} orders of magnitude cannot be "
                 "simulated in double precision; fix the value")
-
-
-@dataclass(frozen=True)
-class Accuracy:
-    """Tolerances of a simulation run and of its verification.
-
-    rtol, atol: integration tolerances where a phase is integrated numerically (the sliding
-        carry and the bouncing phase of the manipulators scene; every other phase is closed form).
-    event_tol: absolute tolerance on a located event (s for times, rad for angles, m for the
-        stairs' nose contacts).
-    agreement: relative difference between simulated and closed-form periodic quantities that
-        verification accepts (verify.verify_nominal). The presets' values are 10x or more above
-        the errors measured by results/bench_accuracy.py (results/accuracy.md).
-    """
-
-    name: str
-    rtol: float
-    atol: float
-    event_tol: float
-    agreement: float = 1e-7
-
-    def __post_init__(self):
-        for key in ("rtol", "atol", "event_tol", "agreement"):
-            value = getattr(self, key)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                    or not math.isfinite(value) or value <= 0.0:
-                raise ValueError(f"accuracy {key} must be a positive finite number, "
-                                 f"not {value!r}")
-        if self.rtol < MIN_RTOL:
-            raise ValueError(f"accuracy rtol must be at least {MIN_RTOL:g} (100 machine "
-                             f"epsilons, the integrator's floor), not {self.rtol:g}")
-        if self.rtol >= 1.0 or self.agreement >= 1.0:
-            raise ValueError("accuracy rtol and agreement must be below 1 (they are relative)")
-
-
-MIN_RTOL = 100 * 2.220446049250313e-16
-
-ACCURACY_PRESETS = {
-    "fast": Accuracy("fast", rtol=1e-6, atol=1e-8, event_tol=1e-7, agreement=1e-4),
-    "default": Accuracy("default", rtol=1e-9, atol=1e-11, event_tol=1e-11, agreement=1e-7),
-    "precise": Accuracy("precise", rtol=1e-12, atol=1e-14, event_tol=1e-14, agreement=1e-9),
-}
-TOLERANCE_KEYS = ("rtol", "atol", "event_tol", "agreement")
-
-
-def accuracy(preset: str | Accuracy | Mapping = "default") -> Accuracy:
-    """An Accuracy from a preset name, an Accuracy (passed through), or a mapping of tolerances
-    for those who want them: {"base": "default", "rtol": 1e-10, ...}; keys left out come from
-    the base preset (default "default"), and the result is named "custom". ValueError names
-    the offending key."""
-    if isinstance(preset, Accuracy):
-        return preset
-    if isinstance(preset, Mapping):
-        values = dict(preset)
-        base = accuracy(values.pop("base", "default"))
-        unknown = sorted(set(values) - set(TOLERANCE_KEYS), key=str)
-        if unknown:
-            raise ValueError(f"unknown accuracy key {unknown[0]!r}: the tolerances are "
-                             f"{', '.join(TOLERANCE_KEYS)} (and base, a preset name)")
-        merged = {k: values.get(k, getattr(base, k)) for k in TOLERANCE_KEYS}
-        return Accuracy("custom", **merged)
-    try:
-        return ACCURACY_PRESETS[preset]
-    except (KeyError, TypeError):
-        raise ValueError(f"accuracy must be one of {', '.join(ACCURACY_PRESETS)}, "
-                         f"not {preset!r}") from None
 
 
 @dataclass(frozen=True)
@@ -174,6 +108,7 @@ class SimulationResult:
             "stages": self.stages,
             "events": [e.to_json() for e in self.events],
             "accuracy": self.accuracy.name,
+            "accuracy_settings": self.accuracy.settings(),
         }
 
 

@@ -21,8 +21,8 @@ import math
 
 import numpy as np
 
+from ..accuracy import accuracy as resolve_accuracy
 from .core import SimulationResult, check_scales
-from .core import accuracy as resolve_accuracy
 from .manip_run import Run
 
 EVENT_KINDS = {

@@ -60,9 +60,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from ..accuracy import Accuracy
+from ..accuracy import accuracy as accuracy_preset
 from ..scenes import StairsDesign, StairsScene
-from .core import Accuracy, Event, Outcome, SimulationRefused, SimulationResult, check_scales
-from .core import accuracy as accuracy_preset
+from .core import Event, Outcome, SimulationRefused, SimulationResult, check_scales
 from .stairs_flight import Contact, next_contact, step_under
 from .stairs_geometry import StairsGeometry, stairs_geometry
 from .stairs_maps import (

@@ -8,7 +8,6 @@ checks the layout around them and turns pydantic's errors into key paths of the 
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import math
 import re
 import reprlib
@@ -20,7 +19,8 @@ from typing import Annotated, Any, NamedTuple
 import pydantic
 from pydantic import Field, Strict, TypeAdapter
 
-from ..errors import SpecError
+from ..accuracy import Accuracy, AccuracyError, accuracy
+from ..errors import SpecError, did_you_mean
 from ..scenes import ManipulatorsDesign, ManipulatorsScene, StairsDesign, StairsScene
 from ..scenes.common import CONFIG
 from .model import (
@@ -134,12 +134,7 @@ def _parse(data: Any, source: str) -> Spec:
     kind = _kind(_table(data, "scene", required=True))
     scene = _scene(data, kind)
     design = _design(_table(data, "design", required=True), kind.design)
-    verification_table = _table(data, "verification")
-    _check_fields(verification_table, Verification, "verification", kind.verification_hints,
-                  exclude=tuple(kind.verification_hints))
-    verification = _build(Verification, verification_table, "verification")
-    _check_unique(verification.offsets, "manipulator", "verification.offsets")
-    _check_unique(verification.step_errors, "step", "verification.step_errors")
+    verification = _verification(_table(data, "verification"), kind)
     expect_table = _table(data, "expect")
     _check_fields(expect_table, Expectations, "expect")
     return Spec(
@@ -153,6 +148,31 @@ def _parse(data: Any, source: str) -> Spec:
         name=name,
         description=description,
     )
+
+
+def _verification(table: dict, kind: _Kind) -> Verification:
+    table = dict(table)
+    setting = table.pop("accuracy", _MISSING)
+    _check_fields(table, Verification, "verification", kind.verification_hints,
+                  exclude=(*kind.verification_hints, "accuracy"))
+    if setting is not _MISSING:
+        table["accuracy"] = _accuracy(setting)
+    verification = _build(Verification, table, "verification")
+    _check_unique(verification.offsets, "manipulator", "verification.offsets")
+    _check_unique(verification.step_errors, "step", "verification.step_errors")
+    return verification
+
+
+def _accuracy(setting: Any) -> Accuracy:
+    """verification.accuracy: a preset name or an inline table of tolerances (parsed by
+    pdm_design.accuracy, whose errors name the key within the table)."""
+    try:
+        return accuracy(setting)
+    except AccuracyError as error:
+        path = "verification.accuracy"
+        key = _join(path, error.key) if error.key else path
+        found = error.found if error.found is not None else _show(error.value)
+        raise _Invalid(key, error.expected, found) from None
 
 
 def _string(data: dict, key: str) -> str:
@@ -179,7 +199,7 @@ def _kind(scene: dict) -> _Kind:
         raise _Invalid("scene.kind", f"one of: {', '.join(KINDS)}", "nothing")
     if not isinstance(kind, str) or kind not in KINDS:
         raise _Invalid("scene.kind", f"one of: {', '.join(KINDS)}",
-                       _show(kind) + _did_you_mean(kind, KINDS))
+                       _show(kind) + did_you_mean(kind, KINDS))
     return KINDS[kind]
 
 
@@ -302,15 +322,8 @@ def _check_keys(table: dict, known: tuple[str, ...], path: str, hints: dict | No
             where = f"a key of {path}" if path else "a top-level key"
             hint = (hints or {}).get(key)
             found = f"unknown key {_show(key)}" + (f" ({hint})" if hint else
-                                                   _did_you_mean(key, known))
+                                                   did_you_mean(key, known))
             raise _Invalid(_join(path, key), f"{where} ({', '.join(known)})", found)
-
-
-def _did_you_mean(word: Any, known) -> str:
-    if not isinstance(word, str):
-        return ""
-    close = difflib.get_close_matches(word, list(known), n=1, cutoff=0.6)
-    return f"; did you mean '{close[0]}'?" if close else ""
 
 
 # --------------------------------------------------------------------------- pydantic's errors

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Annotated, Literal
+from typing import Annotated
 
-from pydantic import Field, Strict
+from pydantic import Field, PlainValidator, Strict
 from pydantic.dataclasses import dataclass as checked
 
+from ..accuracy import ACCURACY_PRESETS, Accuracy, accuracy
 from ..scenes import ManipulatorsDesign, Scene, StairsDesign
 from ..scenes.common import CONFIG, Number
 
@@ -15,8 +16,11 @@ Count = Annotated[int, Strict(), Field(ge=1, le=10_000_000)]
 SampleCount = Annotated[int, Strict(), Field(ge=0, le=1_000_000)]
 Weight = Annotated[float, Strict(), Field(ge=0)]
 
+# A preset name or a mapping of tolerances becomes an Accuracy (the loader resolves it first, to
+# report errors at their key).
+AccuracyField = Annotated[Accuracy, PlainValidator(accuracy)]
+
 OBJECTIVES = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence")
-ACCURACIES = ("fast", "default", "precise")
 
 MANIPULATOR_MARGINS = (
     "landing", "over_the_top", "lift_off", "slip_carry", "tip_carry", "slip_impact", "tip_impact",
@@ -67,7 +71,7 @@ class Verification:
     """How designs are verified in the simulator. stages: manipulators passed or bounces made."""
 
     stages: Count = 6
-    accuracy: Literal["fast", "default", "precise"] = "default"
+    accuracy: AccuracyField = ACCURACY_PRESETS["default"]
     samples: SampleCount = 16
     offsets: tuple[ManipulatorOffset, ...] = ()
     step_errors: tuple[StepError, ...] = ()
