@@ -70,10 +70,13 @@ def bench_ipopt(spec, form, repeats):
     }
 
 
-def bench_slsqp(spec, form, starts, repeats):
-    """The same NLP (objective f, rows g, bounds) by SLSQP, gradients by finite differences."""
+def bench_slsqp(spec, form, starts, repeats, *, fg=None, solver=None):
+    """The same NLP (objective f, rows g, bounds) by SLSQP, gradients by finite differences.
+    fg (objective and rows) and the IPOPT solver of the paired timing default to the shipped,
+    uncompiled ones."""
     p = form.parameters(spec.requirements)
-    fg = ca.Function("fg", [form.nlp["x"], form.nlp["p"]], [form.nlp["f"], form.nlp["g"]])
+    if fg is None:
+        fg = ca.Function("fg", [form.nlp["x"], form.nlp["p"]], [form.nlp["f"], form.nlp["g"]])
     eq = np.flatnonzero(form.ubg == form.lbg)
     ineq = np.flatnonzero(form.ubg != form.lbg)
     bounds = list(zip(form.lbx, np.where(np.isfinite(form.ubx), form.ubx, None)))
@@ -110,7 +113,7 @@ def bench_slsqp(spec, form, starts, repeats):
     feasible = [(r.fun, r) for _, r, v in runs if r.success and v <= 1e-6]
     # Paired timing: the same start by IPOPT then by SLSQP, alternately, so that both see the
     # same machine load.
-    solver = solver_for(form.key, form.nlp, SolverOptions())
+    solver = solver or solver_for(form.key, form.nlp, SolverOptions())
     ratios = []
     for _ in range(repeats):
         for x0 in starts:
@@ -153,19 +156,19 @@ def _slsqp_rows(slsqp):
     ]
 
 
-def bench_stairs(reps):
-    """Second problem (IPOPT vs SLSQP only): problems/stairs_design.toml."""
-    spec = load_spec(ROOT / "problems/stairs_design.toml")
+def bench_problem(name, title, what, reps):
+    """IPOPT against SLSQP only, on problems/<name>.toml ({stages} in `what`: its stages)."""
+    spec = load_spec(ROOT / f"problems/{name}.toml")
     form = formulate(spec)
     ipopt = bench_ipopt(spec, form, reps)
     optimize(spec)
     run, res = timed(lambda: optimize(spec, linearise=False, check_samples=0), reps)
     slsqp = bench_slsqp(spec, form, ipopt["starts"], max(2, reps // 5))
     return [
-        "## Second problem: `problems/stairs_design.toml`",
+        f"## {title}: `problems/{name}.toml`",
         "",
         f"{len(form.x_names)} variables ({', '.join(form.x_names)}), {len(form.lbg)} rows "
-        f"({spec.verification.stages} bounces, two worst-case error scenarios).",
+        f"({what.format(stages=spec.verification.stages)}).",
         "",
         "| method | time | objective (tolerance, m) | notes |",
         "|---|---|---|---|",
@@ -282,7 +285,10 @@ def main():
         f"({full.checks['sampled_offsets']['worst_condition']}).",
         "",
     ]
-    lines += bench_stairs(reps)
+    lines += bench_problem("manipulators_robust_all_free", "Larger problem",
+                           "alpha, beta, link length and mass ratio free", reps)
+    lines += bench_problem("stairs_design", "Stairs problem",
+                           "{stages} bounces, two worst-case error scenarios", reps)
     Path(args.out).write_text("\n".join(lines))
     print("\n".join(lines))
 

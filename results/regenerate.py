@@ -30,7 +30,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results"
 PAPER_SPECS = ("paper_stairs_frictionless", "paper_stairs_friction", "paper_manipulators")
-OPTIMISED_SPECS = ("manipulators_robust", "stairs_design")
+OPTIMISED_SPECS = ("manipulators_robust", "manipulators_robust_all_free", "stairs_design")
 TABLES = {  # folder: (spec, sweeps)
     "manipulators_mass_ratio": ("problems/paper_manipulators.toml", ["mass_ratio=1:30:30"]),
     "manipulators_alpha_beta": ("problems/paper_manipulators.toml",

@@ -397,3 +397,21 @@ def test_stairs_design_is_optimal_and_its_error_box_is_sound():
             down = math.sqrt(up**2 + 2 * G * next_rise)
             L = L + vx * (up + down) / G - (tread + et[n])
             v = down
+
+
+def test_freeing_link_length_and_mass_ratio_beats_every_grid_mechanism():
+    # The four mechanism parameters free: the optimum must be at least as good as the best of
+    # an independent grid over all four (numpy bisection, robust_tolerance_grid).
+    spec = load_spec(PROBLEMS / "manipulators_robust_all_free.toml")
+    result = optimize(spec)
+    assert result.status is Status.OPTIMAL
+    d = spec.design
+    alpha = np.linspace(d["alpha"].min, d["alpha"].max, 31)
+    beta = np.linspace(d["beta"].min, d["beta"].max, 51)
+    best = max(
+        robust_tolerance_grid(spec.scene, alpha, beta, link_length=length, mass_ratio=ratio,
+                              stages=spec.verification.stages).max()
+        for length in np.linspace(d["link_length"].min, d["link_length"].max, 5)
+        for ratio in (d["mass_ratio"].min, 10.0, d["mass_ratio"].max))
+    assert best > 0.0
+    assert result.tolerance["dx"] >= best - 1e-6
