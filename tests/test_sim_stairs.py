@@ -443,6 +443,20 @@ def test_launch_inside_the_stairs_is_refused():
         simulate_stairs(scene, design, stages=1)
 
 
+@pytest.mark.parametrize("past", [0.02, 0.04])
+def test_a_slow_launch_just_past_the_top_nose_comes_down_on_its_corner(past):
+    # The ball starts with its lowest point at the top landing's level (rise = h0), its centre
+    # `past` beyond that landing's nose, moving away at 5 cm/s. It falls r (time sqrt(2 r / g))
+    # to bring its centre to the corner's level, by then past + v0 sqrt(2 r / g) < r from it:
+    # it must touch the corner behind it on the way down.
+    r, v0 = 0.05, 0.05
+    assert past + v0 * math.sqrt(2 * r / G) < r
+    scene, design = paper1(radius=r, launch_speed=v0, rise=H0, tread=1.0,
+                           landing_offset=v0 * math.sqrt(2 * H0 / G) + past)
+    failure = simulate_stairs(scene, design, stages=3).outcome.failure
+    assert failure is not None and (failure.kind, failure.stage) == ("nose_hit", 0)
+
+
 def test_geometry_matches_the_closed_forms():
     geo = stairs_geometry(*paper2())
     vx1, _ = phys.rolling_impact(3.0, 0.5, **BALL2)

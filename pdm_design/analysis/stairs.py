@@ -4,13 +4,9 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from ..physics import stairs as phys
 from ..scenes import StairsDesign, StairsScene
 from .result import Analysis, margin
-
-_CLEARANCE_SAMPLES = 2049
 
 
 def analyse_stairs(scene: StairsScene, design: StairsDesign) -> Analysis:
@@ -61,10 +57,20 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign) -> Analysis:
         )
         landing = tread / 2 if design.landing_offset is None else design.landing_offset
         geometry["landing_offset"] = landing
-        clearance = nose_clearance(vx, eps * vy_periodic, g, ball.radius, tread, rise, landing)
-        geometry["nose_clearance"] = clearance
-        margins["nose_clearance"] = clearance / tread
-        margins["riser_clearance"] = (landing - ball.radius) / tread
+        # the launch over the top landing (one rise above tread 1), whose nose is v0 t(h0) -
+        # landing ahead of it; the optimizer's launch rows and the simulator's step 0
+        launch = phys.launch_clearances(v0, g, ball.radius, h0 - rise,
+                                        v0 * vy_first / g - landing)
+        margins["first_nose_clearance"] = float(min(launch) / tread)
+        if vx > 0.0:
+            clearance = nose_clearance(vx, eps * vy_periodic, g, ball.radius, tread, rise,
+                                       landing)
+            geometry["nose_clearance"] = clearance
+            margins["nose_clearance"] = float(clearance / tread)
+        else:
+            problems.append(f"the ball moves at {vx:g} m/s along the stairs after the first "
+                            "impact: it does not go down them")
+        margins["riser_clearance"] = float((landing - ball.radius) / tread)
         if landing >= tread:
             problems.append(f"landing_offset {landing:g} m is not on the tread (tread {tread:g} m)")
 
@@ -98,24 +104,12 @@ def _periodic_vertical_speed(g, h0, eps, rise, derived, problems):
 def nose_clearance(vx, vy_up, g, radius, tread, rise, landing):
     """Smallest gap (m) between the ball and the step it leaves, over one periodic flight.
 
-    The ball leaves the tread at the contact point (0, 0) with velocity (vx, vy_up); the step's
-    nose is at (tread - landing, 0) and its riser drops from there by `rise`. The gap is the
-    distance from the ball's centre to the nose-and-riser segment less the radius, and, while the
-    ball comes down still over the tread, the height of its lowest point above the tread
-    (negative: it lands twice on one step).
+    The ball leaves the tread `landing` from its back with velocity (vx > 0, vy_up); the nose is
+    tread - landing ahead. The gap is the distance from the ball's centre path to the nose corner
+    less the radius (exact: `physics.stairs.corner_gaps`), and, where the centre passes over the
+    nose, the height of its lowest point above the nose level (negative: it comes down before
+    the nose, or it took off beyond it). `rise` does not enter: the riser below the nose is
+    never nearer than the corner to a ball that clears the corner.
     """
-    flight = 2.0 * vy_up / g + _fall_time(vy_up, g, rise)
-    t = np.linspace(0.0, flight, _CLEARANCE_SAMPLES)
-    cx = vx * t
-    cy = radius + vy_up * t - 0.5 * g * t**2
-    nose_x = tread - landing
-    below = np.clip(cy, -rise, 0.0)  # nearest point of the segment x = nose_x, y in [-rise, 0]
-    gap_segment = np.hypot(cx - nose_x, cy - below) - radius
-    descending_over_tread = (cx <= nose_x) & (t > vy_up / g)
-    gap_tread = np.where(descending_over_tread, cy - radius, np.inf)
-    return float(min(gap_segment.min(), gap_tread.min()))
-
-
-def _fall_time(vy_up, g, rise):
-    """Time from the apex-symmetric return to take-off height down by `rise`."""
-    return (-vy_up + math.sqrt(vy_up**2 + 2.0 * g * rise)) / g
+    del rise
+    return float(min(phys.flight_clearances(vx, vy_up, g, radius, tread - landing)))

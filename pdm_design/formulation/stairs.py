@@ -22,10 +22,14 @@ Nose clearance, smooth and sound: with d the distance from the landing point to 
 above the take-off level is concave in time, so the ball stays above the nose level (and over the
 tread before it) iff its lowest point is above that level at the two ends, x = d - r and d + r:
     eps v vx z - g z^2 / 2 >= 0  for z = d - r, d + r   (times vx^2 > 0).
-After x = d + r it is clear of the riser; it then lands on the next tread. The launch must also
-clear the top landing's nose (the simulator's step 0, one design rise above tread 1, without
-errors): `launch_slack`. With the derived rise and no friction it is flight 1's row at zero error;
-with friction the launch flies at v0 and the later flights at the rolling speed, and it is not.
+After x = d + r it is clear of the riser; it then lands on the next tread. This asks up to about
+r more than the simulator's disc-to-corner contact (the analysis' margins are exact:
+physics.stairs.flight_clearances); the exact gap is a nearest point found from a cubic, whose
+branches cost IPOPT 4 to 6 times the iterations (docs/optimizer.md, section 2). The launch must
+also clear the top landing's nose (the simulator's step 0, one design rise above tread 1, without
+errors): `launch_slack`, the condition `first_nose_clearance`. With the derived rise and no
+friction it is flight 1's row at zero error; with friction the launch flies at v0 and the later
+flights at the rolling speed, and it is not.
 
 Robust errors |er_n|, |et_n| <= tau: L_n increases with every er_j (j <= n, the first riser's
 included) and decreases with every et_j (j < n), v_n increases with every er_j (j <= n): so L_n is
@@ -49,6 +53,10 @@ from .common import MARGIN, MODEL, VALIDITY, Condition, SceneModel, design_input
 
 DEFAULTS = {"rise": None, "tread": None, "landing_offset": None}
 MIN_FORWARD_SPEED = 1e-3  # m/s
+# The flight's two nose rows, by the phase of the flight each guards (solve/words.py reads it).
+NOSE_ENDS = ("leading edge: takes off behind the nose", "trailing edge: comes down beyond the nose")
+# A nose_clearance requirement covers the launch too (its own name, as manipulators' first_ ones).
+LAUNCH_KEYS = ("first_nose_clearance", "nose_clearance")
 
 
 def build(spec):
@@ -150,9 +158,9 @@ class _Model:
     def nose_slack(self, v, dist):
         """Clearance rows of one flight over a nose `dist` ahead: [(where, slack), ...]."""
         r, vx, g = self.scene.ball.radius, self.vx, self.g
-        ends = [("leading edge over the nose", dist - r), ("trailing edge over the nose", dist + r)]
+        ends = list(zip(NOSE_ENDS, (dist - r, dist + r), strict=True))
         if r == 0.0:
-            ends = [("over the nose", dist)]
+            ends = [("passes over the nose", dist)]
         return [(where, self.eps * v * vx * z - g * z**2 / 2) for where, z in ends]
 
     def launch_slack(self):
@@ -198,8 +206,8 @@ class _Model:
                 self.scene.initial.drop_height - tau, self.tread, kind=VALIDITY)
 
         tread = self.tread
-        add("nose_clearance", "launch, over the top landing's nose", self.launch_slack(),
-            tread * self.v0**2)
+        out.append(Condition(LAUNCH_KEYS, "launch: comes down beyond the top landing's nose",
+                             self.launch_slack(), tread * self.v0**2))
         scale = tread * self.vx**2
         if robust:
             L_long, _ = self.trajectory(tau, -tau)
@@ -212,10 +220,10 @@ class _Model:
             where = f"landing {stage}, shortest drift" if robust else f"landing {stage}"
             add("riser_clearance", where, L_short[n] - r, tread)
             ends = [("", tread - L_long[n])] if not robust else [
-                ("nose nearest, ", tread - tau - L_long[n]),
-                ("nose furthest, ", tread + tau - L_short[n]),
+                (", nose nearest", tread - tau - L_long[n]),
+                (", nose furthest", tread + tau - L_short[n]),
             ]
-            for prefix, dist in ends:
+            for suffix, dist in ends:
                 for where, slack in self.nose_slack(v_short[n], dist):
-                    add("nose_clearance", f"flight {stage}, {prefix}{where}", slack, scale)
+                    add("nose_clearance", f"flight {stage}{suffix}, {where}", slack, scale)
         return out

@@ -47,3 +47,31 @@ def fmax(a, b):
 
 def fmin(a, b):
     return _casadi().fmin(a, b) if is_symbolic(a, b) else np.minimum(a, b)
+
+
+def acos(x):
+    return _casadi().acos(x) if is_symbolic(x) else np.arccos(x)
+
+
+def sinh(x):
+    return _casadi().sinh(x) if is_symbolic(x) else np.sinh(x)
+
+
+def asinh(x):
+    return _casadi().asinh(x) if is_symbolic(x) else np.arcsinh(x)
+
+
+def cosh(x):
+    return _casadi().cosh(x) if is_symbolic(x) else np.cosh(x)
+
+
+def acosh(x):
+    return _casadi().acosh(x) if is_symbolic(x) else np.arccosh(x)
+
+
+def where(condition, a, b):
+    """a where condition holds, else b. Both sides are evaluated (numpy and CasADi alike), so
+    each must be finite everywhere: clip arguments rather than rely on the branch."""
+    if is_symbolic(condition, a, b):
+        return _casadi().if_else(condition, a, b)
+    return np.where(condition, a, b)

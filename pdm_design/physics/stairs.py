@@ -11,11 +11,22 @@ with its lowest point h0 above the first tread:
     periodic step length   tread = vx * T
 With friction the first impact may change vx and omega (rolling_impact); afterwards the contact
 point is at rest at every impact, no tangential impulse is needed, and vx stays constant.
+
+Step-nose clearance (flight_clearances, launch_clearances, from corner_gaps and corner_heights):
+the exact gap between the ball (a disc of radius r) and a nose corner its flight passes, from the
+closed-form nearest point of the centre's parabola (docs/physics.md, "Nose clearance, exactly").
+They work on CasADi symbols too (every branch finite, derivatives NaN-free); the NLP does not use
+them, its smooth rows cost IPOPT far fewer iterations (docs/optimizer.md, section 2).
 """
 
 from __future__ import annotations
 
-from .ops import fabs, sqrt
+from .ops import acos, acosh, asinh, cos, cosh, fabs, fmax, fmin, sinh, sqrt, where
+
+_TINY = 1e-30  # keeps the unused branch of a root formula finite
+# keeps acos / acosh off their infinite-slope ends; that moves a root (by ~1e-6 of itself) only next
+# to a double root, where the distance is flat to third order
+_EDGE = 1e-12
 
 
 def impact_speed_vertical(gravity, drop_height):
@@ -67,3 +78,95 @@ def periodic_tread(vx, gravity, drop_height, restitution):
 def periodic_impact_speed(vx, gravity, drop_height):
     """Speed of the ball just before each periodic impact: sqrt(vx^2 + 2 g h0)."""
     return sqrt(vx**2 + 2.0 * gravity * drop_height)
+
+
+def corner_gaps(vx, gravity, apex_height, corner_dx, start_dx, radius):
+    """(start, rising, falling): the ball's gaps (m) to a corner it flies past.
+
+    Frame of the flight's apex: the centre is at (u, H - u^2 / (2 R)) for u >= start_dx, with
+    H = apex_height its height above the corner, R = vx^2 / g the path's radius of curvature at
+    the apex and start_dx <= 0 where the flight starts (0: launched at its apex); the corner is at
+    (corner_dx, 0). Each gap is a distance from the corner to the centre less the radius
+    (negative: they overlap): start, at the start; rising, the smallest over (start_dx, 0) when
+    it is inside, else not below `start`; falling, the smallest over u >= 0. So the smallest of
+    the three is the smallest gap of the whole flight, exactly.
+
+    The squared distance is a quartic in u; its local minima are the smallest and the largest real
+    root of its derivative, the depressed cubic (u/R)^3 + 2 (1 - H/R) (u/R) - 2 corner_dx/R = 0,
+    so the minimum over an interval is at an end or at one of those roots clipped into it. A root
+    before the start adds its squared distance to the start (C1, and never below `start`): that
+    keeps the take-off out of `rising`, whose gap goes flat (d^2 / 2r) as a take-off d behind the
+    corner nears it, and which the optimizer need not back off from (the ball leaves the corner
+    there). Each gap is C1 where one root is the minimiser (a clipped root moves the distance to
+    second order only).
+    """
+    R = vx**2 / gravity
+
+    def dist2(u):
+        return (u - corner_dx) ** 2 + (apex_height - u**2 / (2.0 * R)) ** 2
+
+    def rising_at(root):
+        return dist2(fmin(fmax(root, start_dx), 0.0)) + fmax(start_dx - root, 0.0) ** 2
+
+    p, q = 2.0 * (1.0 - apex_height / R), -2.0 * corner_dx / R
+    low, high = -R * _largest_root(p, -q), R * _largest_root(p, q)
+    rising = fmin(rising_at(low), rising_at(high))
+    falling = fmin(dist2(0.0), fmin(dist2(fmax(low, 0.0)), dist2(fmax(high, 0.0))))
+    return (sqrt(dist2(start_dx)) - radius, sqrt(rising) - radius, sqrt(falling) - radius)
+
+
+def corner_heights(vx, gravity, apex_height, corner_dx, radius):
+    """(rising, falling): height (m) of the ball's lowest point above the corner's level where the
+    centre passes over the corner, on the apex's side (rising: corner_dx clipped to <= 0, falling:
+    to >= 0; frame of `corner_gaps`). Negative rising: the corner is behind the take-off (the ball
+    landed beyond the nose); negative falling: the ball comes down before the corner."""
+    R = vx**2 / gravity
+    before, after = fmin(corner_dx, 0.0), fmax(corner_dx, 0.0)
+    return (apex_height - radius - before**2 / (2.0 * R),
+            apex_height - radius - after**2 / (2.0 * R))
+
+
+def _largest_root(p, q):
+    """Largest real root of u^3 + p u + q = 0, by Chebyshev's hyperbolic and trigonometric forms.
+
+    p >= 0: one root, -2 a sinh(asinh(q / (2 a^3)) / 3), a = sqrt(p/3). p < 0, m = sqrt(-p/3),
+    x = -q / (2 m^3): |x| <= 1, three roots, the largest 2 m cos(acos(x) / 3); |x| > 1, one root,
+    sign(x) 2 m cosh(acosh(|x|) / 3). Every branch is evaluated on clipped arguments (numpy and
+    CasADi evaluate both sides of `where`), so none is NaN and neither are derivatives.
+    """
+    a = sqrt(fmax(p / 3.0, _TINY**2))  # sqrt never at 0: its infinite slope would give NaN
+    single_p = -2.0 * a * sinh(asinh(q / (2.0 * a**3)) / 3.0)
+    m = sqrt(fmax(-p / 3.0, _TINY**2))
+    x = -q / (2.0 * m**3)
+    three = 2.0 * m * cos(acos(fmin(fmax(x, _EDGE - 1.0), 1.0 - _EDGE)) / 3.0)
+    single_m = 2.0 * m * cosh(acosh(fmax(fabs(x), 1.0 + _EDGE)) / 3.0)
+    return where(p >= 0.0, single_p,
+                 where(x > 1.0, single_m, where(x >= -1.0, three, -single_m)))
+
+
+def flight_clearances(vx, vy_up, gravity, radius, nose_dx):
+    """Clearances (m) of a flight leaving a tread at (vx > 0, vy_up) from the contact point, the
+    tread's nose nose_dx ahead at the same level: (behind, start, rising, falling, beyond) =
+        behind  lowest point above the nose level where the centre passes over the nose, on the
+                rising side (negative: the take-off is beyond the nose, nose_dx < 0)
+        start, rising, falling   gaps to the nose corner (`corner_gaps`): at the take-off, while
+                the ball rises, while it comes down
+        beyond  as `behind`, on the falling side (negative: it comes down before the nose).
+    The flight clears the step iff all five are >= 0 (the riser below the nose is never nearer
+    than the corner to a ball that clears it). Its centre's apex is vy_up vx / g ahead, r +
+    vy_up^2 / (2 g) above the contact point."""
+    apex_dx = vy_up * vx / gravity
+    apex_height = radius + vy_up**2 / (2.0 * gravity)
+    gaps = corner_gaps(vx, gravity, apex_height, nose_dx - apex_dx, -apex_dx, radius)
+    behind, beyond = corner_heights(vx, gravity, apex_height, nose_dx - apex_dx, radius)
+    return (behind, *gaps, beyond)
+
+
+def launch_clearances(v0, gravity, radius, height, nose_dx):
+    """Clearances (m) of the launch over the top landing: horizontal at v0 from its apex, the
+    lowest point `height` above the landing, its nose nose_dx ahead (negative: already past it):
+    (falling, beyond) as in `flight_clearances`. `beyond` asks height >= 0 even when the launch is
+    past the nose (exact for a launch above the landing; a launch below it is not modelled)."""
+    _, _, falling = corner_gaps(v0, gravity, height + radius, nose_dx, 0.0, radius)
+    _, beyond = corner_heights(v0, gravity, height + radius, nose_dx, radius)
+    return falling, beyond

@@ -121,7 +121,7 @@ def step_under(geo, k, x):
 
 
 def _forward(geo, k, j, x0, y0, vx, vy, r, g, tol):
-    passed = []
+    passed = _overhung(geo, k, j, x0, r)
     for _ in range(_MAX_STEPS_PER_FLIGHT):
         _, nose, level = geo.relative(k, j)
         t, vy_hit = _descend(vy, level - y0, g)
@@ -142,6 +142,20 @@ def _forward(geo, k, j, x0, y0, vx, vy, r, g, tol):
         if first is not None:
             return first
     return landing
+
+
+def _overhung(geo, k, j, x0, r):
+    """(step, nose, level) of the noses behind step j that the ball, centred at x0, still
+    overhangs: a launch that starts just past the top landing's nose can come down on its corner
+    while moving away from it."""
+    out = []
+    while j > 0:
+        j -= 1
+        _, nose, level = geo.relative(k, j)
+        if nose <= x0 - r:
+            break
+        out.append((j, nose, level))
+    return out
 
 
 def _backward(geo, k, j, x0, y0, vx, vy, r, g, tol):

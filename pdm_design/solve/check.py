@@ -16,7 +16,7 @@ from ..analysis.stairs import analyse_stairs
 
 CHECK_TOL = 1e-6
 # Margins whose optimizer meaning differs from the analysis' (checked at 0: the condition holds).
-_CHECK_AT_ZERO = {"stairs": {"nose_clearance"}, "manipulators": set()}
+_CHECK_AT_ZERO = {"stairs": {"nose_clearance", "first_nose_clearance"}, "manipulators": set()}
 
 
 def analyse(spec, design: dict[str, float]):

@@ -33,9 +33,12 @@ CONDITIONS = {
     "start_height": ("the object starts above the first palm", "lower the first manipulator"),
     # stairs
     "riser_clearance": ("the ball lands clear of the riser behind it",
-                        "land further along the tread (landing_offset) or adjust the tread"),
-    "nose_clearance": ("the ball clears the step nose ahead",
-                       "land further back on the tread, or bounce higher (restitution)"),
+                        "land further forward on the tread (a larger landing_offset)"),
+    "nose_clearance": ("the ball clears the nose of the step it leaves",
+                       "move the landing along the tread (landing_offset)"),
+    "first_nose_clearance": ("the launch clears the top landing's nose",
+                             "land further forward on tread 1 (a larger landing_offset moves the "
+                             "stairs back under the launch), or a slower launch"),
     "first_impact_friction": ("friction stops the ball slipping at the first impact",
                               "more friction, or launch speed and spin that match rolling"),
     "periodic_tread": ("the tread matches the periodic flight (no drift per bounce)",
@@ -43,6 +46,27 @@ CONDITIONS = {
     "forward_flight": ("the ball keeps moving down the stairs", "a faster launch"),
     "step_down": ("every step goes down", "a larger rise"),
 }
+
+
+# The way to move a nose_clearance row's landing depends on the phase of the flight its `where`
+# names (formulation/stairs.py NOSE_ENDS): landing_offset is measured from the back of the
+# tread, so a smaller one takes off further behind the nose ahead, a larger one nearer to it.
+_BACK = "land further back on the tread (a smaller landing_offset)"
+_FORWARD = "land further forward on the tread (a larger landing_offset)"
+PHASE_HINTS = {
+    "nose_clearance": (
+        ("takes off", f"{_BACK}: it lands too near the nose ahead"),
+        ("comes down", f"{_FORWARD}: it comes down on the nose ahead"),
+    ),
+}
+
+
+def hint(name: str, where: str) -> str:
+    """What to change, in words, for condition `name` violated at `where`."""
+    for phrase, text in PHASE_HINTS.get(name, ()):
+        if phrase in where:
+            return text
+    return CONDITIONS.get(name, ("", ""))[1]
 
 
 def normalised_margin(slack: float, scale: float) -> float:
@@ -55,11 +79,12 @@ def normalised_margin(slack: float, scale: float) -> float:
 
 def describe(name: str, where: str, required: float, achieved: float, *,
              equality: bool = False, value: float | None = None) -> str:
-    what, hint = CONDITIONS.get(name, (name.replace("_", " "), ""))
+    what = CONDITIONS.get(name, (name.replace("_", " "), ""))[0]
+    advice = hint(name, where)
     place = f" ({where})" if where else ""
     if equality:
         text = f"{what}{place}: cannot be met, best achievable residual {value:.3g}"
     else:
         text = (f"{what}{place}: needs margin {required:.3g}, "
                 f"best achievable {achieved:.3g}")
-    return f"{text}; try: {hint}" if hint else text
+    return f"{text}; try: {advice}" if advice else text

@@ -26,7 +26,8 @@ MANIPULATOR_MARGINS = (
     "landing", "over_the_top", "lift_off", "slip_carry", "tip_carry", "slip_impact", "tip_impact",
     "first_over_the_top", "first_lift_off", "first_slip_impact", "first_tip_impact",
 )
-STAIRS_MARGINS = ("first_impact_friction", "nose_clearance", "riser_clearance")
+STAIRS_MARGINS = ("first_impact_friction", "nose_clearance", "first_nose_clearance",
+                  "riser_clearance")
 
 
 @checked(frozen=True, config=CONFIG)
