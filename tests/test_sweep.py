@@ -280,3 +280,19 @@ def test_progress_bar_only_on_a_terminal():
             return self.tty
 
     assert progress_enabled(Stream(True)) and not progress_enabled(Stream(False))
+
+
+def test_a_tie_between_margins_names_the_first_in_the_scenes_list():
+    # Frictionless stairs with the derived rise: the launch's nose condition is flight 1's own
+    # (docs/optimizer.md, section 2), so the two margins agree to rounding; the table must name
+    # nose_clearance every time, not whichever rounding made smaller.
+    from pdm_design.sweep.tables import outcome_cells
+
+    for eps in (0.4, 0.5, 0.6, 0.8, 0.95):
+        spec = parse_spec({"name": "tie", "scene": {"kind": "stairs", "ball": {"radius": 0.05}},
+                           "initial": {"drop_height": 1.0},
+                           "design": {"restitution": eps, "launch_speed": 2.0}})
+        outcome = design(spec, verify=False)
+        m = outcome.analysis.margins
+        assert m["first_nose_clearance"] == pytest.approx(m["nose_clearance"], abs=1e-12)
+        assert outcome_cells(outcome, "stairs")["min_margin_name"] == "nose_clearance"

@@ -72,7 +72,11 @@ def outcome_cells(outcome, kind: str) -> dict[str, str]:
         row[f"tolerance.{axis}"] = value if _is_number(value) else None
     margins = analysis.margins
     if margins:
-        worst = min(margins, key=margins.get)
+        # Ties within rounding (a frictionless launch is flight 1's own nose condition) go to the
+        # first in the scene's list, so the column does not flicker from row to row.
+        least = min(margins.values())
+        worst = next(n for n in (*MARGINS[kind], *margins)
+                     if n in margins and margins[n] <= least + 1e-12)
         row["min_margin"], row["min_margin_name"] = margins[worst], worst
     for name in MARGINS[kind]:
         row[f"margin.{name}"] = margins.get(name)
