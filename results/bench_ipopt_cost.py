@@ -53,7 +53,7 @@ class Problem:
         guess = {n: self.spec.design[n].guess for n in names}
         designs = start_designs(names, [self.spec.design[n].min for n in names],
                                 [self.spec.design[n].max for n in names], guess, 8)
-        self.starts = [self.form.start_vector(d) for d in designs]
+        self.starts = [self.form.defined_start(d, guess, self.p) for d in designs]
 
     def solver(self, extra=None, rows=None):
         """An IPOPT solver on the NLP (optionally only its first `rows` rows)."""

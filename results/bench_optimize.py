@@ -53,7 +53,7 @@ def bench_ipopt(spec, form, repeats):
     guess = {n: spec.design[n].guess for n in names}
     designs = start_designs(names, [spec.design[n].min for n in names],
                             [spec.design[n].max for n in names], guess, 8)
-    starts = [form.start_vector(d) for d in designs]
+    starts = [form.defined_start(d, guess, p) for d in designs]
     solves = []
     for _ in range(repeats):
         for i, x0 in enumerate(starts):

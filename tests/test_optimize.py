@@ -415,3 +415,29 @@ def test_freeing_link_length_and_mass_ratio_beats_every_grid_mechanism():
         for ratio in (d["mass_ratio"].min, 10.0, d["mass_ratio"].max))
     assert best > 0.0
     assert result.tolerance["dx"] >= best - 1e-6
+
+
+def test_a_start_where_the_closed_forms_are_undefined_is_moved_toward_the_guess():
+    # beta below alpha: no periodic handover, the speed interval's square roots are of negative
+    # numbers. IPOPT from there stops at once; from the point defined_start picks, on the way to
+    # the spec's guess, it reaches the optimum of the whole problem.
+    from pdm_design.solve.ipopt import SolverOptions, solve_once, solver_for
+
+    spec = load_spec(PROBLEMS / "manipulators_robust.toml")
+    form = formulate(spec)
+    p = form.parameters(spec.requirements)
+    solver = solver_for(form.key, form.nlp, SolverOptions())
+    guess = {n: spec.design[n].guess for n in form.design_names}
+    bad = {"alpha": 0.503, "beta": 0.304}
+
+    def run(x0):
+        return solve_once(solver, x0, p, form.lbx, form.ubx, form.lbg, form.ubg)
+
+    assert run(form.start_vector(bad)).return_status == "Invalid_Number_Detected"
+    x0 = form.defined_start(bad, guess, p)
+    t = (x0[0] - guess["alpha"]) / (bad["alpha"] - guess["alpha"])
+    assert 0.0 < t < 1.0
+    assert x0[1] == pytest.approx(guess["beta"] + t * (bad["beta"] - guess["beta"]))
+    moved = run(x0)
+    assert moved.return_status == "Solve_Succeeded"
+    assert -moved.f == pytest.approx(optimize(spec).tolerance["dx"], rel=1e-6)

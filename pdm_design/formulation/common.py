@@ -173,6 +173,32 @@ class Formulation:
         x = np.concatenate([xd, aux])
         return np.clip(x, self.lbx, self.ubx)
 
+    def defined_start(self, design: dict[str, float], anchor: dict[str, float],
+                      p, halvings: int = 12) -> np.ndarray:
+        """start_vector(design), moved toward `anchor` (the spec's guess) until every row is a
+        number. A start where a closed form is undefined (beta below alpha: no handover, a
+        square root of a negative speed) ends IPOPT at once with Invalid_Number_Detected, and
+        one at the edge of where they are defined soon after; halfway from that edge to the
+        guess is a start worth a run. Unchanged when the anchor is undefined too."""
+        def defined(values):
+            x = self.start_vector(values)
+            rows, _, terms, _ = self.evaluate(x, p)
+            return x, bool(np.isfinite(np.asarray(rows)).all()
+                           and np.isfinite(np.asarray(terms)).all())
+
+        x, ok = defined(design)
+        if ok or not defined(anchor)[1]:
+            return x
+        lo, hi = 0.0, 1.0  # fractions of the way from the anchor to the design: defined, not
+        for _ in range(halvings):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if defined(_between(anchor, design, mid))[1] else (lo, mid)
+        return self.start_vector(_between(anchor, design, lo / 2))
+
+
+def _between(a: dict[str, float], b: dict[str, float], t: float) -> dict[str, float]:
+    return {n: a[n] + t * (b[n] - a[n]) for n in a}
+
 
 def requirement_value(requirements: dict[str, float], keys: tuple[str, ...]) -> float:
     return max((float(requirements.get(k, 0.0)) for k in keys), default=0.0)

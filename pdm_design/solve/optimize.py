@@ -58,7 +58,7 @@ def optimize(
     lows = [spec.design[n].min for n in names]
     highs = [spec.design[n].max for n in names]
     designs = start_designs(names, lows, highs, guess, max(starts, 1), seed)
-    x_starts = [form.start_vector(d) for d in designs]
+    x_starts = [form.defined_start(d, guess, p) for d in designs]
 
     runs = []
     if warm_start is not None and warm_start.solution is not None \
