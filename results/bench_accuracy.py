@@ -42,8 +42,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from pdm_design.io import atomic_path, write_atomic  # noqa: E402
 from pdm_design.accuracy import ACCURACY_PRESETS, MIN_RTOL, Accuracy  # noqa: E402
+from pdm_design.io import atomic_path, write_atomic  # noqa: E402
 
 G = 9.81
 PRESET_COLOURS = {"fast": "tab:red", "default": "tab:blue", "precise": "tab:green"}

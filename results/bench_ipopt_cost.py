@@ -19,14 +19,16 @@ import shutil
 import statistics
 import sys
 import time
+from collections import Counter
 from pathlib import Path
+from unittest import mock
 
 import casadi as ca
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from pdm_design.formulation import formulate  # noqa: E402
+from pdm_design.formulation import common, formulate  # noqa: E402
 from pdm_design.solve.ipopt import SolverOptions, solve_once, start_designs  # noqa: E402
 from pdm_design.spec import load_spec  # noqa: E402
 
@@ -45,9 +47,14 @@ def _bench_optimize():
 class Problem:
     """The built NLP, its parameters and the 8 multistart points optimize uses."""
 
-    def __init__(self, path):
+    def __init__(self, path, *, merge=True):
+        """merge=False: the NLP as built before casadi.cse merges repeated subexpressions."""
         self.spec = load_spec(path)
-        self.form = formulate(self.spec)
+        if merge:
+            self.form = formulate(self.spec)
+        else:
+            with mock.patch.object(common.ca, "cse", lambda expression: expression):
+                self.form = formulate(self.spec, cache=False)
         self.p = self.form.parameters(self.spec.requirements)
         names = self.form.design_names
         guess = {n: self.spec.design[n].guess for n in names}
@@ -98,6 +105,24 @@ def evaluation_share(problem):
     return spent / len(problem.starts) * 1e3, total / len(problem.starts) * 1e3
 
 
+def start_statuses(problem, seeds=8):
+    """IPOPT's return statuses from seeds x 8 multistart points, each taken as drawn and as
+    optimize takes it (moved toward the guess where the closed forms are undefined)."""
+    spec, form = problem.spec, problem.form
+    names = form.design_names
+    guess = {n: spec.design[n].guess for n in names}
+    solver = problem.solver()
+    counts = {"as drawn": Counter(), "defined_start": Counter()}
+    for seed in range(seeds):
+        for d in start_designs(names, [spec.design[n].min for n in names],
+                               [spec.design[n].max for n in names], guess, 8, seed=seed):
+            for label, x0 in (("as drawn", form.start_vector(d)),
+                              ("defined_start", form.defined_start(d, guess, problem.p))):
+                run = solve_once(solver, x0, problem.p, form.lbx, form.ubx, form.lbg, form.ubg)
+                counts[label][run.return_status] += 1
+    return counts
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true")
@@ -114,11 +139,18 @@ def main():
     fixed, per_iter = fixed_and_per_iteration(problem, reps)
     fixed8, per_iter8 = fixed_and_per_iteration(problem, reps, rows=8)
     eval_ms, solve_ms = evaluation_share(problem)
+    statuses = start_statuses(problem)
     spral = problem.solves(problem.solver({"ipopt.linear_solver": "spral"}), reps)
+    checked = problem.solves(problem.solver({"ipopt.fast_step_computation": "no",
+                                             "ipopt.min_refinement_steps": 1}), reps)
     monotone = problem.solves(problem.solver({"ipopt.mu_strategy": "monotone"}), reps)
 
+    unmerged = Problem(ROOT / "problems/manipulators_robust.toml", merge=False)
     rows = [
         ("IPOPT as shipped (adaptive barrier, MUMPS, SX virtual machine)", base),
+        ("repeated subexpressions not merged (no casadi.cse)",
+         unmerged.solves(unmerged.solver(), reps)),
+        ("IPOPT's default step checks (residuals, at least one refinement step)", checked),
         ("monotone barrier update (fewer linear solves per iteration)", monotone),
         ("SPRAL instead of MUMPS (the other linear solver in CasADi's IPOPT)", spral),
     ]
@@ -169,6 +201,17 @@ def main():
           for label, s in rows),
         "",
         f"JIT: {jit_note}.",
+        "",
+        "## Multistart points where the closed forms are undefined",
+        "",
+        "IPOPT's return statuses from 8 seeds x the 8 points `optimize` draws (a point where "
+        "beta < alpha, say, has no handover: IPOPT stops at once), as drawn and moved toward "
+        "the guess (`Formulation.defined_start`):",
+        "",
+        "| starts | statuses |",
+        "|---|---|",
+        *(f"| {label} | {', '.join(f'{k} {v}' for k, v in sorted(c.items()))} |"
+          for label, c in statuses.items()),
         "",
         "## Against SLSQP with finite differences (paired, same start, alternating)",
         "",
