@@ -15,6 +15,7 @@ import argparse
 import importlib.util
 import os
 import platform
+import random
 import shutil
 import statistics
 import sys
@@ -80,6 +81,19 @@ class Problem:
         return runs[len(self.starts):]
 
 
+def interleaved(variants, repeats, seed=0):
+    """label -> solves, the variants taking turns in a new random order each repeat, so that
+    a few percent between them is not the machine's load drifting."""
+    rng = random.Random(seed)
+    runs = {label: [] for label in variants}
+    for _ in range(repeats + 1):  # the first round warms up, unrecorded
+        for label in rng.sample(list(variants), len(variants)):
+            problem, solver = variants[label]
+            runs[label].append(problem.solves(solver, 1))
+    return {label: [s for batch in batches[1:] for s in batch]
+            for label, batches in runs.items()}
+
+
 def median_ms(solves):
     return statistics.median(s.seconds for s in solves) * 1e3
 
@@ -140,30 +154,36 @@ def main():
     fixed8, per_iter8 = fixed_and_per_iteration(problem, reps, rows=8)
     eval_ms, solve_ms = evaluation_share(problem)
     statuses = start_statuses(problem)
-    spral = problem.solves(problem.solver({"ipopt.linear_solver": "spral"}), reps)
-    checked = problem.solves(problem.solver({"ipopt.fast_step_computation": "no",
-                                             "ipopt.min_refinement_steps": 1}), reps)
-    monotone = problem.solves(problem.solver({"ipopt.mu_strategy": "monotone"}), reps)
 
     unmerged = Problem(ROOT / "problems/manipulators_robust.toml", merge=False)
-    rows = [
-        ("IPOPT as shipped (adaptive barrier, MUMPS, SX virtual machine)", base),
-        ("repeated subexpressions not merged (no casadi.cse)",
-         unmerged.solves(unmerged.solver(), reps)),
-        ("IPOPT's default step checks (residuals, at least one refinement step)", checked),
-        ("monotone barrier update (fewer linear solves per iteration)", monotone),
-        ("SPRAL instead of MUMPS (the other linear solver in CasADi's IPOPT)", spral),
-    ]
+    variants = {  # label: (problem, solver)
+        "IPOPT as shipped (adaptive barrier, MUMPS, SX virtual machine)":
+            (problem, problem.solver()),
+        "repeated subexpressions not merged (no casadi.cse)": (unmerged, unmerged.solver()),
+        "IPOPT's default step checks (residuals, at least one refinement step)":
+            (problem, problem.solver({"ipopt.fast_step_computation": "no",
+                                      "ipopt.min_refinement_steps": 1})),
+        "monotone barrier update (fewer linear solves per iteration)":
+            (problem, problem.solver({"ipopt.mu_strategy": "monotone"})),
+        "SPRAL instead of MUMPS (the other linear solver in CasADi's IPOPT)":
+            (problem, problem.solver({"ipopt.linear_solver": "spral"})),
+    }
     jit_note = "no C compiler on this machine: not measured"
     paired = {"as shipped": bench.bench_slsqp(problem.spec, form, problem.starts, reps)}
     if shutil.which("gcc"):
         tic = time.perf_counter()
         jit_solver = problem.solver(JIT)
         compile_s = time.perf_counter() - tic
-        rows.append(("functions compiled to C by CasADi's JIT (gcc -O1)",
-                     problem.solves(jit_solver, reps)))
+        variants["functions compiled to C by CasADi's JIT (gcc -O1)"] = (problem, jit_solver)
         jit_note = f"compiling the NLP's functions took {compile_s:.2f} s"
         paired["compiled"] = _paired_compiled(bench, problem, jit_solver, reps)
+    rows = list(interleaved(variants, reps).items())
+    payback = "without a compiler there is nothing to weigh."
+    if shutil.which("gcc"):
+        saved = median_ms(rows[0][1]) - median_ms(rows[-1][1])
+        payback = (f"the compiler's {compile_s:.2f} s pays back after about "
+                   f"{compile_s * 1e3 / saved:.0f} solves of one NLP, and every spec change or "
+                   "sweep point is a new NLP." if saved > 0 else "it saved nothing here.")
 
     lines = [
         "# Where an IPOPT solve's time goes",
@@ -195,6 +215,9 @@ def main():
         "",
         "## Levers",
         "",
+        "Each variant takes its turn in a new random order in every repeat (load drift would "
+        "swamp differences of a few percent).",
+        "",
         "| variant | one solve | iterations |",
         "|---|---|---|",
         *(f"| {label} | {median_ms(s):.2f} ms | {statistics.median(x.iterations for x in s):.0f} |"
@@ -219,8 +242,9 @@ def main():
         "|---|---|",
         *(f"| {label} | **{r['paired_ratio']:.1f}x** |" for label, r in paired.items()),
         "",
-        "Compiled functions speed IPOPT's derivatives and SLSQP's function calls alike, so the "
-        "ratio moves little. HSL's MA27, IPOPT's usual linear solver for small problems, is "
+        "Compiled functions speed IPOPT's derivatives and SLSQP's function calls alike. "
+        f"`optimize` does not compile: {payback} HSL's MA27, IPOPT's usual linear solver for "
+        "small problems, is "
         "licensed (neither on PyPI nor in Debian), so a tool installed with pip cannot rely on "
         "it.",
         "",

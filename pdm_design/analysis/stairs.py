@@ -58,7 +58,7 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign) -> Analysis:
         landing = tread / 2 if design.landing_offset is None else design.landing_offset
         geometry["landing_offset"] = landing
         # the launch over the top landing (one rise above tread 1), whose nose is v0 t(h0) -
-        # landing ahead of it; the optimizer's launch rows and the simulator's step 0
+        # landing ahead of it; the optimizer's launch row and the simulator's step 0
         launch = phys.launch_clearances(v0, g, ball.radius, h0 - rise,
                                         v0 * vy_first / g - landing)
         margins["first_nose_clearance"] = float(min(launch) / tread)
