@@ -153,7 +153,9 @@ def main():
     fixed, per_iter = fixed_and_per_iteration(problem, reps)
     fixed8, per_iter8 = fixed_and_per_iteration(problem, reps, rows=8)
     eval_ms, solve_ms = evaluation_share(problem)
-    statuses = start_statuses(problem)
+    others = [Problem(ROOT / f"problems/{name}.toml")
+              for name in ("manipulators_robust_all_free", "stairs_design")]
+    statuses = {other.spec.name: start_statuses(other) for other in (problem, *others)}
 
     unmerged = Problem(ROOT / "problems/manipulators_robust.toml", merge=False)
     variants = {  # label: (problem, solver)
@@ -178,6 +180,8 @@ def main():
         jit_note = f"compiling the NLP's functions took {compile_s:.2f} s"
         paired["compiled"] = _paired_compiled(bench, problem, jit_solver, reps)
     rows = list(interleaved(variants, reps).items())
+    instructions = {label: _instructions(p.form) for label, p in
+                    (("merged (as shipped)", problem), ("not merged", unmerged))}
     payback = "without a compiler there is nothing to weigh."
     if shutil.which("gcc"):
         saved = median_ms(rows[0][1]) - median_ms(rows[-1][1])
@@ -218,12 +222,15 @@ def main():
         "Each variant takes its turn in a new random order in every repeat (load drift would "
         "swamp differences of a few percent).",
         "",
-        "| variant | one solve | iterations |",
-        "|---|---|---|",
-        *(f"| {label} | {median_ms(s):.2f} ms | {statistics.median(x.iterations for x in s):.0f} |"
-          for label, s in rows),
+        "| variant | one solve | iterations | best objective (tolerance, m) |",
+        "|---|---|---|---|",
+        *(f"| {label} | {median_ms(s):.2f} ms | {statistics.median(x.iterations for x in s):.0f} "
+          f"| {-min(x.f for x in s):.10f} |" for label, s in rows),
         "",
         f"JIT: {jit_note}.",
+        "",
+        "Instructions CasADi's virtual machine runs (f and g; the Hessian of the Lagrangian): "
+        + "; ".join(f"{label} {a} and {b}" for label, (a, b) in instructions.items()) + ".",
         "",
         "## Multistart points where the closed forms are undefined",
         "",
@@ -231,10 +238,10 @@ def main():
         "beta < alpha, say, has no handover: IPOPT stops at once), as drawn and moved toward "
         "the guess (`Formulation.defined_start`):",
         "",
-        "| starts | statuses |",
-        "|---|---|",
-        *(f"| {label} | {', '.join(f'{k} {v}' for k, v in sorted(c.items()))} |"
-          for label, c in statuses.items()),
+        "| problem | starts | statuses |",
+        "|---|---|---|",
+        *(f"| `{name}` | {label} | {', '.join(f'{k} {v}' for k, v in sorted(c.items()))} |"
+          for name, counts in statuses.items() for label, c in counts.items()),
         "",
         "## Against SLSQP with finite differences (paired, same start, alternating)",
         "",
@@ -251,6 +258,14 @@ def main():
     ]
     Path(args.out).write_text("\n".join(lines))
     print("\n".join(lines))
+
+
+def _instructions(form):
+    """Virtual-machine instructions of f and g, and of the Hessian of the Lagrangian IPOPT uses."""
+    x, p = form.nlp["x"], form.nlp["p"]
+    fg = ca.Function("fg", [x, p], [form.nlp["f"], form.nlp["g"]])
+    hessian = ca.nlpsol("count", "ipopt", form.nlp, SolverOptions().casadi())
+    return fg.n_instructions(), hessian.get_function("nlp_hess_l").n_instructions()
 
 
 def _paired_compiled(bench, problem, jit_solver, reps):

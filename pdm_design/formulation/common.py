@@ -277,7 +277,7 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
     return Formulation(
         kind=model.kind, key=key,
         # Rows repeat subexpressions built separately (cos beta, the fall speeds...): merging
-        # them cuts the derivatives CasADi generates by a third and a solve by ~8 %
+        # them cuts the derivatives CasADi generates by a third and a solve by 5-8 %
         # (results/bench_ipopt_cost.md).
         nlp={"x": x, "p": p, "f": ca.cse(f), "g": ca.cse(ca.vertcat(*rows))},
         x_names=x_names, design_names=design_names,
