@@ -63,8 +63,7 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign) -> Analysis:
                                         v0 * vy_first / g - landing)
         margins["first_nose_clearance"] = float(min(launch) / tread)
         if vx > 0.0:
-            clearance = nose_clearance(vx, eps * vy_periodic, g, ball.radius, tread, rise,
-                                       landing)
+            clearance = nose_clearance(vx, eps * vy_periodic, g, ball.radius, tread, landing)
             geometry["nose_clearance"] = clearance
             margins["nose_clearance"] = float(clearance / tread)
         else:
@@ -101,15 +100,14 @@ def _periodic_vertical_speed(g, h0, eps, rise, derived, problems):
     return None
 
 
-def nose_clearance(vx, vy_up, g, radius, tread, rise, landing):
+def nose_clearance(vx, vy_up, g, radius, tread, landing):
     """Smallest gap (m) between the ball and the step it leaves, over one periodic flight.
 
     The ball leaves the tread `landing` from its back with velocity (vx > 0, vy_up); the nose is
     tread - landing ahead. The gap is the distance from the ball's centre path to the nose corner
     less the radius (exact: `physics.stairs.corner_gaps`), and, where the centre passes over the
     nose, the height of its lowest point above the nose level (negative: it comes down before
-    the nose, or it took off beyond it). `rise` does not enter: the riser below the nose is
-    never nearer than the corner to a ball that clears the corner.
+    the nose, or it took off beyond it). The step's rise does not enter: the riser below the
+    nose is never nearer than the corner to a ball that clears the corner.
     """
-    del rise
     return float(min(phys.flight_clearances(vx, vy_up, g, radius, tread - landing)))

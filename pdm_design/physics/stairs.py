@@ -15,8 +15,8 @@ point is at rest at every impact, no tangential impulse is needed, and vx stays 
 Step-nose clearance (flight_clearances, launch_clearances, from corner_gaps and corner_heights):
 the exact gap between the ball (a disc of radius r) and a nose corner its flight passes, from the
 closed-form nearest point of the centre's parabola (docs/physics.md, "Nose clearance, exactly").
-They work on CasADi symbols too (every branch finite, derivatives NaN-free); the NLP does not use
-them, its smooth rows cost IPOPT far fewer iterations (docs/optimizer.md, section 2).
+Written with the ops dispatch like every closed form here, but only the analysis calls them (on
+floats); the NLP's smooth rows cost IPOPT far fewer iterations (docs/optimizer.md, section 2).
 """
 
 from __future__ import annotations
@@ -131,8 +131,8 @@ def _largest_root(p, q):
 
     p >= 0: one root, -2 a sinh(asinh(q / (2 a^3)) / 3), a = sqrt(p/3). p < 0, m = sqrt(-p/3),
     x = -q / (2 m^3): |x| <= 1, three roots, the largest 2 m cos(acos(x) / 3); |x| > 1, one root,
-    sign(x) 2 m cosh(acosh(|x|) / 3). Every branch is evaluated on clipped arguments (numpy and
-    CasADi evaluate both sides of `where`), so none is NaN and neither are derivatives.
+    sign(x) 2 m cosh(acosh(|x|) / 3). Every branch is evaluated on clipped arguments (`where`
+    evaluates both sides), so none is NaN.
     """
     a = sqrt(fmax(p / 3.0, _TINY**2))  # sqrt never at 0: its infinite slope would give NaN
     single_p = -2.0 * a * sinh(asinh(q / (2.0 * a**3)) / 3.0)
