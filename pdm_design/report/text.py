@@ -67,9 +67,12 @@ def optimize_text(outcome: DesignOutcome) -> str:
                   f" - {v.get('summary', '')}"]
     if outcome.solver:
         stats = outcome.solver
+        together = stats.get("stacked_starts", 0)
+        runs = (f"{1e3 * stats['solve_time']:.2f} ms for {together} starts solved together"
+                if together else f"{1e3 * stats['solve_time']:.2f} ms per solve; "
+                f"{stats['starts']} starts")
         lines += ["", f"solver: IPOPT {stats['status']}, {stats['iterations']} iterations, "
-                  f"{1e3 * stats['solve_time']:.2f} ms per solve; {stats['starts']} starts, "
-                  f"{1e3 * stats['wall_time']:.0f} ms in all"]
+                  f"{runs}, {1e3 * stats['wall_time']:.0f} ms in all"]
     if outcome.violations:
         lines += ["", "why it does not work:", *(f"  - {v}" for v in outcome.violations)]
     return "\n".join(lines) + "\n"

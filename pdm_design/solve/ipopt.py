@@ -3,6 +3,7 @@ and the map from IPOPT's return status to our Status vocabulary."""
 
 from __future__ import annotations
 
+import functools
 import threading
 import time
 from dataclasses import dataclass
@@ -125,12 +126,19 @@ def start_designs(names, lows, highs, guess, count: int, seed: int = 0) -> list[
     n = len(names)
     if count <= 1 or n == 0:
         return starts[: max(count, 1)]
-    lows, highs = np.asarray(lows, float), np.asarray(highs, float)
-    points = qmc.Sobol(d=n, scramble=True, seed=seed).random(_pow2(count - 1))[: count - 1]
-    for row in points:
+    for row in _sobol(n, count - 1, seed):
         starts.append({nm: float(lo + r * (hi - lo))
                        for nm, lo, hi, r in zip(names, lows, highs, row)})
     return starts
+
+
+@functools.lru_cache(maxsize=64)
+def _sobol(dimension: int, count: int, seed: int) -> np.ndarray:
+    """count scrambled-Sobol points in the unit cube (cached: drawing them took 0.4 ms, 4 % of
+    an 8-start optimize of problems/manipulators_robust.toml)."""
+    points = qmc.Sobol(d=dimension, scramble=True, seed=seed).random(_pow2(count))[:count]
+    points.flags.writeable = False
+    return points
 
 
 def _pow2(n: int) -> int:

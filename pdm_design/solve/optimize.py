@@ -12,6 +12,7 @@ from ..status import Status
 from . import check, elastic
 from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
 from .result import OptimizeResult, Solution, SolverStats
+from .stacked import solve_stacked, stacked_solver_for
 from .tolerance import linearised_tolerance
 from .words import normalised_margin
 
@@ -60,7 +61,7 @@ def optimize(
     designs = start_designs(names, lows, highs, guess, max(starts, 1), seed)
     x_starts = [form.defined_start(d, guess, p) for d in designs]
 
-    runs = []
+    runs, calls = [], []  # one Solve per start; one per IPOPT run (stacked starts share one)
     if warm_start is not None and warm_start.solution is not None \
             and warm_start.solution.key == form.key:
         warm = solver_for(form.key, form.nlp, SolverOptions(
@@ -68,8 +69,11 @@ def optimize(
         ws = warm_start.solution
         runs.append(solve_once(warm, ws.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
                                lam_x0=ws.lam_x, lam_g0=ws.lam_g, start=-1))
-    for i, x0 in enumerate(x_starts):
-        runs.append(solve_once(solver, x0, p, form.lbx, form.ubx, form.lbg, form.ubg, start=i))
+        calls.append(runs[-1])
+    from_starts, start_calls = _solve_starts(form, options, solver, x_starts, p)
+    runs += from_starts
+    calls += start_calls
+    stacked = len(start_calls) < len(from_starts)  # the starts shared one IPOPT run
     chosen = best(runs)
     status, x = chosen.status, chosen.x
     violations, at_bounds = (), ()
@@ -84,6 +88,7 @@ def optimize(
             retry = solve_once(solver, diag.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
                                start=len(runs))
             runs.append(retry)
+            calls.append(retry)
             if retry.status in (Status.OPTIMAL, Status.ACCEPTABLE):
                 chosen, status, x = retry, retry.status, retry.x
         else:
@@ -138,10 +143,11 @@ def optimize(
 
     stats = SolverStats(
         iterations=chosen.iterations,
-        total_iterations=sum(r.iterations for r in runs) + extra_iters,
+        total_iterations=sum(r.iterations for r in calls) + extra_iters,
         solve_time=chosen.seconds,
-        total_solve_time=sum(r.seconds for r in runs) + extra_time,
+        total_solve_time=sum(r.seconds for r in calls) + extra_time,
         starts=len(runs),
+        stacked_starts=len(from_starts) if stacked else 0,
         build_time=build_time,
         wall_time=time.perf_counter() - tic,
         return_statuses=tuple(r.return_status for r in runs),
@@ -153,6 +159,21 @@ def optimize(
         checks=checks, stats=stats, message=message,
         solution=Solution(form.key, x, chosen.lam_x, chosen.lam_g),
     )
+
+
+def _solve_starts(form, options, solver, x_starts, p):
+    """(one Solve per start, the IPOPT runs made). Several starts are solved together
+    (solve/stacked.py); unless that run succeeds, one by one, and the failed stacked run still
+    counts in the totals."""
+    together = []
+    if len(x_starts) > 1:
+        together = solve_stacked(stacked_solver_for(form.key, form.nlp, options, len(x_starts)),
+                                 x_starts, p, form.lbx, form.ubx, form.lbg, form.ubg)
+        if together[0].status is Status.OPTIMAL:
+            return together, together[:1]
+    alone = [solve_once(solver, x0, p, form.lbx, form.ubx, form.lbg, form.ubg, start=i)
+             for i, x0 in enumerate(x_starts)]
+    return alone, together[:1] + alone
 
 
 def _is_cached(spec) -> bool:

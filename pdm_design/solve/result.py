@@ -30,13 +30,16 @@ class SolverStats:
     """Solver statistics. Times in seconds."""
 
     iterations: int  # IPOPT iterations of the run whose answer is reported
-    total_iterations: int  # over every start (and the elastic runs)
+    total_iterations: int  # over every IPOPT run (and the elastic runs)
     solve_time: float  # wall time of the reported run
     total_solve_time: float  # over every IPOPT run
     starts: int
     build_time: float  # building the NLP (0 when it came from the cache)
     wall_time: float  # the whole optimize call
     return_statuses: tuple[str, ...] = ()
+    # starts solved together in one IPOPT run (0: one run per start); iterations and
+    # solve_time are then that run's
+    stacked_starts: int = 0
 
     def to_json(self) -> dict:
         return {k: getattr(self, k) for k in self.__dataclass_fields__} | {
