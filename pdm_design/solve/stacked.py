@@ -29,7 +29,7 @@ MAX_ITER = 100
 @dataclass(frozen=True)
 class StackedSolver:
     solver: object  # nlpsol over the stacked NLP
-    objective: object  # the original objective f(x, p), to score each copy
+    objectives: object  # (copies' x as columns, p) -> each copy's own objective
     count: int
     n: int  # variables per copy
 
@@ -61,7 +61,7 @@ def build_stacked(nlp: dict, options: SolverOptions, count: int) -> StackedSolve
     stacked = {"x": ca.vec(xs), "p": p, "f": ca.sum1(ca.vertcat(*(f for f, _ in outs))),
                "g": ca.vertcat(*(g for _, g in outs))}
     return StackedSolver(ca.nlpsol("pdm_stacked", "ipopt", stacked, options.casadi()),
-                         ca.Function("f", [x, p], [nlp["f"]]), count, x.numel())
+                         ca.Function("f", [x, p], [nlp["f"]]).map(count), count, x.numel())
 
 
 def solve_stacked(stacked: StackedSolver, x_starts, p, lbx, ubx, lbg, ubg) -> list[Solve]:
@@ -83,7 +83,8 @@ def solve_stacked(stacked: StackedSolver, x_starts, p, lbx, ubx, lbg, ubg) -> li
     xs = np.asarray(sol["x"]).reshape(count, n)
     lam_x = np.asarray(sol["lam_x"]).reshape(count, n)
     lam_g = np.asarray(sol["lam_g"]).reshape(count, m)
+    objectives = np.asarray(stacked.objectives(xs.T, p)).ravel()
     return [Solve(status=map_status(ret), return_status=ret, x=xs[k],
-                  f=float(stacked.objective(xs[k], p)), lam_x=lam_x[k], lam_g=lam_g[k],
+                  f=float(objectives[k]), lam_x=lam_x[k], lam_g=lam_g[k],
                   iterations=int(stats.get("iter_count", 0)), seconds=seconds, start=k)
             for k in range(count)]
