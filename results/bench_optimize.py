@@ -171,7 +171,7 @@ def bench_problem(name, title, what, reps):
     ipopt = bench_ipopt(spec, form, reps)
     optimize(spec)
     run, res = timed(lambda: optimize(spec, linearise=False, check_samples=0), reps)
-    slsqp = bench_slsqp(spec, form, ipopt["starts"], max(2, reps // 5),
+    slsqp = bench_slsqp(spec, form, ipopt["starts"], max(2, reps // 2),
                         optimize_run=lambda: optimize(spec, linearise=False, check_samples=0))
     return [
         f"## {title}: `problems/{name}.toml`",
@@ -217,7 +217,7 @@ def main():
     run_full, full = timed(lambda: optimize(spec), max(3, reps // 4))
     warm, wres = timed(lambda: optimize(spec, starts=1, warm_start=res, linearise=False,
                                         check_samples=0), reps)
-    slsqp = bench_slsqp(spec, form, ipopt["starts"], max(2, reps // 5),
+    slsqp = bench_slsqp(spec, form, ipopt["starts"], max(2, reps // 2),
                         optimize_run=lambda: optimize(spec, linearise=False, check_samples=0))
     grid = bench_grid(spec, max(2, reps // 10))
 

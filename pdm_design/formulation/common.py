@@ -195,6 +195,20 @@ class Formulation:
             lo, hi = (mid, hi) if defined(_between(anchor, design, mid))[1] else (lo, mid)
         return self.start_vector(_between(anchor, design, lo / 2))
 
+    def defined_starts(self, designs: list[dict[str, float]], anchor: dict[str, float],
+                       p) -> list[np.ndarray]:
+        """defined_start of each design; those already defined are found in one evaluation
+        of all of them (one call per start was 4 % of an 8-start optimize)."""
+        xd = np.array([[float(d[n]) for n in self.design_names] for d in designs]).T
+        aux = (np.asarray(self.aux_init.map(len(designs))(xd)) if self.aux_init is not None
+               else np.zeros((0, len(designs))))
+        xs = np.clip(np.vstack([xd, aux]), self.lbx[:, None], self.ubx[:, None])
+        rows, _, terms, _ = self.evaluate.map(len(designs))(xs, p)
+        finite = (np.isfinite(np.asarray(rows)).all(axis=0)
+                  & np.isfinite(np.asarray(terms)).all(axis=0))
+        return [xs[:, k].copy() if finite[k] else self.defined_start(d, anchor, p)
+                for k, d in enumerate(designs)]
+
 
 def _between(a: dict[str, float], b: dict[str, float], t: float) -> dict[str, float]:
     return {n: a[n] + t * (b[n] - a[n]) for n in a}

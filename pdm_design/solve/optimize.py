@@ -59,7 +59,7 @@ def optimize(
     lows = [spec.design[n].min for n in names]
     highs = [spec.design[n].max for n in names]
     designs = start_designs(names, lows, highs, guess, max(starts, 1), seed)
-    x_starts = [form.defined_start(d, guess, p) for d in designs]
+    x_starts = form.defined_starts(designs, guess, p)
 
     runs, calls = [], []  # one Solve per start; one per IPOPT run (stacked starts share one)
     if warm_start is not None and warm_start.solution is not None \
