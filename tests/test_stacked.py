@@ -77,3 +77,29 @@ def test_a_stacked_run_that_fails_leaves_the_answer_to_one_run_per_start(monkeyp
     alone = _alone(form, p, _starts(spec, form, p))
     assert stats.total_iterations == 3 + sum(run.iterations for run in alone)
     assert result.objective == pytest.approx(reference.objective, rel=1e-7)
+
+
+def test_starts_are_split_into_near_equal_groups_of_at_most_max_copies():
+    for count in range(1, 70):
+        parts = stacked.groups(count)
+        sizes = [len(g) for g in parts]
+        assert [i for g in parts for i in g] == list(range(count))
+        assert max(sizes) <= stacked.MAX_COPIES and max(sizes) - min(sizes) <= 1
+        assert len(parts) == -(-count // stacked.MAX_COPIES)
+
+
+def test_more_starts_than_a_group_holds_take_one_stacked_run_per_group():
+    spec = load_spec(PROBLEMS / "manipulators_robust.toml")
+    result = optimize(spec, starts=20, linearise=False, check_samples=0)
+    stats = result.stats
+    assert result.status is Status.OPTIMAL
+    assert stats.starts == stats.stacked_starts == 20
+    # two groups of 10, each its own run: their iterations add up
+    form = formulate(spec)
+    p = form.parameters(spec.requirements)
+    starts = _starts(spec, form, p, count=20)
+    solver = stacked.stacked_solver_for(form.key, form.nlp, SolverOptions(), 10)
+    runs = [stacked.solve_stacked(solver, starts[a:a + 10], p, form.lbx, form.ubx, form.lbg,
+                                  form.ubg)[0] for a in (0, 10)]
+    assert stats.total_iterations == sum(run.iterations for run in runs)
+    assert stats.iterations in {run.iterations for run in runs}

@@ -68,11 +68,11 @@ def optimize_text(outcome: DesignOutcome) -> str:
     if outcome.solver:
         stats = outcome.solver
         together = stats.get("stacked_starts", 0)
-        runs = (f"{1e3 * stats['solve_time']:.2f} ms for {together} starts solved together"
-                if together else f"{1e3 * stats['solve_time']:.2f} ms per solve; "
-                f"{stats['starts']} starts")
-        lines += ["", f"solver: IPOPT {stats['status']}, {stats['iterations']} iterations, "
-                  f"{runs}, {1e3 * stats['wall_time']:.0f} ms in all"]
+        starts = f"{stats['starts']} start{'s' if stats['starts'] != 1 else ''}" + (
+            f" ({together} solved together)" if together else "")
+        lines += ["", f"solver: IPOPT {stats['status']}, {stats['iterations']} iterations; "
+                  f"{starts}, {1e3 * stats['total_solve_time']:.1f} ms in IPOPT, "
+                  f"{1e3 * stats['wall_time']:.0f} ms in all"]
     if outcome.violations:
         lines += ["", "why it does not work:", *(f"  - {v}" for v in outcome.violations)]
     return "\n".join(lines) + "\n"

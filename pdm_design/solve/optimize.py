@@ -12,7 +12,7 @@ from ..status import Status
 from . import check, elastic
 from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
 from .result import OptimizeResult, Solution, SolverStats
-from .stacked import solve_stacked, stacked_solver_for
+from .stacked import groups, solve_stacked, stacked_solver_for
 from .tolerance import linearised_tolerance
 from .words import normalised_margin
 
@@ -70,10 +70,9 @@ def optimize(
         runs.append(solve_once(warm, ws.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
                                lam_x0=ws.lam_x, lam_g0=ws.lam_g, start=-1))
         calls.append(runs[-1])
-    from_starts, start_calls = _solve_starts(form, options, solver, x_starts, p)
+    from_starts, start_calls, stacked_starts = _solve_starts(form, options, solver, x_starts, p)
     runs += from_starts
     calls += start_calls
-    stacked = len(start_calls) < len(from_starts)  # the starts shared one IPOPT run
     chosen = best(runs)
     status, x = chosen.status, chosen.x
     violations, at_bounds = (), ()
@@ -147,7 +146,7 @@ def optimize(
         solve_time=chosen.seconds,
         total_solve_time=sum(r.seconds for r in calls) + extra_time,
         starts=len(runs),
-        stacked_starts=len(from_starts) if stacked else 0,
+        stacked_starts=stacked_starts,
         build_time=build_time,
         wall_time=time.perf_counter() - tic,
         return_statuses=tuple(r.return_status for r in runs),
@@ -162,18 +161,26 @@ def optimize(
 
 
 def _solve_starts(form, options, solver, x_starts, p):
-    """(one Solve per start, the IPOPT runs made). Several starts are solved together
-    (solve/stacked.py); unless that run succeeds, one by one, and the failed stacked run still
-    counts in the totals."""
-    together = []
-    if len(x_starts) > 1:
-        together = solve_stacked(stacked_solver_for(form.key, form.nlp, options, len(x_starts)),
-                                 x_starts, p, form.lbx, form.ubx, form.lbg, form.ubg)
-        if together[0].status is Status.OPTIMAL:
-            return together, together[:1]
-    alone = [solve_once(solver, x0, p, form.lbx, form.ubx, form.lbg, form.ubg, start=i)
-             for i, x0 in enumerate(x_starts)]
-    return alone, together[:1] + alone
+    """(one Solve per start, the IPOPT runs made, how many starts shared a stacked run). The
+    starts are solved together in groups (solve/stacked.py); a group whose stacked run does not
+    succeed is solved one by one, and its failed run still counts in the totals."""
+    runs, calls, shared = [], [], 0
+    for group in groups(len(x_starts)):
+        starts = x_starts[group.start:group.stop]
+        if len(starts) > 1:
+            stacked = stacked_solver_for(form.key, form.nlp, options, len(starts))
+            together = solve_stacked(stacked, starts, p, form.lbx, form.ubx, form.lbg, form.ubg,
+                                     first=group.start)
+            calls.append(together[0])
+            if together[0].status is Status.OPTIMAL:
+                runs += together
+                shared += len(together)
+                continue
+        alone = [solve_once(solver, x0, p, form.lbx, form.ubx, form.lbg, form.ubg, start=i)
+                 for i, x0 in zip(group, starts)]
+        runs += alone
+        calls += alone
+    return runs, calls, shared
 
 
 def _is_cached(spec) -> bool:

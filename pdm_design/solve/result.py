@@ -37,8 +37,8 @@ class SolverStats:
     build_time: float  # building the NLP (0 when it came from the cache)
     wall_time: float  # the whole optimize call
     return_statuses: tuple[str, ...] = ()
-    # starts solved together in one IPOPT run (0: one run per start); iterations and
-    # solve_time are then that run's
+    # starts solved in stacked runs, several per IPOPT run (0: one run per start); when the
+    # reported run is one, iterations and solve_time are that whole run's
     stacked_starts: int = 0
 
     def to_json(self) -> dict:

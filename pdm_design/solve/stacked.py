@@ -21,9 +21,20 @@ import numpy as np
 
 from .ipopt import Solve, SolverOptions, map_status
 
-# The stacked run takes about as many iterations as the slowest copy alone (16-35 for 8 starts
-# of the shipped problems); a run needing more has a copy in trouble, best solved on its own.
+# Stacked runs of 8 starts of the shipped problems took 16-35 iterations (one start alone: a
+# median of 14-18); a run needing many more has a copy in trouble, best solved on its own.
 MAX_ITER = 100
+# Copies per stacked run. Per start, a run costs about the same from 8 to 64 copies, but
+# creating the solver grows with the copies (0.4-0.9 s for 64) and one failing copy sends its
+# whole group back to one run per start.
+MAX_COPIES = 16
+
+
+def groups(count: int) -> list[range]:
+    """The starts 0..count-1 in consecutive groups of near-equal size, none over MAX_COPIES."""
+    parts = -(-count // MAX_COPIES)
+    edges = [round(i * count / parts) for i in range(parts + 1)] if count else [0]
+    return [range(a, b) for a, b in zip(edges, edges[1:])]
 
 
 @dataclass(frozen=True)
@@ -64,9 +75,10 @@ def build_stacked(nlp: dict, options: SolverOptions, count: int) -> StackedSolve
                          ca.Function("f", [x, p], [nlp["f"]]).map(count), count, x.numel())
 
 
-def solve_stacked(stacked: StackedSolver, x_starts, p, lbx, ubx, lbg, ubg) -> list[Solve]:
-    """One Solve per start, all from the one stacked run: each carries that run's status,
-    iterations and wall time (they are shared, not per copy)."""
+def solve_stacked(stacked: StackedSolver, x_starts, p, lbx, ubx, lbg, ubg,
+                  first: int = 0) -> list[Solve]:
+    """One Solve per start (numbered from `first`), all from the one stacked run: each carries
+    that run's status, iterations and wall time (they are shared, not per copy)."""
     count, n, m = stacked.count, stacked.n, len(lbg)
     tic = time.perf_counter()
     try:
@@ -75,7 +87,7 @@ def solve_stacked(stacked: StackedSolver, x_starts, p, lbx, ubx, lbg, ubg) -> li
                              lbg=np.tile(lbg, count), ubg=np.tile(ubg, count))
     except RuntimeError:  # evaluation errors at a start point
         return [Solve(map_status("Evaluation_Error"), "Evaluation_Error", np.asarray(x0, float),
-                      np.inf, np.zeros(n), np.zeros(m), 0, time.perf_counter() - tic, i)
+                      np.inf, np.zeros(n), np.zeros(m), 0, time.perf_counter() - tic, first + i)
                 for i, x0 in enumerate(x_starts)]
     seconds = time.perf_counter() - tic
     stats = stacked.solver.stats()
@@ -86,5 +98,5 @@ def solve_stacked(stacked: StackedSolver, x_starts, p, lbx, ubx, lbg, ubg) -> li
     objectives = np.asarray(stacked.objectives(xs.T, p)).ravel()
     return [Solve(status=map_status(ret), return_status=ret, x=xs[k],
                   f=float(objectives[k]), lam_x=lam_x[k], lam_g=lam_g[k],
-                  iterations=int(stats.get("iter_count", 0)), seconds=seconds, start=k)
+                  iterations=int(stats.get("iter_count", 0)), seconds=seconds, start=first + k)
             for k in range(count)]
