@@ -24,9 +24,10 @@ from .ipopt import Solve, SolverOptions, map_status
 # Stacked runs of 8 starts of the shipped problems took 16-35 iterations (one start alone: a
 # median of 14-18); a run needing many more has a copy in trouble, best solved on its own.
 MAX_ITER = 100
-# Copies per stacked run. Per start, a run costs about the same from 8 to 64 copies, but
-# creating the solver grows with the copies (0.4-0.9 s for 64) and one failing copy sends its
-# whole group back to one run per start.
+# Copies per stacked run. Per start, a run of problems/manipulators_robust.toml cost about the
+# same from 8 to 64 copies (1.4-1.8 ms), but one of problems/stairs_design.toml cost 4x more at
+# 64 than at 32; creating the solver grows with the copies (0.4-0.9 s for 64); and one failing
+# copy sends its whole group back to one run per start.
 MAX_COPIES = 16
 
 
