@@ -4,6 +4,7 @@ answer to the one-start-at-a-time runs, with its cost still counted."""
 
 from __future__ import annotations
 
+import importlib
 from pathlib import Path
 
 import casadi as ca
@@ -103,3 +104,18 @@ def test_more_starts_than_a_group_holds_take_one_stacked_run_per_group():
                                   form.ubg)[0] for a in (0, 10)]
     assert stats.total_iterations == sum(run.iterations for run in runs)
     assert stats.iterations in {run.iterations for run in runs}
+
+
+@pytest.mark.parametrize("name", ["manipulators_robust", "manipulators_robust_all_free",
+                                  "stairs_design"])
+def test_optimize_finds_the_same_design_stacked_as_one_start_at_a_time(name, monkeypatch):
+    spec = load_spec(PROBLEMS / f"{name}.toml")
+    together = optimize(spec, linearise=False, check_samples=0)
+    optimize_module = importlib.import_module("pdm_design.solve.optimize")
+    monkeypatch.setattr(optimize_module, "groups", lambda n: [range(i, i + 1) for i in range(n)])
+    alone = optimize(spec, linearise=False, check_samples=0)
+    assert together.stats.stacked_starts == 8 and alone.stats.stacked_starts == 0
+    assert together.status is alone.status is Status.OPTIMAL
+    assert together.objective == pytest.approx(alone.objective, rel=1e-8)
+    for key, value in alone.design.items():
+        assert together.design[key] == pytest.approx(value, rel=1e-5, abs=1e-8)
