@@ -119,3 +119,17 @@ def test_optimize_finds_the_same_design_stacked_as_one_start_at_a_time(name, mon
     assert together.objective == pytest.approx(alone.objective, rel=1e-8)
     for key, value in alone.design.items():
         assert together.design[key] == pytest.approx(value, rel=1e-5, abs=1e-8)
+
+
+def test_an_evaluation_error_at_the_start_is_a_solver_error_for_every_copy():
+    def refuses(**_):
+        raise RuntimeError("Error in Function::call for 'nlp_g'")
+
+    solver = stacked.StackedSolver(refuses, None, count=2, n=3)
+    runs = stacked.solve_stacked(solver, [np.ones(3), np.zeros(3)], np.zeros(1), np.zeros(3),
+                                 np.ones(3), np.zeros(4), np.ones(4), first=5)
+    assert [r.start for r in runs] == [5, 6]
+    assert all(r.status is Status.SOLVER_ERROR and r.return_status == "Evaluation_Error"
+               and r.f == np.inf and r.lam_g.shape == (4,) for r in runs)
+    assert solve_once(refuses, np.ones(3), None, None, None, np.zeros(4), None).status \
+        is Status.SOLVER_ERROR

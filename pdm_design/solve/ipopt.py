@@ -82,6 +82,13 @@ class Solve:
     seconds: float
     start: int
 
+    @classmethod
+    def evaluation_error(cls, x0, rows: int, seconds: float, start: int) -> Solve:
+        """A run CasADi refused at its start point (an evaluation error raised, not returned)."""
+        x0 = np.asarray(x0, float)
+        return cls(Status.SOLVER_ERROR, "Evaluation_Error", x0, np.inf, np.zeros(len(x0)),
+                   np.zeros(rows), 0, seconds, start)
+
 
 _SOLVERS: dict[tuple, object] = {}
 _LOCK = threading.Lock()
@@ -106,9 +113,7 @@ def solve_once(solver, x0, p, lbx, ubx, lbg, ubg, *, lam_x0=None, lam_g0=None, s
     try:
         sol = solver(**args)
     except RuntimeError:  # evaluation errors at the start point
-        n = len(x0)
-        return Solve(Status.SOLVER_ERROR, "Evaluation_Error", np.asarray(x0, float), np.inf,
-                     np.zeros(n), np.zeros(len(lbg)), 0, time.perf_counter() - tic, start)
+        return Solve.evaluation_error(x0, len(lbg), time.perf_counter() - tic, start)
     seconds = time.perf_counter() - tic
     stats = solver.stats()
     ret = stats.get("return_status", "Unknown")

@@ -87,9 +87,8 @@ def solve_stacked(stacked: StackedSolver, x_starts, p, lbx, ubx, lbg, ubg,
                              lbx=np.tile(lbx, count), ubx=np.tile(ubx, count),
                              lbg=np.tile(lbg, count), ubg=np.tile(ubg, count))
     except RuntimeError:  # evaluation errors at a start point
-        return [Solve(map_status("Evaluation_Error"), "Evaluation_Error", np.asarray(x0, float),
-                      np.inf, np.zeros(n), np.zeros(m), 0, time.perf_counter() - tic, first + i)
-                for i, x0 in enumerate(x_starts)]
+        seconds = time.perf_counter() - tic
+        return [Solve.evaluation_error(x0, m, seconds, first + i) for i, x0 in enumerate(x_starts)]
     seconds = time.perf_counter() - tic
     stats = stacked.solver.stats()
     ret = stats.get("return_status", "Unknown")
