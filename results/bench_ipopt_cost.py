@@ -2,7 +2,7 @@
 that could shorten it buys, measured against the SLSQP baseline of bench_optimize.py in the same
 run (not a test). Writes results/bench_ipopt_cost.md.
 
-    python results/bench_ipopt_cost.py            # about a minute
+    python results/bench_ipopt_cost.py            # about 15 s
     python results/bench_ipopt_cost.py --quick
 
 The question it answers: why IPOPT is not 5x faster per solve than SLSQP with finite

@@ -2,7 +2,7 @@
 against the same NLP solved with scipy's SLSQP (finite differences) and against the independent
 grid search of tests/test_optimize.py. Writes results/bench_optimize.md.
 
-    python results/bench_optimize.py            # about a minute
+    python results/bench_optimize.py            # about 20 s
     python results/bench_optimize.py --quick    # fewer repeats
 """
 
