@@ -43,12 +43,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from pdm_design.accuracy import ACCURACY_PRESETS, MIN_RTOL, Accuracy  # noqa: E402
+from pdm_design.api import SOLVE_PRESETS  # noqa: E402
 from pdm_design.io import atomic_path, write_atomic  # noqa: E402
 
 G = 9.81
 PRESET_COLOURS = {"fast": "tab:red", "default": "tab:blue", "precise": "tab:green"}
-# What the optimizer should use per preset (the optimizer owner wires it; measured below)
-NLP_TOL = {"fast": 1e-5, "default": 1e-8, "precise": 1e-11}
+# IPOPT's tol per preset, as pdm_design.api wires it (measured below)
+NLP_TOL = {name: preset["tol"] for name, preset in SOLVE_PRESETS.items()}
 
 
 def ladder(quick: bool) -> list[Accuracy]:
@@ -275,32 +276,11 @@ def independent_slide_check():
 
 # ------------------------------------------------------------------ optimizer
 
-def optimizer_rows(tols, *, exact_bounds=False):
-    """IPOPT tol ladder on a problem with a known optimum. exact_bounds: a what-if for the
-    optimizer owner - IPOPT with bound_relax_factor 0 (its default 1e-8 relaxes every bound and
-    constraint by 1e-8 relative, which floors the error of an optimum on an active constraint
-    at ~1e-8 whatever tol is); set by patching SolverOptions.casadi for this run only."""
-    from contextlib import ExitStack
-    from unittest import mock
-
+def optimizer_rows(tols, *, bound_relax_factor: float):
+    """IPOPT tol ladder on a problem with a known optimum, at one bound_relax_factor (IPOPT's
+    default 1e-8 relaxes every bound and constraint by 1e-8 relative, which floors the error of
+    an optimum on an active constraint at ~1e-8 whatever tol is; the precise preset sets 0)."""
     from scipy.optimize import brentq
-
-    from pdm_design.solve import ipopt
-
-    stack = ExitStack()
-    if exact_bounds:
-        original = ipopt.SolverOptions.casadi
-
-        def casadi(self):
-            return {**original(self), "ipopt.bound_relax_factor": 0.0}
-
-        stack.enter_context(mock.patch.object(ipopt.SolverOptions, "casadi", casadi))
-        stack.enter_context(mock.patch.dict(ipopt._SOLVERS, clear=True))
-    with stack:
-        return _optimizer_rows(tols, brentq)
-
-
-def _optimizer_rows(tols, brentq):
 
     from pdm_design.scenes import Body, ManipulatorsInitial, ManipulatorsScene, Palm
     from pdm_design.solve import optimize
@@ -325,8 +305,9 @@ def _optimizer_rows(tols, brentq):
     optimize(spec, tol=1e-8, linearise=False, check_samples=0)  # build the NLP once
     rows = []
     for tol in tols:
-        seconds, res = timed(lambda tol=tol: optimize(spec, tol=tol, linearise=False,
-                                                      check_samples=0), min_time=0.5)
+        seconds, res = timed(lambda tol=tol: optimize(
+            spec, tol=tol, bound_relax_factor=bound_relax_factor, linearise=False,
+            check_samples=0), min_time=0.5)
         beta = res.design["beta"] if res.design else math.nan
         rows.append({"tol": tol, "seconds": seconds, "error": abs(beta - b_star),
                      "status": res.status.name.lower()})
@@ -455,8 +436,8 @@ def main():
     results = [(scene, measure(scene, accuracies, quick)) for scene in scenes]
     check = independent_slide_check()
     opt_tols = [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
-    opt_rows, b_star = optimizer_rows(opt_tols)
-    exact_rows, _ = optimizer_rows(opt_tols, exact_bounds=True)
+    opt_rows, b_star = optimizer_rows(opt_tols, bound_relax_factor=1e-8)
+    exact_rows, _ = optimizer_rows(opt_tols, bound_relax_factor=0.0)
     plot(results, opt_rows, exact_rows, ROOT / "results" / "accuracy.png")
     write_atomic(ROOT / "results" / "accuracy.md",
                  report(results, opt_rows, exact_rows, b_star, check,
@@ -509,10 +490,10 @@ def report(results, opt_rows, exact_rows, b_star, check, seconds, quick):
         f"min drop with beta free (over-the-top margin 0.5): beta* = {b_star:.15f} rad by brentq "
         "on the closed form. IPOPT's `tol` against the error of the optimum found and the wall "
         "time of one `optimize` (8 starts, no tolerance box, no sampling check), with IPOPT's",
-        "defaults as `pdm_design.solve` sets them today, and with `bound_relax_factor = 0`",
-        "(patched in for this run only):",
+        "default `bound_relax_factor` (1e-8), and with `bound_relax_factor = 0` (`optimize`'s",
+        "keyword; the precise preset sets it):",
         "",
-        "| IPOPT tol | preset that should use it | wall time (ms) | abs. error of beta | status "
+        "| IPOPT tol | preset that uses it | wall time (ms) | abs. error of beta | status "
         "| with bound_relax_factor 0: wall time (ms) | abs. error | status |",
         "|---|---|---|---|---|---|---|---|",
     ]
@@ -523,6 +504,15 @@ def report(results, opt_rows, exact_rows, b_star, check, seconds, quick):
                      f"{fmt(e['error'])} | {e['status']} |")
     lines += ["", *recommendation(results, opt_rows, exact_rows)]
     return "\n".join(lines) + "\n"
+
+
+def presets_in_words() -> str:
+    """The optimizer's settings per preset, as wired, e.g. for the closing recommendation."""
+    names = " / ".join(SOLVE_PRESETS)
+    def each(key):
+        return " / ".join(f"{SOLVE_PRESETS[n][key]:g}" for n in SOLVE_PRESETS)
+    return (f"`tol` {each('tol')}, `bound_relax_factor` {each('bound_relax_factor')} and "
+            f"{each('starts')} starts ({names})")
 
 
 def recommendation(results, opt_rows, exact_rows):
@@ -557,14 +547,13 @@ def recommendation(results, opt_rows, exact_rows):
         "- **Verification** (verify.py, `Accuracy.agreement`) demands 1e-4 / 1e-7 / 1e-9 between",
         "  simulator and closed forms: 100x or more above the errors measured here, so a",
         "  disagreement means the design or the closed form, not the integrator.",
-        "- **The optimizer** (its owner wires the presets): with IPOPT's default",
+        "- **The optimizer**: with IPOPT's default",
         f"  `bound_relax_factor` (1e-8) the optimum sits {fmt(relaxed, 1)} off whatever `tol` is,",
         "  because every bound and constraint is relaxed by 1e-8. With `bound_relax_factor = 0`",
         f"  it drops to {fmt(exact['fast'], 1)} / {fmt(exact['default'], 1)} / "
         f"{fmt(exact['precise'], 1)} at tol",
-        "  1e-5 / 1e-8 / 1e-11 (fast / default / precise), for the same wall time. Proposed:",
-        "  `tol` 1e-5 / 1e-8 / 1e-11 and `bound_relax_factor` 1e-8 / 1e-10 / 0 (or 0 for all), and",
-        "  Monte-Carlo check samples 64 / 256 / 1024 for the verification depth.",
+        "  1e-5 / 1e-8 / 1e-11 (fast / default / precise), for the same wall time. The presets",
+        "  (`pdm_design.api.SOLVE_PRESETS`) use " + presets_in_words() + ".",
     ]
 
 

@@ -1,13 +1,16 @@
 """`pdm-design check`: the CI gate on specs' expectations."""
 
+import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from pdm_design.cli import main
 
-PAPER = Path(__file__).resolve().parents[1] / "problems" / "paper_manipulators.toml"
+ROOT = Path(__file__).resolve().parents[1]
+PAPER = ROOT / "problems" / "paper_manipulators.toml"
 
 
 def run(*args):
@@ -66,3 +69,19 @@ def test_junit_report_lists_each_spec(tmp_path):
     assert suite.get("tests") == "2" and suite.get("failures") == "1"
     failed = [c.get("name") for c in suite if c.find("failure") is not None]
     assert failed == [str(failing)]
+
+
+def _docs_examples():
+    text = (ROOT / "docs" / "spec.md").read_text(encoding="utf-8")
+    return [b for b in re.findall(r"```toml\n(.*?)```", text, re.DOTALL) if "[scene]" in b]
+
+
+@pytest.mark.parametrize("index", range(2))
+def test_complete_examples_in_docs_meet_their_own_expectations(tmp_path, index):
+    # A reader copies these whole; their [expect] tables say what they should get.
+    example = _docs_examples()[index]
+    assert "[expect]" in example
+    path = tmp_path / "example.toml"
+    path.write_text(example)
+    code, out, _ = run(path)
+    assert (code, out.split()[0]) == (0, "PASS"), out

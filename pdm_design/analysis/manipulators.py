@@ -36,7 +36,7 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign) -
     s2 = phys.handover_speed_squared(a, b, q, gravity=g, link_length=l)
     periodic: dict[str, float | None] = {
         "handover_speed": None, "landing_speed": None,
-        "contraction": float(phys.contraction(a, b, q)),
+        "contraction": float(phys.contraction(a, b, q)), "drop_per_stage": None,
     }
     if s2 <= 0.0:
         problems.append(f"beta = {b:g} rad is not beyond alpha = {a:g} rad: the carry gains no "

@@ -76,10 +76,16 @@ class _Invalid(Exception):
 
 def load_spec(path: str | Path) -> Spec:
     """Read and validate the spec file at `path`. Raises SpecError for any problem."""
+    return parse_spec(read_spec_data(path), str(path))
+
+
+def read_spec_data(path: str | Path) -> dict:
+    """The spec file at `path` as TOML data, not yet validated (a sweep edits it point by point
+    before parse_spec). Raises SpecError when the file cannot be read or is not TOML."""
     source = str(path)
     text = _read_text(Path(path), source)
     try:
-        data = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SpecError(source, "", "valid TOML", str(exc)) from None
     except RecursionError:
@@ -87,7 +93,6 @@ def load_spec(path: str | Path) -> Spec:
                         "deeper nesting") from None
     except ValueError as exc:  # e.g. an integer with thousands of digits
         raise SpecError(source, "", "valid TOML", str(exc)) from None
-    return parse_spec(data, source)
 
 
 def _read_text(path: Path, source: str) -> str:

@@ -21,7 +21,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tomllib
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future
 from concurrent.futures import wait as wait_futures
@@ -32,7 +31,7 @@ from pathlib import Path
 from ..errors import SpecError
 from ..io import write_atomic
 from ..progress import progress_bar
-from ..spec import load_spec, parse_spec
+from ..spec import parse_spec, read_spec_data
 from . import tables
 from .grid import GridPoint, SweepAxis, chains, grid_points, point_data, sweep_axes
 
@@ -100,8 +99,8 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
     a folder that does not match on resume).
     """
     source = str(spec_path)
-    base = load_spec(spec_path)  # the spec itself must be valid (a clear error if not)
-    data = tomllib.loads(Path(spec_path).read_text(encoding="utf-8-sig"))  # as load_spec did
+    data = read_spec_data(spec_path)
+    base = parse_spec(data, source)  # the spec itself must be valid (a clear error if not)
     axes = sweep_axes(data, list(sweeps))
     points = grid_points(axes)
     paths = tuple(a.path for a in axes)
