@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 
@@ -44,6 +45,16 @@ class OutputError(PdmError):
         reason = error.strerror or str(error)
         if isinstance(error, FileExistsError):  # mkdir of the folder met a file of that name
             reason = f"{error.filename} is a file, not a folder"
-        elif error.filename and str(error.filename) != self.path:
+        elif error.filename and not _names_this_output(error, self.path):
             reason += f" ({error.filename})"
         super().__init__(f"cannot write {self.path}: {reason}")
+
+
+def _names_this_output(error: OSError, path: str) -> bool:
+    """Whether the OSError is about `path` itself or the temporary file written beside it
+    (pdm_design.io names those `.NAME.*`): saying so again would only add noise."""
+    named = [os.fspath(f) for f in (error.filename, error.filename2) if f is not None]
+    here = os.path.split(path)
+    return any(f == path or (os.path.dirname(f) == here[0]
+                             and os.path.basename(f).startswith(f".{here[1]}."))
+               for f in named)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import errno
 import os
+import stat
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -13,24 +15,64 @@ from .errors import OutputError
 def write_atomic(path: str | os.PathLike, data: str | bytes) -> None:
     """Write data to path via a temporary file in the same folder and an atomic rename.
     OutputError (naming the path) if the folder cannot be made or the disk refuses the data."""
-    path = Path(path)
+    write_all({path: data})
+
+
+def write_all(files: dict) -> None:
+    """Write several files (path -> str or bytes) whole or not at all: every one goes to a
+    temporary file first, and none is renamed into place unless all were written and no
+    target is a folder. A device or a named pipe (/dev/null, a FIFO) is written to directly:
+    renaming over it would replace it with a regular file."""
+    temps: dict[Path, str] = {}
     try:
-        _write(path, data)
+        for path, data in files.items():
+            path = Path(path)
+            if _is_special(path):
+                _guard(path, _write_into, path, data)
+                continue
+            temps[path] = _guard(path, _write_temp, path, data)
+        for path in temps:
+            if path.is_dir():
+                raise OutputError(path, IsADirectoryError(errno.EISDIR, "Is a directory"))
+        for path, tmp in temps.items():
+            _guard(path, _publish, tmp, path)
+    finally:
+        for tmp in temps.values():
+            Path(tmp).unlink(missing_ok=True)
+
+
+def _guard(path: Path, action, *args):
+    """action(*args), its OSError as an OutputError naming path."""
+    try:
+        return action(*args)
     except OSError as error:
         raise OutputError(path, error) from error
 
 
-def _write(path: Path, data: str | bytes) -> None:
+def _is_special(path: Path) -> bool:
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        return False
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
+
+
+def _write_into(path: Path, data: str | bytes) -> None:
+    with path.open("wb" if isinstance(data, bytes) else "w") as handle:
+        handle.write(data)
+
+
+def _write_temp(path: Path, data: str | bytes) -> str:
     path.parent.mkdir(parents=True, exist_ok=True)
     mode = "wb" if isinstance(data, bytes) else "w"
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, mode) as handle:
             handle.write(data)
-        _publish(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+    return tmp
 
 
 @contextmanager

@@ -56,3 +56,26 @@ def test_write_atomic_reports_the_path_and_keeps_the_old_file(tmp_path, monkeypa
     assert not caught.value.bad_input
     assert target.read_text() == "old"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["table.csv"]
+
+
+def test_a_set_of_files_is_written_whole_or_not_at_all(tmp_path):
+    (tmp_path / "b.csv").mkdir()  # the second file's name is taken by a folder
+    with pytest.raises(OutputError, match=r"cannot write .*b\.csv: Is a directory$"):
+        io.write_all({tmp_path / "a.md": "a", tmp_path / "b.csv": "b"})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.csv"]  # no a.md, no temporaries
+
+
+def test_a_named_pipe_is_written_into_not_replaced(tmp_path):
+    import os
+    import stat
+    import threading
+
+    pipe = tmp_path / "report.xml"
+    os.mkfifo(pipe)
+    received = []
+    reader = threading.Thread(target=lambda: received.append(pipe.read_text()))
+    reader.start()
+    io.write_atomic(pipe, "<ok/>")
+    reader.join(timeout=10)
+    assert received == ["<ok/>"]
+    assert stat.S_ISFIFO(pipe.stat().st_mode)

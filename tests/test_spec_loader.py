@@ -211,6 +211,7 @@ BAD_VALUES = [
      "a finite number"),
     ("manipulators", ("initial", "position"), [1.0, 2.0, 3.0], "initial.position",
      "an array of 2 items"),
+    ("manipulators", ("initial", "position"), [1.0], "initial.position", "an array of 2 items"),
     ("manipulators", ("verification", "offsets", 0, "dx"), "0.1", "verification.offsets[0].dx",
      "a number"),
     ("manipulators", ("verification", "offsets", 0, "manipulator"), 0,

@@ -274,3 +274,16 @@ def test_a_required_gap_near_the_nose_says_land_further_back():
     near, back = (stairs({"restitution": 0.8, "launch_speed": 2.0, "landing_offset": L})
                   for L in (1.60, 1.50))
     assert margins(back)["nose_clearance"] > margins(near)["nose_clearance"]
+
+
+def test_a_flat_floor_is_periodic_only_without_loss():
+    """rise 0: with restitution 1 every bounce returns to h0 (the periodic vertical speed is
+    sqrt(2 g h0)); below 1 the bounces die out, which the analysis says instead of dividing by
+    the zero tread the orbit would need."""
+    flat = stairs({"restitution": 1.0, "launch_speed": 2.0, "rise": 0.0, "tread": 1.0})
+    lossless = analyse(flat.scene, flat.design_at())
+    assert lossless.periodic["vertical_impact_speed"] == pytest.approx(math.sqrt(2 * G * H0))
+    damped = stairs({"restitution": 0.8, "launch_speed": 2.0, "rise": 0.0})
+    lossy = analyse(damped.scene, damped.design_at())
+    assert lossy.periodic["impact_speed"] is None
+    assert any("no periodic orbit" in p for p in lossy.problems)

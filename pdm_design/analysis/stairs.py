@@ -92,8 +92,12 @@ def _periodic_vertical_speed(g, h0, eps, rise, derived, problems):
     """Vertical impact speed of the periodic orbit: v*^2 (1 - eps^2) = 2 g rise."""
     if derived:
         return phys.impact_speed_vertical(g, h0)
-    if eps < 1.0:
+    if eps < 1.0 and rise > 0.0:
         return math.sqrt(2.0 * g * rise / (1.0 - eps**2))
+    if eps < 1.0:
+        problems.append(f"rise 0 with restitution {eps:g} < 1: every bounce loses height and no "
+                        "step gives it back, so there is no periodic orbit")
+        return None
     if rise == 0.0:
         return phys.impact_speed_vertical(g, h0)
     problems.append("restitution 1 with a rise > 0: every bounce gains energy, no periodic orbit")

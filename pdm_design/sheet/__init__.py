@@ -11,21 +11,20 @@ STEM = "sheet"
 
 
 def write_sheet(sheet: BuildSheet, folder, *, drawing: bool = True) -> tuple[Path, ...]:
-    """Write sheet.md, sheet.csv and (unless drawing=False) sheet.png and sheet.svg."""
-    from ..io import write_atomic
+    """Write sheet.md, sheet.csv and (unless drawing=False) sheet.png and sheet.svg: all of them
+    or, when one cannot be written, none."""
+    from ..io import write_all
 
     folder = Path(folder)
-    files = []
+    files = {folder / f"{STEM}.md": sheet_markdown(sheet, f"{STEM}.svg" if drawing else None),
+             folder / f"{STEM}.csv": sheet_csv(sheet)}
     if drawing:
         from .drawing import drawing_files
 
-        for name, payload in drawing_files(sheet, STEM).items():
-            write_atomic(folder / name, payload)
-            files.append(folder / name)
-    write_atomic(folder / f"{STEM}.csv", sheet_csv(sheet))
-    write_atomic(folder / f"{STEM}.md",
-                 sheet_markdown(sheet, f"{STEM}.svg" if drawing else None))
-    return (folder / f"{STEM}.md", folder / f"{STEM}.csv", *files)
+        files |= {folder / name: payload
+                  for name, payload in drawing_files(sheet, STEM).items()}
+    write_all(files)
+    return tuple(files)
 
 
 __all__ = ["BuildSheet", "make_sheet", "sheet_csv", "sheet_for", "sheet_markdown",

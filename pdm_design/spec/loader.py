@@ -366,6 +366,9 @@ def _invalid(error: dict, key: str, *, found: str | None = None, data: Any = _MI
         if isinstance(data, dict) and subject in data:
             key, data = _join(key, subject), data[subject]
         return _Invalid(key, f"consistent values ({message})", found or _show(data))
+    if kind == "missing" and error["loc"] and isinstance(error["loc"][-1], int):
+        # an item missing from a fixed-length array: the only ones in a spec are points [x, y]
+        return _Invalid(key, "an array of 2 items", found or _show(list(error["input"])))
     if kind in ("missing", "missing_argument"):
         return _Invalid(key, "a value (this key is required)", "nothing")
     return _Invalid(key, _expected(error), found or _show(error["input"]))

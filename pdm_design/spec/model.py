@@ -10,11 +10,12 @@ from pydantic.dataclasses import dataclass as checked
 
 from ..accuracy import ACCURACY_PRESETS, Accuracy, accuracy
 from ..scenes import ManipulatorsDesign, Scene, StairsDesign
-from ..scenes.common import CONFIG, Number
+from ..scenes.common import CONFIG, LARGEST, Number
 
 Count = Annotated[int, Strict(), Field(ge=1, le=10_000_000)]
 SampleCount = Annotated[int, Strict(), Field(ge=0, le=1_000_000)]
-Weight = Annotated[float, Strict(), Field(ge=0)]
+# Weights beyond a million (or their ratios) only scale IPOPT's objective out of range.
+Weight = Annotated[float, Strict(), Field(ge=0, le=LARGEST)]
 
 # A preset name or a mapping of tolerances becomes an Accuracy (the loader resolves it first, to
 # report errors at their key).
