@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .api import DesignOutcome, design
-from .errors import SpecError
+from .errors import PdmError, SpecError
 from .spec import load_spec
 
 
@@ -32,25 +32,45 @@ class CheckResult:
 
 
 def spec_paths(targets: list[str]) -> list[Path]:
-    """The spec files named, with each directory expanded to its *.toml files (sorted)."""
+    """The spec files named, with each directory expanded to its *.toml files (sorted). A
+    directory without any is bad input: a CI gate that checks nothing must not pass."""
     paths: list[Path] = []
     for target in targets:
         path = Path(target)
-        paths.extend(sorted(path.glob("*.toml")) if path.is_dir() else [path])
+        if path.is_dir():
+            found = sorted(path.glob("*.toml"))
+            if not found:
+                raise SpecError(target, "", "a spec file or a folder with *.toml files",
+                                "no *.toml files")
+            paths.extend(found)
+        else:
+            paths.append(path)
     return paths
 
 
 def check_spec(path: Path) -> CheckResult:
+    """One spec's verdict. Any error, even an internal one, becomes this spec's ERROR result,
+    so that the other specs are still checked and the JUnit report still written."""
+    import os
     import time
 
     start = time.perf_counter()
     try:
-        spec = load_spec(path)
+        failures = tuple(unmet_expectations(design(load_spec(path))))
     except SpecError as error:
-        return CheckResult(str(path), error=str(error))
-    outcome = design(spec)
-    failures = tuple(unmet_expectations(outcome))
-    return CheckResult(str(path), failures=failures, seconds=time.perf_counter() - start)
+        # The ERROR line already names the file: drop the message's own "FILE: " prefix.
+        text, prefix = str(error), f"{error.file}: "
+        same_file = error.file == str(path) and text.startswith(prefix)
+        message = text[len(prefix):] if same_file else text
+    except PdmError as error:
+        message = str(error)
+    except Exception as error:
+        if os.environ.get("PDM_DESIGN_DEBUG"):  # the CLI's switch for seeing the traceback
+            raise
+        message = f"internal error ({type(error).__name__}): {error}"
+    else:
+        return CheckResult(str(path), failures=failures, seconds=time.perf_counter() - start)
+    return CheckResult(str(path), error=message, seconds=time.perf_counter() - start)
 
 
 def unmet_expectations(outcome: DesignOutcome) -> list[str]:

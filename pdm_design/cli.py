@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import functools
 import json
-import math
 import os
 import sys
 
@@ -112,23 +111,45 @@ def _not_yet(name: str):
 
 
 def _parse_pairs(values, label, what, count):
-    """Parse 'K:A,B' options (1 <= K <= count) into (K, A, B), or a clear error naming the
-    option."""
+    """Parse 'K:A,B' options (1 <= K <= count, each K once) into (K, A, B), or a clear error
+    naming the option. A and B are lengths, held to the spec loader's limit: a larger one would
+    fail the model's validation with a dump instead of a message."""
     from .errors import SpecError
+    from .scenes.common import LARGEST
 
-    parsed = []
+    parsed, seen = [], set()
     for text in values:
         try:
             index, pair = text.split(":", 1)
             first, second = (float(v) for v in pair.split(","))
             index = int(index)
-            if not 1 <= index <= count or not all(math.isfinite(v) for v in (first, second)):
-                raise ValueError
+            if not 1 <= index <= count or not all(abs(v) <= LARGEST for v in (first, second)):
+                raise ValueError  # (abs(nan) <= LARGEST is False: nan and inf are refused too)
         except ValueError:
-            raise SpecError("command line", label, f"{what} with K from 1 to {count}, "
-                            "e.g. 2:0.1,-0.2", repr(text)) from None
+            raise SpecError("command line", label, f"{what} with K from 1 to {count} and "
+                            f"values within +-{LARGEST:g} m, e.g. 2:0.1,-0.2", repr(text)) from None
+        if index in seen:  # as the spec loader refuses for its offsets and step_errors
+            raise SpecError("command line", label, "each K listed once",
+                            f"K = {index} again in {text!r}")
+        seen.add(index)
         parsed.append((index, first, second))
     return parsed
+
+
+def _check_plot_path(plot: str) -> None:
+    """Refuse a --plot file whose extension matplotlib cannot write, before any work (matplotlib
+    picks the format from the extension; it is imported only here: it is slow to import)."""
+    from pathlib import Path
+
+    from matplotlib.figure import Figure
+
+    from .errors import SpecError
+
+    formats = Figure().canvas.get_supported_filetypes()
+    if Path(plot).suffix[1:].lower() not in formats:
+        raise SpecError("command line", "--plot", "a file name ending in .png, .svg, .pdf or "
+                        f"another format matplotlib writes ({', '.join(sorted(formats))})",
+                        repr(plot))
 
 
 @main.command()
@@ -140,22 +161,34 @@ def _parse_pairs(values, label, what, count):
 @click.option("--step-error", "step_errors", multiple=True, metavar="K:DRISE,DTREAD",
               help="Add DRISE, DTREAD metres to step K's rise and tread. Repeatable.")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
-              help="Write figures like the paper's (PNG) to this file.")
+              help="Write figures like the paper's to this file; its extension picks the "
+              "format (png, svg, pdf, ...).")
 @ACCURACY
 @FORMAT
 @_guarded
 def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
     """Run the event simulator on SPEC's design (optimised first if it has free variables)."""
     from .api import design
+    from .errors import PdmError, SpecError
     from .report.simulation import simulation_text
+    from .sim.core import SimulationRefused
     from .spec import load_spec
-    from .spec.model import ManipulatorOffset, StepError
+    from .spec.model import MAX_MANIPULATOR_STAGES, ManipulatorOffset, StepError
     from .verify import simulate_spec
 
+    if plot is not None:
+        _check_plot_path(plot)
     loaded = load_spec(spec)
-    point = loaded.design_at()
-    if loaded.free_variables:
-        point = loaded.design_at(design(loaded, verify=False).analysis.design)
+    # Each option is refused, not ignored, on the other scene kind: a run without the offsets
+    # the user asked for would look like their answer.
+    for option, given, kind, other in (("--offset", offsets, "manipulators", "--step-error"),
+                                       ("--step-error", step_errors, "stairs", "--offset")):
+        if given and loaded.kind != kind:
+            raise SpecError("command line", option, f"a {kind} spec ({option} is for {kind} "
+                            f"scenes; {loaded.kind} take {other})", f"a {loaded.kind} spec")
+    if loaded.kind == "manipulators" and stages is not None and stages > MAX_MANIPULATOR_STAGES:
+        raise SpecError("command line", "--stages", f"at most {MAX_MANIPULATOR_STAGES} "
+                        "manipulators (each stage's record is kept in memory)", str(stages))
     row = stages or loaded.verification.stages
     kwargs = {}
     if offsets:
@@ -165,9 +198,15 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
         kwargs["step_errors"] = tuple(StepError(step=k, rise=a, tread=b) for k, a, b in
                                       _parse_pairs(step_errors, "--step-error", "K:DRISE,DTREAD",
                                                    row))
-    result = simulate_spec(loaded, point, stages=stages, accuracy=accuracy,
-                           record_trajectory=plot is not None, **kwargs)
-    if plot:
+    point = loaded.design_at()
+    if loaded.free_variables:
+        point = loaded.design_at(design(loaded, verify=False).analysis.design)
+    try:
+        result = simulate_spec(loaded, point, stages=stages, accuracy=accuracy,
+                               record_trajectory=plot is not None, **kwargs)
+    except SimulationRefused as refusal:  # the design is at fault, not the input's syntax: exit 1
+        raise PdmError(f"{spec}: the simulator refuses this design: {refusal}") from None
+    if plot is not None:
         from .report.plots import plot_simulation
 
         plot_simulation(loaded, point, result, plot, stages=stages,
@@ -274,7 +313,10 @@ def check(targets, junit):
     """CI gate: solve and verify each spec (or every *.toml in a directory) and test its
     [expect] table. One line per spec; exit 1 if any expectation fails, 2 on bad input."""
     from .check import check_spec, junit_xml, spec_paths
+    from .errors import SpecError
 
+    if junit is not None and not junit:  # else the report the user asked for is silently lost
+        raise SpecError("command line", "--junit", "a file name", "''")
     results = []
     for path in spec_paths(list(targets)):
         results.append(check_spec(path))

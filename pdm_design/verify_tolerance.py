@@ -18,6 +18,7 @@ import itertools
 import numpy as np
 
 from .progress import progress_bar
+from .sim.core import SimulationRefused
 from .spec.model import ManipulatorOffset, Spec, StepError
 from .verify import simulate_spec
 
@@ -53,8 +54,14 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
     failures = []
     with progress_bar(len(builds), "verifying the tolerance box") as advance:
         for name, errors in builds:
-            result = simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
-            advance()
+            try:
+                result = simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
+            except SimulationRefused as refusal:  # e.g. a rise error larger than the rise
+                failures.append({"build": name, "errors": errors, "stages_passed": 0,
+                                 "failure": f"the simulator refuses this build: {refusal}"})
+                continue
+            finally:
+                advance()
             if not result.outcome.completed:
                 f = result.outcome.failure
                 what = f"{f.kind} at stage {f.stage}" if f else "incomplete"

@@ -56,3 +56,21 @@ def test_a_tolerance_the_simulator_refutes_is_not_reported_verified(monkeypatch)
     assert outcome.verification["tolerance_failures"]
     assert any("tolerance refuted" in f for f in outcome.verification["failures"])
     assert outcome.exit_code == 1
+
+
+def test_a_claimed_box_the_simulator_cannot_build_is_a_failure_in_the_report(monkeypatch):
+    # A rise error larger than the rise makes a step go up: the simulator refuses that build.
+    # The claim is then refuted in the report (exit 1), not an error that prints nothing.
+    real = pdm_design.solve.optimize
+    stairs = load_spec(ROBUST.parent / "stairs_design.toml")
+
+    def beyond_the_rise(spec, **kwargs):
+        result = real(spec, **kwargs)
+        rise = (1 - 0.8**2) * 1.0  # the periodic rise (1 - eps^2) h0 of this spec
+        return dataclasses.replace(result, tolerance={"rise": 1.5 * rise, "tread": 0.0})
+
+    monkeypatch.setattr(pdm_design.solve, "optimize", beyond_the_rise)
+    outcome = design(stairs)
+    refused = [f for f in outcome.verification["tolerance_failures"]
+               if "refuses this build" in f["failure"]]
+    assert refused and outcome.verification["passed"] is False and outcome.exit_code == 1

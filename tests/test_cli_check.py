@@ -85,3 +85,53 @@ def test_complete_examples_in_docs_meet_their_own_expectations(tmp_path, index):
     path.write_text(example)
     code, out, _ = run(path)
     assert (code, out.split()[0]) == (0, "PASS"), out
+
+
+def test_internal_error_in_one_spec_is_its_error_line_and_the_run_goes_on(tmp_path,
+                                                                          monkeypatch):
+    import pdm_design.check
+
+    real, calls = pdm_design.check.design, []
+
+    def design_failing_the_second_time(spec, *args, **kwargs):
+        calls.append(spec)
+        if len(calls) == 2:
+            raise RuntimeError("boom")
+        return real(spec, *args, **kwargs)
+
+    monkeypatch.setattr(pdm_design.check, "design", design_failing_the_second_time)
+    for name in ("a.toml", "b.toml", "c.toml"):
+        _spec_with_expect(tmp_path, "feasible = true", name)
+    report = tmp_path / "report.xml"
+    code, out, _ = run(tmp_path, "--junit", report)
+    assert code == 2
+    second = f"ERROR {tmp_path / 'b.toml'}: internal error (RuntimeError): boom"
+    assert out.splitlines()[1] == second
+    assert [line.split()[0] for line in out.splitlines()] == ["PASS", "ERROR", "PASS"]
+    suite = ET.parse(report).getroot()
+    assert (suite.get("tests"), suite.get("errors"), suite.get("failures")) == ("3", "1", "0")
+
+
+def test_invalid_toml_line_names_the_file_once(tmp_path):
+    bad = tmp_path / "b.toml"
+    bad.write_text("x = =\n")
+    code, out, _ = run(bad)
+    assert code == 2
+    assert out.startswith(f"ERROR {bad}: expected valid TOML, found ")
+    assert out.count(str(bad)) == 1
+
+
+def test_folder_without_specs_is_bad_input(tmp_path):
+    (tmp_path / "notes.txt").write_text("not a spec")
+    code, out, err = run(tmp_path)
+    assert code == 2
+    assert out == ""
+    assert err == (f"error: {tmp_path}: expected a spec file or a folder with *.toml files, "
+                   "found no *.toml files\n")
+
+
+def test_empty_junit_path_is_bad_input(tmp_path):
+    code, out, err = run(_spec_with_expect(tmp_path, "feasible = true"), "--junit", "")
+    assert code == 2
+    assert out == ""  # refused before any spec is checked
+    assert err == "error: command line: --junit: expected a file name, found ''\n"

@@ -4,6 +4,7 @@ import json
 import math
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from pdm_design.cli import main
@@ -74,3 +75,71 @@ def test_offset_beyond_the_row_is_bad_input():
     code, _, err = run(PAPER, "--stages", "6", "--offset", "7:0.1,0")
     assert code == 2
     assert "--offset" in err and "from 1 to 6" in err
+
+
+STAIRS = PROBLEMS / "paper_stairs_frictionless.toml"
+
+
+@pytest.mark.parametrize("spec, option, value", [(PAPER, "--offset", "2:1e7,0"),
+                                                 (PAPER, "--offset", "2:0,-1.5e6"),
+                                                 (STAIRS, "--step-error", "3:2e6,0")])
+def test_value_beyond_a_thousand_kilometres_is_bad_input(spec, option, value):
+    code, _, err = run(spec, option, value)
+    assert code == 2
+    assert err.startswith(f"error: command line: {option}: expected ")
+    assert "1e+06 m" in err and "internal error" not in err
+
+
+@pytest.mark.parametrize("spec, option, takes, other", [
+    (PAPER, "--step-error", "stairs", "manipulators"),
+    (STAIRS, "--offset", "manipulators", "stairs")])
+def test_option_for_the_other_scene_kind_is_refused(spec, option, takes, other):
+    code, _, err = run(spec, option, "2:0.1,0")
+    assert code == 2
+    assert err.startswith(f"error: command line: {option}: expected a {takes} spec ")
+    assert err.endswith(f"found a {other} spec\n")
+
+
+@pytest.mark.parametrize("spec, option", [(PAPER, "--offset"), (STAIRS, "--step-error")])
+def test_same_k_twice_is_refused(spec, option):
+    code, _, err = run(spec, option, "2:0.1,0", option, "2:0,0.1")
+    assert code == 2
+    assert err == (f"error: command line: {option}: expected each K listed once, "
+                   "found K = 2 again in '2:0,0.1'\n")
+
+
+@pytest.mark.parametrize("name", ["out.txt", "noext", ""])
+def test_plot_file_matplotlib_cannot_write_is_refused_before_any_work(tmp_path, name):
+    # The spec does not exist: the --plot error proves the option was checked first.
+    target = str(tmp_path / name) if name else ""
+    code, _, err = run(tmp_path / "missing.toml", "--plot", target)
+    assert code == 2
+    assert err.startswith("error: command line: --plot: expected a file name ending in ")
+    assert all(f in err for f in ("png", "svg", "pdf")) and err.endswith(f"found {target!r}\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_simulator_refusal_names_the_spec_and_exits_1(tmp_path):
+    # Heavy backspin (50 rad/s, r = 0.5 m) keeps the ball slipping through the first impact, so
+    # friction takes its full mu (1 + eps) sqrt(2 g h0) = 3.986 m/s (mu = 0.5, eps = 0.8,
+    # h0 = 1 m) off V0 = 0.1 m/s: vx1 < 0 and the derived tread vx1 (1 + eps) sqrt(2 g h0) / g
+    # is negative.
+    text = (PROBLEMS / "paper_stairs_friction.toml").read_text()
+    text = text.replace("launch_speed = 3.0 ", "launch_speed = 0.1 ")
+    text = text.replace("spin = 0.5 ", "spin = 50.0 ")
+    spec = tmp_path / "backspin.toml"
+    spec.write_text(text)
+    code, out, err = run(spec)
+    assert code == 1
+    prefix = f"error: {spec}: the simulator refuses this design: the derived tread is "
+    assert err.startswith(prefix)
+    v = math.sqrt(2 * 9.81 * 1.0)
+    expected = (0.1 - 0.5 * 1.8 * v) * 1.8 * v / 9.81
+    assert math.isclose(float(err[len(prefix):].split()[0]), expected, rel_tol=1e-5)
+
+
+def test_stages_beyond_the_manipulator_limit_is_bad_input():
+    code, _, err = run(PAPER, "--stages", "100001")
+    assert code == 2
+    assert err.startswith("error: command line: --stages: expected at most 100000 manipulators")
+    assert err.endswith("found 100001\n")

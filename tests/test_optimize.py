@@ -462,3 +462,59 @@ def test_starts_checked_together_are_the_starts_checked_one_by_one(name):
         assert any(moved)
     assert np.array_equal(np.array(form.defined_starts(designs, guess, p)),
                           np.array(one_by_one))
+
+
+def test_an_optimum_on_a_bound_is_reported_within_it():
+    """Restitution free up to 1: the margins grow as the bounces lose less, so the optimum sits
+    on the bound, where the rise (1 - eps^2) h0 is 0. IPOPT relaxes bounds by 1e-8; the design
+    it reports must not be the restitution 1 + 7e-9 and rise -1e-8 that the re-check refuses."""
+    from pdm_design.spec import parse_spec
+
+    spec = parse_spec({
+        "scene": {"kind": "stairs", "ball": {"radius": 0.05}},
+        "initial": {"drop_height": 1.0},
+        "design": {"restitution": {"min": 0.0, "max": 1.0},
+                   "launch_speed": {"min": 0.5, "max": 3.0, "initial": 2.0},
+                   "landing_offset": {"min": 0.0, "max": 3.0, "initial": 0.8}},
+        "objective": {"max_min_margin": 1.0}})
+    result = optimize(spec)
+    assert result.status is Status.OPTIMAL
+    assert 0.0 <= result.design["restitution"] <= 1.0 and result.design["rise"] >= 0.0
+
+
+def _robust_manipulators(scale: float = 1.0, stages: int = 6):
+    """problems/manipulators_robust.toml with every length times `scale` (speeds times its
+    square root, so that every angle and every ratio stays the same)."""
+    import tomllib
+
+    from pdm_design.spec import parse_spec
+
+    data = tomllib.loads((PROBLEMS / "manipulators_robust.toml").read_text())
+    body, palm, initial = data["scene"]["body"], data["scene"]["palm"], data["initial"]
+    for table, keys in ((body, ("width", "height")), (palm, ("width", "thickness"))):
+        for key in keys:
+            table[key] *= scale
+    initial["position"] = [v * scale for v in initial["position"]]
+    initial["velocity"] = [v * math.sqrt(scale) for v in initial["velocity"]]
+    data["design"]["link_length"] *= scale
+    data["verification"]["stages"] = stages
+    return parse_spec(data)
+
+
+def test_the_linearised_sets_scale_with_the_device():
+    """Dimensional analysis: ten times the size, ten times every half-width (cvxpy in metres
+    failed at that size and the report silently lost the linearised sets)."""
+    one, ten = (optimize(_robust_manipulators(k), check_samples=0).linearised for k in (1, 10))
+    assert one.status == ten.status == "optimal"
+    assert ten.square == pytest.approx(10 * one.square, rel=1e-6)
+    for axis in ("dx", "dy"):
+        assert ten.box[axis] == pytest.approx(10 * one.box[axis], rel=1e-4)  # a flat optimum
+    assert ten.ellipsoid["min_semi_axis"] == pytest.approx(
+        10 * one.ellipsoid["min_semi_axis"], rel=1e-4)
+
+
+def test_many_offsets_leave_the_robust_box_and_say_why_the_linearised_sets_are_missing():
+    spec = _robust_manipulators(stages=130)  # dx1..dx130 and dy1..dy131
+    result = optimize(spec, check_samples=0)
+    assert result.status is Status.OPTIMAL and result.tolerance["dx"] > 0
+    assert result.linearised.status.startswith("not computed: 261 offset coordinates")

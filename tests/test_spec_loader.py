@@ -458,8 +458,37 @@ def test_deeply_nested_value_in_parsed_data():
 
 def test_long_array_is_validated():
     offsets = [{"manipulator": i, "dx": 0.001} for i in range(1, 100_001)]
-    spec = parse_spec(with_value(base("manipulators"), ("verification", "offsets"), offsets))
+    data = with_value(base("manipulators"), ("verification", "stages"), 100_000)
+    spec = parse_spec(with_value(data, ("verification", "offsets"), offsets))
     assert len(spec.verification.offsets) == 100_000
+
+
+@pytest.mark.parametrize("kind, table, stages, value, key, expected", [
+    # the row keeps every stage's record; more would not fit in memory (docs/spec.md)
+    ("manipulators", {}, 100_001, None, "verification.stages", "an integer <= 100000"),
+    # an offset or step error on a stage that is not run
+    ("manipulators", {"offsets": [{"manipulator": 7}]}, 6, None,
+     "verification.offsets[0].manipulator", "an integer <= verification.stages (6)"),
+    ("stairs", {"step_errors": [{"step": 21}]}, 20, None,
+     "verification.step_errors[0].step", "an integer <= verification.stages (20)"),
+    # an NLP with rows for every bounce: free variables limit the bounces, a fixed design not
+    ("stairs", {}, 201, {"min": 1.0, "max": 3.0}, "verification.stages",
+     "an integer <= 200 when the design has free variables"),
+])
+def test_stages_limit_what_is_run_and_optimised(kind, table, stages, value, key, expected):
+    data = with_value(base(kind), ("verification", "stages"), stages)
+    for name, item in table.items():
+        data = with_value(data, ("verification", name), item)
+    if value is not None:
+        data = with_value(data, ("design", "launch_speed"), value)
+    with pytest.raises(SpecError) as error:
+        parse_spec(data, "s.toml")
+    assert error.value.key == key and error.value.expected.startswith(expected)
+
+
+def test_a_fixed_stairs_design_may_be_simulated_for_many_bounces():
+    data = with_value(base("stairs"), ("verification", "stages"), 10_000_000)
+    assert parse_spec(data, "s.toml").verification.stages == 10_000_000
 
 
 # --------------------------------------------------------------------------- property

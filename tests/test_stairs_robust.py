@@ -8,20 +8,29 @@ landing and tread 1: the first riser's error, which moves the first landing, was
 worst case. Also: the launch must clear the top landing's nose (step 0), which with friction the
 flights' rows do not imply. Every number asserted here comes from the simulator; the design and
 the claimed box from the optimizer.
+
+Also the size of the stairs (audit): below a rise of about 1 cm every start ended in
+Invalid_Number_Detected (the tolerance's bound was 1 m, so IPOPT started it at 1 cm, above the
+rise, where the flights' square roots are of negative numbers), and at restitution 0.999 the
+claimed box was larger than the rise (the rise row was normalised by the tread, so IPOPT's
+1e-8 was 5e-6 of the rise). The references there are dimensional analysis (the same stairs at
+lengths x k and speeds x sqrt(k) have the box x k) and the closed form rise (1 - eps^2) h0.
 """
 
 from __future__ import annotations
 
 import math
+import tomllib
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 import pytest
 
 from pdm_design.formulation import formulate
 from pdm_design.sim.stairs import simulate_stairs
 from pdm_design.solve import optimize
-from pdm_design.spec import load_spec
+from pdm_design.spec import load_spec, parse_spec
 from pdm_design.spec.model import StepError
 from pdm_design.status import Status
 from pdm_design.verify_tolerance import verify_tolerance
@@ -127,5 +136,93 @@ def test_launch_must_clear_the_top_landing(tmp_path, restitution, spin):
     point = spec.design_at({name: result.design[name] for name in spec.free_variables})
     nominal = simulate_stairs(spec.scene, point, stages=5)
     assert nominal.outcome.completed, nominal.outcome.failure
+    box = verify_tolerance(spec, point, result.tolerance, samples=4)
+    assert box["passed"], box["failures"]
+
+
+# -- the size of the stairs ---------------------------------------------------------------------
+
+def scaled_spec(k, restitution=None):
+    """problems/stairs_design.toml at lengths x k and speeds x sqrt(k) (g unchanged): the same
+    stairs, every flight the same shape in units of the drop height, so the same box x k."""
+    data = tomllib.loads((PROBLEMS / "stairs_design.toml").read_text())
+    data["scene"]["ball"]["radius"] *= k
+    data["initial"]["drop_height"] *= k
+    for name, factor in (("launch_speed", math.sqrt(k)), ("landing_offset", k)):
+        data["design"][name] = {key: value * factor
+                                for key, value in data["design"][name].items()}
+    if restitution is not None:
+        data["design"]["restitution"] = restitution
+    return parse_spec(data, f"stairs_design at scale {k}")
+
+
+@pytest.fixture(scope="module")
+def full_size():
+    result = optimize(scaled_spec(1.0))
+    assert result.status is Status.OPTIMAL
+    return result
+
+
+@pytest.mark.parametrize("k", [0.01, 1e-4])
+def test_the_error_box_scales_with_the_stairs(full_size, k):
+    # k = 0.01 is the audit's spec (rise 3.6 mm): every start ended Invalid_Number_Detected
+    spec = scaled_spec(k)
+    result = optimize(spec)
+    assert result.status is Status.OPTIMAL, result.stats.return_statuses
+    assert result.tolerance["rise"] / k == pytest.approx(full_size.tolerance["rise"], rel=1e-6)
+    assert result.design["launch_speed"] / math.sqrt(k) == pytest.approx(
+        full_size.design["launch_speed"], rel=1e-6)
+    assert result.design["landing_offset"] / k == pytest.approx(
+        full_size.design["landing_offset"], rel=1e-6)
+    if k == 0.01:  # and the simulator confirms the small box as it does the full-size one
+        point = spec.design_at({n: result.design[n] for n in spec.free_variables})
+        box = verify_tolerance(spec, point, result.tolerance, samples=4)
+        assert box["passed"], box["failures"]
+
+
+def test_the_shipped_answer_is_unchanged(full_size):
+    # problems/stairs_design.toml: 12.647 mm (docs/optimizer.md, section 2: 12.65 mm)
+    assert full_size.tolerance["rise"] == pytest.approx(0.012647, abs=5e-7)
+
+
+def test_every_row_is_a_number_wherever_ipopt_may_start():
+    # The tolerance's bounds are the problem's own (at most the largest rise: a larger riser
+    # error makes a step go up), and every row is a number in the whole box, the tolerance
+    # above a rise included (IPOPT may step there on the way).
+    k, eps = 0.01, 0.8
+    spec = scaled_spec(k)
+    form = formulate(spec)
+    rise = (1 - eps**2) * spec.scene.initial.drop_height
+    i = form.tolerance_index
+    assert form.lbx[i] == 0.0 and form.ubx[i] <= rise
+    p = form.parameters(spec.requirements)
+    rng = np.random.default_rng(1)
+    lo, hi = form.lbx.copy(), form.ubx.copy()
+    hi[i] = spec.scene.initial.drop_height  # far beyond the rise: still numbers
+    points = np.vstack([lo + rng.uniform(size=len(lo)) * (hi - lo) for _ in range(64)]
+                       + [lo, hi])
+    jacobian = ca.Function("J", [form.nlp["x"], form.nlp["p"]],
+                           [ca.jacobian(form.nlp["g"], form.nlp["x"])])
+    for x in points:
+        rows = np.asarray(form.evaluate(x, p)[0], dtype=float)
+        assert np.isfinite(rows).all()
+        assert np.isfinite(np.asarray(jacobian(x, p).full())).all()
+
+
+@pytest.mark.parametrize("restitution", [0.999, 0.99999])
+def test_the_claimed_error_box_never_exceeds_the_rise(restitution):
+    # rise = (1 - eps^2) h0 is 2 mm and 20 um: an error box larger than the rise builds a step
+    # that goes up. IPOPT's 1e-8 on a row normalised by the tread (2.7 m) let the claim exceed a
+    # 2 mm rise by 1.8e-8 m; relative to the rise, the claim stays below it.
+    spec = scaled_spec(1.0, restitution)
+    result = optimize(spec)
+    assert result.status is Status.OPTIMAL
+    rise = (1.0 - restitution**2) * spec.scene.initial.drop_height
+    tol = result.tolerance["rise"]
+    assert tol <= rise
+    # the rise is what limits the box here (every nose row keeps 20 % of margin), and a box of
+    # all but 1e-5 of it passes the simulator: the claim gives nothing away either
+    assert tol >= (1.0 - 1e-5) * rise
+    point = spec.design_at({n: result.design[n] for n in spec.free_variables})
     box = verify_tolerance(spec, point, result.tolerance, samples=4)
     assert box["passed"], box["failures"]

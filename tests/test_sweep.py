@@ -3,6 +3,8 @@ writing, resume after an interruption, local workers and a Dask cluster on the l
 interface giving the same table."""
 
 import math
+import subprocess
+import sys
 import tomllib
 from pathlib import Path
 
@@ -255,6 +257,66 @@ def test_dask_cluster_on_loopback_gives_the_same_table(tmp_path):
     assert "6 solved now" in out
     assert (tmp_path / "dask" / "table.csv").read_text() == (
         tmp_path / "local" / "table.csv").read_text()
+
+
+# --------------------------------------------------------------------------- a failed start
+
+def _files(folder):
+    return {p.name: p.read_bytes() for p in sorted(Path(folder).iterdir())}
+
+
+@pytest.mark.parametrize("address", ["tcp://127.0.0.1:1", "foo"])
+def test_unreachable_scheduler_leaves_the_folder_as_it_was_with_one_error_line(tmp_path,
+                                                                               address):
+    # a finished table, then another sweep into the same folder on a scheduler that refuses
+    # (Dask retries until the connect timeout: a few seconds) or a malformed address; a child
+    # process, so that what Python prints at exit (a Dask client closed by the garbage
+    # collector) is seen too
+    pytest.importorskip("distributed")
+    out = tmp_path / "r1"
+    run_sweep(MANIP, ["mass_ratio=5:10:2"], out, workers=1)
+    before = _files(out)
+    assert {"table.md", "optimum.png", "tolerance.svg"} <= set(before)
+    done = subprocess.run(
+        [sys.executable, "-m", "pdm_design", "table", str(MANIP), "--sweep", "alpha=0.1:0.3:3",
+         "--out", str(out), "--scheduler", address],
+        capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("error: ") and done.stderr.count("\n") == 1, done.stderr
+    assert "--scheduler" in done.stderr and address in done.stderr
+    assert "Traceback" not in done.stderr and "Exception ignored" not in done.stderr
+    assert _files(out) == before
+
+
+def test_bad_workers_on_resume_leaves_the_folder_as_it_was(tmp_path):
+    # resume rewrites table.csv without its cut-short last line: not before the run can start
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(MANIP, GRID, tmp_path, workers=1, plots=False, on_row=_interrupt_after(3))
+    with open(tmp_path / "table.csv", "a") as stream:
+        stream.write("16.0,0.8,evaluated,0.2,0.6")
+    before = _files(tmp_path)
+    with pytest.raises(SpecError, match="--workers"):
+        run_sweep(MANIP, GRID, tmp_path, workers=0, plots=False, resume=True)
+    assert _files(tmp_path) == before
+    with pytest.raises(SpecError, match="--workers"):  # nor a fresh run
+        run_sweep(MANIP, ["mass_ratio=4:16:2"], tmp_path, workers=0, plots=False)
+    assert _files(tmp_path) == before
+
+
+def test_a_dask_client_that_failed_to_start_is_closed_at_once(monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    made = []
+    real_init = distributed.Client.__init__
+
+    def init(self, *args, **kwargs):
+        made.append(self)
+        real_init(self, *args, **kwargs)
+
+    monkeypatch.setattr(distributed.Client, "__init__", init)
+    with pytest.raises(SpecError, match="--scheduler"):
+        sweep_run._DaskExecutor("tcp://")  # malformed: fails at once, the client half-started
+    (client,) = made
+    assert client.status == "closed"
 
 
 # --------------------------------------------------------------------------- the command

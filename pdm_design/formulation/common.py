@@ -107,6 +107,10 @@ class SceneModel:
     derived: dict[str, object]  # named design quantities (SX) reported with the design
     tolerance_axes: tuple[str, ...]  # ("dx", "dy") or ("rise", "tread")
     scenario: Scenario | None = None
+    # The NLP minimises f / objective_scale (the optimum is the same; the reported terms are in
+    # natural units). IPOPT's dual and complementarity tolerances are absolute in f's units, so
+    # f in metres on a centimetre scene stopped it short of the optimum (the stairs set it).
+    objective_scale: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -274,6 +278,8 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
     f = 0.0
     for name, w in weights.items():
         f = f - w * OBJECTIVE_SENSE[name] * model.objective_terms[name]
+    if model.objective_scale != 1.0:
+        f = f / model.objective_scale
     terms = ca.vertcat(*[model.objective_terms[n] for n in OBJECTIVE_SENSE])
     derived_names = tuple(model.derived)
     evaluate = ca.Function(

@@ -39,6 +39,12 @@ worst case over d in [d_lo, d_hi] is at an end: checking both ends with the smal
 With friction, the first impact's demand falls with v_1: it is checked at er_1 = -tau. Errors
 accumulate (the horizontal landing is neutrally stable), so the tolerance shrinks with the number
 of stages checked.
+
+The same NLP at any size of the stairs (lengths x k, speeds x sqrt(k): the same design, the box
+x k; docs/optimizer.md, section 4): tau lies in [0, the largest rise of the design box] (a larger
+riser error makes the step go up), every row is a pure number (slack and scale divided by the
+scene's units h0 and sqrt(2 g h0)) and a number anywhere in that box, the rise row is relative to
+the rise, and the objective is divided by its own size (`objective_scale`).
 """
 
 from __future__ import annotations
@@ -52,7 +58,18 @@ from ..scenes import StairsDesign
 from .common import MARGIN, MODEL, VALIDITY, Condition, SceneModel, design_inputs
 
 DEFAULTS = {"rise": None, "tread": None, "landing_offset": None}
-MIN_FORWARD_SPEED = 1e-3  # m/s
+# The ball keeps moving forward: vx >= this fraction of the first vertical impact speed
+# sqrt(2 g h0) (a slope of at most 1000 at the first landing; a ratio, so the same at any scale).
+MIN_FORWARD_RATIO = 1e-3
+# Every built step still goes down: a rise error of at most (1 - this) of the rise. IPOPT meets a
+# row to about 1e-8 of its norm (bound_relax_factor, tol); this keeps a claimed tolerance below
+# the rise, not within IPOPT's tolerance above it, and costs a relative 1e-6 of a tolerance
+# that the rise bounds.
+MIN_STEP_FRACTION = 1e-6
+# Square roots of speeds squared are taken of at least this fraction of 2 g h0: nowhere near the
+# feasible set (there a flight leaves a tread upward, eps v > 0), but it keeps every row a number
+# wherever IPOPT may step, a tolerance above the rise included.
+SPEED2_FLOOR = 1e-20
 # The flight's two nose rows, by the phase of the flight each guards (solve/words.py reads it).
 NOSE_ENDS = ("leading edge: takes off behind the nose", "trailing edge: comes down beyond the nose")
 # A nose_clearance requirement covers the launch too (its own name, as manipulators' first_ ones).
@@ -66,15 +83,16 @@ def build(spec):
     epigraph = float(spec.objective.get("max_min_margin", 0.0)) > 0.0
     tau = ca.SX.sym("tolerance") if robust else 0.0
     t = ca.SX.sym("min_margin") if epigraph else None
-    m = _Model(scene, values, spec.verification.stages)
+    top = tolerance_bound(scene.initial.drop_height, values, bounds)
+    m = _Model(scene, values, spec.verification.stages, rise_unit=top)
 
     aux, start = [], []
     if m.V_symbol is not None:
         aux.append(("periodic_vertical_speed", m.V_symbol, 0.0, math.inf))
         start.append(ca.sqrt(2 * m.g * m.rise / ca.fmax(1 - m.eps**2, 1e-9)))
     if robust:
-        aux.append(("tolerance", tau, 0.0, max(scene.initial.drop_height, 1.0)))
-        start.append(0.0)
+        aux.append(("tolerance", tau, 0.0, top))
+        start.append(0.01 * top)
     if epigraph:
         aux.append(("min_margin", t, 0.0, 1.0))
         start.append(0.0)
@@ -94,19 +112,53 @@ def build(spec):
         derived={"rise": m.rise, "tread": m.tread, "landing_offset": m.L1,
                  "horizontal_speed": m.vx, "periodic_vertical_speed": m.V},
         tolerance_axes=("rise", "tread"),
+        objective_scale=objective_scale(spec.objective, top or scene.initial.drop_height),
     )
     return model, bounds, m
+
+
+# objective terms measured in metres (the others are pure numbers)
+LENGTH_TERMS = ("max_offset_tolerance", "min_drop")
+
+
+def objective_scale(weights, length):
+    """The size of the objective sum w * term: its weights' mean of the terms' sizes (`length`,
+    the largest rise the box allows, for a length; 1 for a ratio). The NLP divides its objective
+    by it, so IPOPT's absolute tolerances are relative ones at any size of the scene."""
+    sizes = {name: (length if name in LENGTH_TERMS else 1.0, abs(float(w)))
+             for name, w in weights.items() if float(w) != 0.0}
+    total = sum(w for _, w in sizes.values())
+    return sum(size * w for size, w in sizes.values()) / total if total > 0 else 1.0
+
+
+def tolerance_bound(h0, values, bounds):
+    """The largest error box the design box can allow: no larger than the largest rise (a riser
+    error beyond the rise makes the step go up: the `step_down` row) nor h0 (tread 1 stays below
+    the launcher). A bound in the problem's own lengths, so the variable, IPOPT's push of its
+    start off the bound (0.01 of it) and every row at that start scale with the scene; a fixed
+    bound of 1 m started it at 1 cm, above any rise below 1 cm, where the flights' square roots
+    were of negative numbers (Invalid_Number_Detected on every start)."""
+    if values["rise"] is None:  # derived: (1 - eps^2) h0, largest at the smallest restitution
+        eps = bounds["restitution"][0] if "restitution" in bounds else values["restitution"]
+        rise = (1.0 - float(eps) ** 2) * h0
+    else:
+        rise = bounds["rise"][1] if "rise" in bounds else values["rise"]
+    return max(min(float(rise), h0), 0.0)
 
 
 class _Model:
     """Closed forms of one stairs scene on (possibly symbolic) design values."""
 
-    def __init__(self, scene, values, stages):
+    def __init__(self, scene, values, stages, rise_unit=0.0):
         self.scene, self.stages, self.g = scene, stages, scene.gravity
         ball = scene.ball
         self.eps, self.v0 = values["restitution"], values["launch_speed"]
-        h0 = scene.initial.drop_height
+        h0 = self.h0 = scene.initial.drop_height
         self.vy1 = phys.impact_speed_vertical(self.g, h0)
+        # the scene's own units: every row's slack and scale are divided by their unit, so rows
+        # (and their norms, the scales at the guess) are pure numbers at any size of the scene
+        self.length, self.speed = h0, self.vy1
+        self.rise_unit = rise_unit or h0  # the largest rise in the design box
         if scene.frictionless:
             self.vx = self.v0
         else:
@@ -128,15 +180,15 @@ class _Model:
     def flight(self, v, rise_n):
         """(time, next vertical impact speed) of a flight leaving at eps v, falling rise_n."""
         up = self.eps * v
-        down = ca.sqrt(up**2 + 2 * self.g * rise_n)
+        down = ca.sqrt(ca.fmax(up**2 + 2 * self.g * rise_n, SPEED2_FLOOR * self.speed**2))
         return (up + down) / self.g, down
 
     def first_landing(self, er1):
         """(L_1, v_1) when the first riser is er1 too high: tread 1 is er1 below its design
         level and the launcher is not, so the ball falls h0 + er1, further and faster.
         L_1 - landing_offset = v0 (t(er1) - t(0)), written without cancellation."""
-        h0 = self.scene.initial.drop_height
-        v1 = phys.impact_speed_vertical(self.g, h0 + er1)
+        h0 = self.h0
+        v1 = phys.impact_speed_vertical(self.g, ca.fmax(h0 + er1, SPEED2_FLOOR * h0))
         return self.L1 + self.v0 * 2 * er1 / (v1 + self.vy1), v1
 
     def trajectory(self, er, et):
@@ -178,14 +230,18 @@ class _Model:
 
     def conditions(self, tau, robust):
         g, r = self.g, self.scene.ball.radius
+        length, speed = self.length, self.speed
         out: list[Condition] = []
 
-        def add(key, where, slack, scale=1.0, kind=MARGIN, **kw):
-            out.append(Condition((key,) if key else (), where, slack, scale, kind, **kw))
+        def add(key, where, slack, scale=1.0, kind=MARGIN, unit=1.0, keys=None, **kw):
+            keys = keys if keys is not None else ((key,) if key else ())
+            out.append(Condition(keys, where, slack / unit, scale / unit, kind, **kw))
 
         if self.V_symbol is not None:
-            add(None, "periodic vertical speed: V^2 (1 - eps^2) = 2 g rise",
-                self.V**2 * (1 - self.eps**2) - 2 * g * self.rise, kind=MODEL, equality=True)
+            # scaled by the size of either side (2 g rise at the orbit), not by 1 m^2/s^2
+            lhs, rhs = self.V**2 * (1 - self.eps**2), 2 * g * self.rise
+            add(None, "periodic vertical speed: V^2 (1 - eps^2) = 2 g rise", lhs - rhs,
+                lhs + rhs, kind=MODEL, unit=speed**2, equality=True)
         if not self.tread_derived:
             add("periodic_tread", "tread = horizontal speed x periodic flight time",
                 self.tread - self.orbit_tread, self.tread, equality=True)
@@ -199,15 +255,20 @@ class _Model:
             add("first_impact_friction", "first impact ends rolling",
                 self.scene.friction - demand, self.scene.friction)
         add("forward_flight", "the ball keeps moving down the stairs",
-            self.vx - MIN_FORWARD_SPEED, 1.0, kind=VALIDITY)
-        add("step_down", "every step goes down", self.rise - tau, self.tread, kind=VALIDITY)
+            self.vx - MIN_FORWARD_RATIO * speed, speed, kind=VALIDITY, unit=speed)
+        # Relative to the rise itself (its value at the guess is the row's norm): IPOPT's
+        # tolerances are then fractions of the rise, however small (restitution near 1). In
+        # units of the largest rise, so that norm is not below the smallest assemble takes.
+        keep = 1.0 - MIN_STEP_FRACTION
+        add("step_down", "every step goes down", keep * self.rise - tau, self.rise,
+            kind=VALIDITY, unit=self.rise_unit)
         if robust:
-            add("step_down", "tread 1 stays below the launch",
-                self.scene.initial.drop_height - tau, self.tread, kind=VALIDITY)
+            add("step_down", "tread 1 stays below the launch", keep * self.h0 - tau, self.h0,
+                kind=VALIDITY, unit=length)
 
         tread = self.tread
-        out.append(Condition(LAUNCH_KEYS, "launch: comes down beyond the top landing's nose",
-                             self.launch_slack(), tread * self.v0**2))
+        add(None, "launch: comes down beyond the top landing's nose", self.launch_slack(),
+            tread * self.v0**2, unit=length * speed**2, keys=LAUNCH_KEYS)
         scale = tread * self.vx**2
         if robust:
             L_long, _ = self.trajectory(tau, -tau)
@@ -218,12 +279,13 @@ class _Model:
         for n in range(self.stages):
             stage = n + 1
             where = f"landing {stage}, shortest drift" if robust else f"landing {stage}"
-            add("riser_clearance", where, L_short[n] - r, tread)
+            add("riser_clearance", where, L_short[n] - r, tread, unit=length)
             ends = [("", tread - L_long[n])] if not robust else [
                 (", nose nearest", tread - tau - L_long[n]),
                 (", nose furthest", tread + tau - L_short[n]),
             ]
             for suffix, dist in ends:
                 for where, slack in self.nose_slack(v_short[n], dist):
-                    add("nose_clearance", f"flight {stage}{suffix}, {where}", slack, scale)
+                    add("nose_clearance", f"flight {stage}{suffix}, {where}", slack, scale,
+                        unit=length * speed**2)
         return out

@@ -33,11 +33,18 @@ def _tolerance_rows(tolerance: dict) -> list[str]:
     lines = [f"  {axis:<6} +-{value * 1e3:.2f} mm (robust NLP)" for axis, value in box.items()]
     linear = tolerance.get("linearised")
     if linear:
-        per_axis = ", ".join(f"{k} +-{v * 1e3:.2f} mm" for k, v in linear["box"].items())
-        smallest_axis = linear["ellipsoid"].get("min_semi_axis", float("nan"))
-        lines.append(f"  linearised safe set (cvxpy): square +-{linear['square'] * 1e3:.2f} mm; "
-                     f"widest box {per_axis}; ellipsoid semi-axes "
-                     f"{smallest_axis * 1e3:.2f} mm and up")
+        parts = []
+        if linear["square"] or linear["box"]:  # neither: not computed (the status says why)
+            parts.append(f"square +-{linear['square'] * 1e3:.2f} mm")
+        if linear["box"]:
+            parts.append("widest box " + ", ".join(f"{k} +-{v * 1e3:.2f} mm"
+                                                   for k, v in linear["box"].items()))
+        if "min_semi_axis" in linear["ellipsoid"]:
+            parts.append(f"ellipsoid semi-axes {linear['ellipsoid']['min_semi_axis'] * 1e3:.2f} "
+                         "mm and up")
+        if linear["status"] != "optimal":
+            parts.append(linear["status"])
+        lines.append("  linearised safe set (cvxpy): " + "; ".join(parts))
     return lines
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ..errors import PdmError, SpecError
 from ..spec import load_spec
-from ..spec.model import Bounds, Spec
+from ..spec.model import MAX_OPTIMISED_BOUNCES, Bounds, Spec
 
 JSON_SCHEMA_PREFIX = "pdm-design/optimize/"
 MARKDOWN_ROWS = 100
@@ -141,6 +141,9 @@ def _tolerance(spec: Spec, tol: dict | None, wanted: bool) -> tuple[dict | None,
         return {a: float(tol[a]) for a in axes}, "robust tolerance of the optimised design"
     if not wanted:
         return None, "tolerance not computed (--no-tolerance)"
+    if spec.kind == "stairs" and spec.verification.stages > MAX_OPTIMISED_BOUNCES:
+        return None, (f"tolerance not computed: its NLP has rows for every bounce, and "
+                      f"{spec.verification.stages} is more than {MAX_OPTIMISED_BOUNCES}")
     asked = dataclasses.replace(spec, objective={"max_offset_tolerance": 1.0})
     try:
         from ..api import design

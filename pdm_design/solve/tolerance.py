@@ -5,7 +5,7 @@ every manipulator's offset or every step's errors d, formulation/*_offsets.py) a
 d = 0 with CasADi's Jacobian and normalised by scale_i(x*, 0):  b + A d >= 0.  Then
 
 * square box   max tau         s.t.  b_i - tau ||A_i||_1 >= 0              (an LP)
-* axis box     max sum log h_g s.t.  b_i - sum_g h_g sum_{j in g} |A_ij| >= 0
+* axis box     max prod h_g    s.t.  b_i - sum_g h_g sum_{j in g} |A_ij| >= 0
 * ellipsoid    max log det E   s.t.  ||E A_i||_2 <= b_i,  E symmetric PSD  (centred at 0),
                solved in its polar form (see `_ellipsoid`)
 
@@ -27,6 +27,9 @@ import numpy as np
 from .result import LinearisedTolerance
 
 FULL_ELLIPSOID_MAX_DIM = 24
+# Beyond this many offsets the linearised sets cost more than the whole optimisation: the
+# axis-aligned ellipsoid took cvxpy 30 s at 400 coordinates, the dense Jacobian 4 GB at 2001.
+MAX_COORDINATES = 256
 _JAC: dict[str, object] = {}
 _LOCK = threading.Lock()
 
@@ -64,67 +67,111 @@ def linear_safe_set(form, x, p):
     return A, b, keep
 
 
-def linearised_tolerance(form, x, p, *, cap: float) -> LinearisedTolerance:
-    """Largest square box, axis box and ellipsoid inside the linearised safe set at x."""
+def linearised_tolerance(form, x, p, *, cap: float, length: float) -> LinearisedTolerance:
+    """Largest square box, axis box and ellipsoid inside the linearised safe set at x.
+
+    The offsets are solved for in units of `length` (the device's size), so that cvxpy sees the
+    same numbers at any scale of the scene (in metres, its exponential cones failed on a device
+    ten times the shipped ones); `cap` (m) bounds every half-width. A part
+    that cannot be solved is left out, and `status` says which and why.
+    """
     sc = form.scenario
     names = sc.offset_names
+    if len(names) > MAX_COORDINATES:
+        return LinearisedTolerance(0.0, {}, {}, names, status=(
+            f"not computed: {len(names)} offset coordinates (more than {MAX_COORDINATES}); the "
+            "robust box is the answer"))
     A_all, b_all, keep = linear_safe_set(form, x, p)
     if np.any(b_all < -1e-9):
         return LinearisedTolerance(0.0, {g: 0.0 for g in sc.groups}, {}, names,
                                    status="the nominal design already violates a condition")
-    A, b = A_all[keep], np.maximum(b_all[keep], 0.0)
-    absA = np.abs(A)
+    A, b = A_all[keep] * length, np.maximum(b_all[keep], 0.0)
+    absA, top = np.abs(A), cap / length
+    problems = []
 
-    tau = cp.Variable(nonneg=True)
-    cp.Problem(cp.Maximize(tau), [b - tau * absA.sum(axis=1) >= 0, tau <= cap]).solve(
-        solver=cp.CLARABEL)
-    square = float(tau.value)
+    tau, square = cp.Variable(nonneg=True), 0.0
+    if _solved(cp.Problem(cp.Maximize(tau), [b - tau * absA.sum(axis=1) >= 0, tau <= top]),
+               "square box", problems):
+        square = float(tau.value) * length
 
     groups = list(sc.groups)
     G = np.stack([absA[:, list(sc.groups[g])].sum(axis=1) for g in groups], axis=1)
     h = cp.Variable(len(groups), nonneg=True)
-    cp.Problem(cp.Maximize(cp.sum(cp.log(h))), [b - G @ h >= 0, h <= cap]).solve(
-        solver=cp.CLARABEL)
-    box = {g: float(v) for g, v in zip(groups, np.atleast_1d(h.value))}
+    box = {}
+    # the largest area as a geometric mean (second-order cones): its logarithm (exponential
+    # cones) failed in Clarabel on a row of 100 manipulators. The optimum is flat along the
+    # binding row, so the box is found to tight tolerances (defaults moved it by 1e-5).
+    if _solved(cp.Problem(cp.Maximize(cp.geo_mean(h)), [b - G @ h >= 0, h <= top]),
+               "axis box", problems, tight=True):
+        box = {g: float(v) * length for g, v in zip(groups, np.atleast_1d(h.value))}
 
-    ellipsoid, status = _ellipsoid(A, b, names, cap)
-    return LinearisedTolerance(square, box, ellipsoid, names, status=status)
+    ellipsoid = _ellipsoid(A, b, names, top, problems)
+    if "matrix" in ellipsoid:
+        ellipsoid = _scaled(ellipsoid, length)
+    return LinearisedTolerance(square, box, ellipsoid, names,
+                               status="; ".join(problems) or "optimal")
 
 
-def _ellipsoid(A, b, names, cap):
-    """Largest-volume ellipsoid {E u : ||u|| <= 1} centred at 0 inside {b + A d >= 0}.
+def _solved(problem, what: str, problems: list[str], tight: bool = False) -> bool:
+    """Solve with Clarabel; False (and a line in `problems`) unless it is optimal."""
+    options = {"tol_gap_abs": 1e-12, "tol_gap_rel": 1e-12, "tol_feas": 1e-12} if tight else {}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            problem.solve(solver=cp.CLARABEL, **options)
+    except cp.error.SolverError as exc:
+        problems.append(f"{what} not computed: {exc}")
+        return False
+    if problem.status != cp.OPTIMAL:
+        problems.append(f"{what} not computed: cvxpy status {problem.status}")
+        return False
+    return True
+
+
+def _scaled(ellipsoid: dict, length: float) -> dict:
+    """An ellipsoid found in units of `length`, in metres."""
+    out = dict(ellipsoid)
+    for key in ("min_semi_axis", "max_semi_axis", "volume_radius"):
+        out[key] = ellipsoid[key] * length
+    out["extent"] = {k: v * length for k, v in ellipsoid["extent"].items()}
+    out["matrix"] = (np.asarray(ellipsoid["matrix"]) * length).tolist()
+    return out
+
+
+def _ellipsoid(A, b, names, cap, problems):
+    """Largest-volume ellipsoid {E u : ||u|| <= 1} centred at 0 inside {b + A d >= 0} ({} and a
+    line in `problems` when it cannot be found).
 
     Full shape up to FULL_ELLIPSOID_MAX_DIM coordinates, in the polar form (linear constraints):
     max log det P s.t. c_i' P c_i <= 1 with c_i = A_i / b_i, P = E^2; beyond that an axis-aligned
-    ellipsoid (an SOCP: max sum log e_j s.t. ||diag(e) A_i|| <= b_i), since cvxpy's log-det cone
+    ellipsoid (an SOCP: max sum log e_j s.t. ||c_i * e|| <= 1), since cvxpy's log-det cone
     grows too slow for interactive use (about 10 s at 40 coordinates).
     """
     n = len(names)
     if np.any(b <= 0):
+        problems.append("ellipsoid degenerate: a condition is at its limit at the design itself")
         return {"shape": "none", "min_semi_axis": 0.0, "max_semi_axis": 0.0,
-                "volume_radius": 0.0, "extent": {nm: 0.0 for nm in names}}, "degenerate"
+                "volume_radius": 0.0, "extent": {nm: 0.0 for nm in names}, "matrix": []}
     C = A / b[:, None]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        if n <= FULL_ELLIPSOID_MAX_DIM:
-            P = cp.Variable((n, n), PSD=True)
-            prob = cp.Problem(cp.Maximize(cp.log_det(P)),
-                              [cp.sum(cp.multiply(C @ P, C), axis=1) <= 1, cp.diag(P) <= cap**2])
-            prob.solve(solver=cp.CLARABEL)
-            if P.value is None:
-                return {}, prob.status
-            w, V = np.linalg.eigh(0.5 * (P.value + P.value.T))
-            E = V @ np.diag(np.sqrt(np.clip(w, 0.0, None))) @ V.T
-            shape = "full"
-        else:
-            e = cp.Variable(n, nonneg=True)
-            prob = cp.Problem(cp.Maximize(cp.sum(cp.log(e))),
-                              [cp.norm(C @ cp.diag(e), 2, axis=1) <= 1, e <= cap])
-            prob.solve(solver=cp.CLARABEL)
-            if e.value is None:
-                return {}, prob.status
-            E = np.diag(e.value)
-            shape = "axis-aligned"
+    if n <= FULL_ELLIPSOID_MAX_DIM:
+        P = cp.Variable((n, n), PSD=True)
+        if not _solved(cp.Problem(cp.Maximize(cp.log_det(P)),
+                                  [cp.sum(cp.multiply(C @ P, C), axis=1) <= 1,
+                                   cp.diag(P) <= cap**2]), "ellipsoid", problems):
+            return {}
+        w, V = np.linalg.eigh(0.5 * (P.value + P.value.T))
+        E = V @ np.diag(np.sqrt(np.clip(w, 0.0, None))) @ V.T
+        shape = "full"
+    else:
+        e = cp.Variable(n, nonneg=True)
+        # row i of C diag(e) is C_i * e: broadcast, not an n x n product (memory m n^2)
+        rows = cp.multiply(C, cp.reshape(e, (1, n), order="C"))
+        if not _solved(cp.Problem(cp.Maximize(cp.sum(cp.log(e))),
+                                  [cp.norm(rows, 2, axis=1) <= 1, e <= cap]),
+                       "ellipsoid", problems):
+            return {}
+        E = np.diag(e.value)
+        shape = "axis-aligned"
     axes = np.clip(np.linalg.eigvalsh(E), 0.0, None)
     return {
         "shape": shape,
@@ -133,4 +180,4 @@ def _ellipsoid(A, b, names, cap):
         "volume_radius": float(np.exp(np.mean(np.log(np.maximum(axes, 1e-300))))),
         "extent": {nm: float(np.linalg.norm(E[:, j])) for j, nm in enumerate(names)},
         "matrix": E.tolist(),
-    }, prob.status
+    }

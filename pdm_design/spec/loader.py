@@ -25,6 +25,8 @@ from ..scenes import ManipulatorsDesign, ManipulatorsScene, StairsDesign, Stairs
 from ..scenes.common import CONFIG
 from .model import (
     MANIPULATOR_MARGINS,
+    MAX_MANIPULATOR_STAGES,
+    MAX_OPTIMISED_BOUNCES,
     OBJECTIVES,
     STAIRS_MARGINS,
     Bounds,
@@ -140,6 +142,7 @@ def _parse(data: Any, source: str) -> Spec:
     scene = _scene(data, kind)
     design = _design(_table(data, "design", required=True), kind.design)
     verification = _verification(_table(data, "verification"), kind)
+    _check_stages(verification, kind, design)
     expect_table = _table(data, "expect")
     _check_fields(expect_table, Expectations, "expect")
     return Spec(
@@ -166,6 +169,26 @@ def _verification(table: dict, kind: _Kind) -> Verification:
     _check_unique(verification.offsets, "manipulator", "verification.offsets")
     _check_unique(verification.step_errors, "step", "verification.step_errors")
     return verification
+
+
+def _check_stages(verification: Verification, kind: _Kind, design: dict) -> None:
+    """What the number of stages allows: a run that fits in memory, an NLP IPOPT can solve,
+    and offsets or step errors on stages that are run."""
+    stages = verification.stages
+    if kind.scene is ManipulatorsScene and stages > MAX_MANIPULATOR_STAGES:
+        raise _Invalid("verification.stages", f"an integer <= {MAX_MANIPULATOR_STAGES} for a row "
+                       "of manipulators (the simulator keeps every stage's record)", str(stages))
+    if kind.scene is StairsScene and stages > MAX_OPTIMISED_BOUNCES and any(
+            isinstance(v, Bounds) for v in design.values()):
+        raise _Invalid("verification.stages", f"an integer <= {MAX_OPTIMISED_BOUNCES} when the "
+                       "design has free variables (the NLP has rows for every bounce; a fixed "
+                       "design may be simulated for up to 10 000 000)", str(stages))
+    for key, items, attribute in (("offsets", verification.offsets, "manipulator"),
+                                  ("step_errors", verification.step_errors, "step")):
+        for i, item in enumerate(items):
+            if getattr(item, attribute) > stages:
+                raise _Invalid(f"verification.{key}[{i}].{attribute}", f"an integer <= "
+                               f"verification.stages ({stages})", str(getattr(item, attribute)))
 
 
 def _accuracy(setting: Any) -> Accuracy:

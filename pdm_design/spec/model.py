@@ -13,6 +13,11 @@ from ..scenes import ManipulatorsDesign, Scene, StairsDesign
 from ..scenes.common import CONFIG, LARGEST, Number
 
 Count = Annotated[int, Strict(), Field(ge=1, le=10_000_000)]
+# A manipulator run keeps every stage's record and event (about 15 kB a stage); a stairs NLP has
+# rows for every bounce, and IPOPT needs ever more iterations for them (23 at 100 bounces, 327 at
+# 300, one start), so a stairs design with free variables is optimised over at most 200.
+MAX_MANIPULATOR_STAGES = 100_000
+MAX_OPTIMISED_BOUNCES = 200
 SampleCount = Annotated[int, Strict(), Field(ge=0, le=1_000_000)]
 # Weights beyond a million (or their ratios) only scale IPOPT's objective out of range.
 Weight = Annotated[float, Strict(), Field(ge=0, le=LARGEST)]

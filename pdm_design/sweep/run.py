@@ -14,6 +14,13 @@ Files in the output folder:
     optimum.png/.svg, tolerance.png/.svg   plots (written at the end)
     sweep.json    what the table was made from (spec digest, sweeps, columns): `resume`
                   refuses a folder made from another spec or other sweeps
+
+Order of a run: everything that can fail on the input (the spec, the sweeps, a folder that does
+not match on resume, the workers, the scheduler's address) is checked, and the workers started
+or the Dask scheduler reached, before anything in the folder changes: a run that fails before
+solving leaves the folder as it was. Only then is the folder started (a fresh table: sweep.json
+and a header-only table.csv, the old table.md and plots removed; on resume: table.csv rewritten
+with its whole, non-error rows).
 """
 
 from __future__ import annotations
@@ -24,7 +31,7 @@ import os
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future
 from concurrent.futures import wait as wait_futures
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -40,7 +47,7 @@ CSV_NAME, MARKDOWN_NAME, META_NAME = "table.csv", "table.md", "sweep.json"
 PLOT_NAMES = tuple(f"{n}.{e}" for n in ("optimum", "tolerance") for e in ("png", "svg"))
 DEFAULT_CHAIN = 4
 WARM_STATUSES = ("optimal", "evaluated", "acceptable")
-DASK_TIMEOUT = "20s"
+DASK_CONNECT_TIMEOUT = 5  # seconds to reach the Dask scheduler before --scheduler is refused
 
 
 @dataclass(frozen=True)
@@ -96,7 +103,8 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
         solve only the others (rows with status `error` are solved again).
     chain: grid points per warm-start chain. on_row: called after each row is written.
     Raises SpecError for bad input (the spec, a sweep, a grid value out of a parameter's domain,
-    a folder that does not match on resume).
+    a folder that does not match on resume, the workers, a scheduler that does not answer
+    within DASK_CONNECT_TIMEOUT seconds), always before the folder is changed.
     """
     source = str(spec_path)
     data = read_spec_data(spec_path)
@@ -114,33 +122,38 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
     folder = Path(out)
     meta = {"schema": SCHEMA, "spec": source, "spec_sha256": _digest(data),
             "sweeps": [a.to_json() for a in axes], "chain": chain, "columns": list(header)}
-    done = _prepare_folder(folder, meta, header, resume)
+    kept = _read_folder(folder, meta, header, resume)  # reads only
+    done = dict(kept or {})
     reused = len(done)
     free = [n for n, v in (data.get("design") or {}).items()
             if isinstance(v, dict) and ("design", n) not in paths]
 
     todo = [p for p in points if p.key not in done]
     all_chains = chains(points, chain)
+    # the last thing that can fail on the input (--workers, --scheduler): before the folder
+    # is touched, so that a failed start leaves it as it was
     executor = _executor(workers, scheduler, len(all_chains)) if todo else None
     csv_path = folder / CSV_NAME
-    with _closing(executor), open(csv_path, "a", encoding="utf-8", newline="") as stream, \
-            progress_bar(len(points), f"sweep {Path(source).name}", enabled=show_progress,
-                         completed=reused) as advance:
+    with _closing(executor):
+        _start_folder(folder, meta, header, kept)
+        with open(csv_path, "a", encoding="utf-8", newline="") as stream, \
+                progress_bar(len(points), f"sweep {Path(source).name}", enabled=show_progress,
+                             completed=reused) as advance:
 
-        def record(i: int, cells: dict[str, str]) -> None:
-            row = {**dict(zip(sweep_columns, points[i].key)), **cells}
-            stream.write(tables.csv_line([row.get(c, "") for c in header]))
-            stream.flush()
-            done[points[i].key] = row
-            advance(1)
-            if on_row is not None:
-                on_row(points[i], row)
+            def record(i: int, cells: dict[str, str]) -> None:
+                row = {**dict(zip(sweep_columns, points[i].key)), **cells}
+                stream.write(tables.csv_line([row.get(c, "") for c in header]))
+                stream.flush()
+                done[points[i].key] = row
+                advance(1)
+                if on_row is not None:
+                    on_row(points[i], row)
 
-        def task(i: int, warm: dict | None) -> PointTask:
-            return PointTask(data, labels[i], paths, points[i].values, warm)
+            def task(i: int, warm: dict | None) -> PointTask:
+                return PointTask(data, labels[i], paths, points[i].values, warm)
 
-        if todo:
-            _execute(executor, all_chains, points, done, free, task, record)
+            if todo:
+                _execute(executor, all_chains, points, done, free, task, record)
 
     rows = [done[p.key] for p in points]
     files = _write_outputs(folder, base, source, axes, header, rows, plots)
@@ -160,38 +173,48 @@ def _digest(data: dict) -> str:
 
 # --------------------------------------------------------------------------- the folder
 
-def _prepare_folder(folder: Path, meta: dict, header, resume: bool) -> dict:
-    """Rows already computed (by grid key) when resuming; a fresh table otherwise."""
+def _read_folder(folder: Path, meta: dict, header, resume: bool) -> dict | None:
+    """The rows (by grid key) kept from the table in `folder` when resuming it; None when the
+    run starts a fresh table. Checks the folder (SpecError if it does not fit) but changes
+    nothing in it: `_start_folder` does, once nothing else can fail on the input."""
     csv_path, meta_path = folder / CSV_NAME, folder / META_NAME
     if folder.exists() and not folder.is_dir():
         raise SpecError("command line", "--out", "a folder", f"'{folder}' is a file")
-    done: dict[tuple[str, ...], dict[str, str]] = {}
-    if resume and csv_path.exists():
-        try:
-            old = json.loads(meta_path.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            old = None
-        if not isinstance(old, dict) or any(old.get(k) != meta[k] for k in
-                                            ("spec_sha256", "sweeps", "chain", "columns")):
-            raise SpecError("command line", "--resume", f"a table in {folder} made from the "
-                            "same spec, sweeps and chain length", "one made from others (run "
-                            "without --resume to start it again)")
-        found, rows = tables.read_csv(csv_path.read_text(encoding="utf-8"))
-        if found != list(header):
-            raise SpecError("command line", "--resume", f"{csv_path} with this table's "
-                            "columns", "other columns")
-        width = len(meta["sweeps"])
-        for row in rows:
-            if row.get("status") != tables.ERROR:
-                done[tuple(row[c] for c in header[:width])] = row
-        # the file again, whole rows only (a cut-short last line is dropped), errors left out
-        write_atomic(csv_path, tables.csv_text(header, list(done.values())))
-        return done
+    if not (resume and csv_path.exists()):
+        return None
+    try:
+        old = json.loads(meta_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        old = None
+    if not isinstance(old, dict) or any(old.get(k) != meta[k] for k in
+                                        ("spec_sha256", "sweeps", "chain", "columns")):
+        raise SpecError("command line", "--resume", f"a table in {folder} made from the "
+                        "same spec, sweeps and chain length", "one made from others (run "
+                        "without --resume to start it again)")
+    found, rows = tables.read_csv(csv_path.read_text(encoding="utf-8"))
+    if found != list(header):
+        raise SpecError("command line", "--resume", f"{csv_path} with this table's "
+                        "columns", "other columns")
+    width = len(meta["sweeps"])
+    kept: dict[tuple[str, ...], dict[str, str]] = {}
+    for row in rows:
+        if row.get("status") != tables.ERROR:
+            kept[tuple(row[c] for c in header[:width])] = row
+    return kept
+
+
+def _start_folder(folder: Path, meta: dict, header, kept: dict | None) -> None:
+    """Ready the folder for the rows to be appended: on resume, table.csv again with the kept
+    rows only (a cut-short last line dropped, errors left out); for a fresh table, sweep.json
+    and a header-only table.csv, and the outputs of an earlier run removed."""
+    csv_path, meta_path = folder / CSV_NAME, folder / META_NAME
+    if kept is not None:
+        write_atomic(csv_path, tables.csv_text(header, list(kept.values())))
+        return
     write_atomic(meta_path, json.dumps(meta, indent=1) + "\n")
     write_atomic(csv_path, tables.csv_text(header, []))
     for name in (MARKDOWN_NAME, *PLOT_NAMES):
         (folder / name).unlink(missing_ok=True)  # stale outputs of an earlier run
-    return done
 
 
 def _write_outputs(folder, spec, source, axes, header, rows, plots) -> tuple[Path, ...]:
@@ -359,14 +382,12 @@ class _DaskExecutor:
         except ImportError:  # pragma: no cover - a dependency of the package
             raise SpecError("command line", "--scheduler", "Dask distributed installed "
                             "(pip install 'dask[distributed]')", "it is not") from None
+        self.client = _dask_client(distributed, address)
         try:
-            self.client = distributed.Client(address, timeout=DASK_TIMEOUT,
-                                             set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as error:
-            raise SpecError("command line", "--scheduler", "the address of a running Dask "
-                            "scheduler (e.g. tcp://127.0.0.1:8786)",
-                            f"'{address}' ({error})") from None
-        self.finished = distributed.as_completed(loop=self.client.loop)
+            self.finished = distributed.as_completed(loop=self.client.loop)
+        except BaseException:
+            self.close()
+            raise
 
     def submit(self, point_task):
         future = self.client.submit(solve_point, point_task, pure=False)
@@ -383,3 +404,34 @@ class _DaskExecutor:
     def close(self):
         self.client.close()
 
+
+def _dask_client(distributed, address: str):
+    """A Dask client connected to the scheduler at `address`, within DASK_CONNECT_TIMEOUT
+    seconds (Dask retries a refused connection until then); SpecError naming --scheduler if
+    the address is malformed or nothing answers there. A client whose start failed is closed
+    here, at once: left to the garbage collector, it would be closed at interpreter exit,
+    after its IO loop had stopped, wait twice the timeout and print a traceback."""
+    client = distributed.Client.__new__(distributed.Client)  # a reference, should __init__ fail
+    try:
+        client.__init__(address, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
+    except BaseException as error:
+        _dispose(client)
+        # ValueError/TypeError: a malformed address or an unknown or unconfigured protocol
+        # (tls without certificates, ucx not installed); OSError: nothing answered in time
+        if not isinstance(error, (OSError, TimeoutError, ValueError, TypeError, ImportError)):
+            raise
+        raise SpecError("command line", "--scheduler", "the address of a running Dask "
+                        "scheduler (e.g. tcp://127.0.0.1:8786) that answers within "
+                        f"{DASK_CONNECT_TIMEOUT} s", f"'{address}' ({error})") from None
+    return client
+
+
+def _dispose(client) -> None:
+    """Close a Dask client whose start failed and stop its IO loop thread (Client.close leaves
+    the loop running when the failed start had already closed the client)."""
+    with suppress(Exception):
+        client.close(timeout=DASK_CONNECT_TIMEOUT)
+    runner = getattr(client, "_loop_runner", None)
+    if runner is not None:
+        with suppress(Exception):
+            runner.stop()
