@@ -518,3 +518,14 @@ def test_many_offsets_leave_the_robust_box_and_say_why_the_linearised_sets_are_m
     result = optimize(spec, check_samples=0)
     assert result.status is Status.OPTIMAL and result.tolerance["dx"] > 0
     assert result.linearised.status.startswith("not computed: 261 offset coordinates")
+
+
+def test_a_row_of_tiny_manipulators_has_the_same_optimum_to_scale():
+    """Dimensional analysis: links of 40 microns tolerate 2e-5 times the offsets of 2 m links
+    (IPOPT's absolute tolerances on an objective in metres stopped it 2.2e-5 short there)."""
+    k = 2e-5
+    one, tiny = (optimize(_robust_manipulators(s), check_samples=0, linearise=False)
+                 for s in (1.0, k))
+    assert tiny.status is Status.OPTIMAL
+    assert tiny.tolerance["dx"] / k == pytest.approx(one.tolerance["dx"], rel=5e-6)
+    assert tiny.design["alpha"] == pytest.approx(one.design["alpha"], abs=1e-6)

@@ -329,3 +329,18 @@ def spec_key(spec) -> str:
     design = sorted((k, repr(v)) for k, v in spec.design.items())
     objective = sorted((k, float(v)) for k, v in spec.objective.items())
     return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages))
+
+
+# objective terms measured in metres (the others are pure numbers)
+LENGTH_TERMS = ("max_offset_tolerance", "min_drop")
+
+
+def objective_scale(weights, length):
+    """The size of the objective sum w * term: its weights' mean of the terms' sizes (`length`,
+    the scene's size - the largest rise the box allows, the longest link - for a length; 1 for a
+    ratio). The NLP divides its objective by it, so IPOPT's absolute tolerances are relative
+    ones at any size of the scene."""
+    sizes = {name: (length if name in LENGTH_TERMS else 1.0, abs(float(w)))
+             for name, w in weights.items() if float(w) != 0.0}
+    total = sum(w for _, w in sizes.values())
+    return sum(size * w for size, w in sizes.values()) / total if total > 0 else 1.0

@@ -55,7 +55,15 @@ import casadi as ca
 
 from ..physics import stairs as phys
 from ..scenes import StairsDesign
-from .common import MARGIN, MODEL, VALIDITY, Condition, SceneModel, design_inputs
+from .common import (
+    MARGIN,
+    MODEL,
+    VALIDITY,
+    Condition,
+    SceneModel,
+    design_inputs,
+    objective_scale,
+)
 
 DEFAULTS = {"rise": None, "tread": None, "landing_offset": None}
 # The ball keeps moving forward: vx >= this fraction of the first vertical impact speed
@@ -115,20 +123,6 @@ def build(spec):
         objective_scale=objective_scale(spec.objective, top or scene.initial.drop_height),
     )
     return model, bounds, m
-
-
-# objective terms measured in metres (the others are pure numbers)
-LENGTH_TERMS = ("max_offset_tolerance", "min_drop")
-
-
-def objective_scale(weights, length):
-    """The size of the objective sum w * term: its weights' mean of the terms' sizes (`length`,
-    the largest rise the box allows, for a length; 1 for a ratio). The NLP divides its objective
-    by it, so IPOPT's absolute tolerances are relative ones at any size of the scene."""
-    sizes = {name: (length if name in LENGTH_TERMS else 1.0, abs(float(w)))
-             for name, w in weights.items() if float(w) != 0.0}
-    total = sum(w for _, w in sizes.values())
-    return sum(size * w for size, w in sizes.values()) / total if total > 0 else 1.0
 
 
 def tolerance_bound(h0, values, bounds):
