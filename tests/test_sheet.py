@@ -145,3 +145,28 @@ def test_sheet_of_a_design_that_does_not_work_exits_1(tmp_path):
     code, _, err = run("sheet", spec, "--out", tmp_path / "out", "--no-tolerance")
     assert code == 1 and "infeasible" in err
     assert (tmp_path / "out" / "sheet.csv").exists()
+
+
+@pytest.fixture(scope="module")
+def saved_stairs_design():
+    code, out, _ = run("optimize", PROBLEMS / "stairs_design.toml", "--format", "json",
+                       "--no-verify")
+    assert code == 0
+    return json.loads(out)
+
+
+@pytest.mark.parametrize("where, value, key", [
+    ("design", -1.0, "design.launch_speed"),     # below the spec's bounds (0.5 to 3 m/s)
+    ("design", "x", "design.launch_speed"),
+    ("design", True, "design.launch_speed"),      # JSON true is not a number
+    ("tolerance", -1.0, "tolerance.rise"),
+])
+def test_an_edited_design_json_is_bad_input_naming_its_key(tmp_path, saved_stairs_design,
+                                                           where, value, key):
+    doc = json.loads(json.dumps(saved_stairs_design))
+    doc[where]["rise" if where == "tolerance" else "launch_speed"] = value
+    path = tmp_path / "design.json"
+    path.write_text(json.dumps(doc))
+    code, _, err = run("sheet", path, "--out", tmp_path / "out", "--no-drawing")
+    assert code == 2 and f"{path}: {key}: expected" in err
+    assert not (tmp_path / "out").exists()

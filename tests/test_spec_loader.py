@@ -401,6 +401,18 @@ def test_directory(tmp_path):
     assert load_error(tmp_path).found == "a directory"
 
 
+def test_named_pipe_is_refused_not_waited_on(tmp_path):
+    import os
+
+    os.mkfifo(tmp_path / "spec.toml")  # opening it would wait for a writer that never comes
+    assert load_error(tmp_path / "spec.toml").found == "a named pipe"
+
+
+def test_an_integer_too_long_to_read_is_named_as_such(tmp_path):
+    error = load_error(write(tmp_path, "[scene]\ngravity = 1" + "0" * 5000 + "\n"))
+    assert (error.expected, error.found) == ("valid TOML", "an integer of more than 4300 digits")
+
+
 def test_empty_file(tmp_path):
     error = load_error(write(tmp_path, ""))
     assert (error.key, error.found) == ("scene", "an empty spec")

@@ -75,7 +75,7 @@ def sheet_for(path: str | Path, *, count: int | None = None,
         outcome = design(spec)
         values = dict(outcome.analysis.design)
         status, tol = outcome.status.value, outcome.tolerance
-    fixed = fixed_spec(spec, values)
+    fixed = fixed_spec(spec, values, source=str(path))
     tol, note = _tolerance(fixed, tol, tolerance)
     count = spec.verification.stages if count is None else count
     try:
@@ -84,19 +84,28 @@ def sheet_for(path: str | Path, *, count: int | None = None,
         raise PdmError(f"{path}: no build sheet: {exc}") from None
 
 
-def fixed_spec(spec: Spec, values: dict[str, float | None]) -> Spec:
-    """The spec with each free variable fixed at `values` (the design to build)."""
+def fixed_spec(spec: Spec, values: dict, source: str | None = None) -> Spec:
+    """The spec with each free variable fixed at `values` (the design to build; a saved JSON
+    document's, named `source` in errors): a number within the spec's bounds for each."""
+    import pydantic
+
+    source = source or spec.source
     design = {}
     for name, value in spec.design.items():
         if isinstance(value, Bounds):
             found = values.get(name)
-            if found is None or not math.isfinite(float(found)):
-                raise SpecError(spec.source, f"design.{name}", "a value for this free variable "
-                                "in the design", "none")
+            if not _finite(found) or not value.min <= found <= value.max:
+                raise SpecError(source, f"design.{name}", f"a number from {value.min:g} to "
+                                f"{value.max:g} (the spec's bounds)", repr(found))
             design[name] = float(found)
         else:
             design[name] = value
-    spec.design_class(**design)  # validates the point
+    try:
+        spec.design_class(**design)  # validates the point as a whole
+    except pydantic.ValidationError as exc:
+        error = exc.errors()[0]
+        raise SpecError(source, "design", "a design the scene can take",
+                        error["msg"]) from None
     return dataclasses.replace(spec, design=design)
 
 
@@ -127,6 +136,9 @@ def _from_json(path: Path):
     if not isinstance(values, dict):
         raise SpecError(source, "design", "a table of design values", repr(values))
     tol = doc.get("tolerance")
+    for axis, value in (tol.items() if isinstance(tol, dict) else ()):
+        if axis in TOLERANCE_AXES[spec.kind] and not (_finite(value) and value >= 0):
+            raise SpecError(source, f"tolerance.{axis}", "a number >= 0 (m)", repr(value))
     return spec, values, str(doc.get("status", "")), tol if isinstance(tol, dict) else None
 
 

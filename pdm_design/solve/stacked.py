@@ -21,8 +21,8 @@ import numpy as np
 
 from .ipopt import Solve, SolverOptions, map_status
 
-# Stacked runs of 8 starts of the shipped problems took 16-35 iterations (one start alone: a
-# median of 14-18); a run needing many more has a copy in trouble, best solved on its own.
+# Stacked runs of 8 starts of the shipped problems take 16-28 iterations (one start alone: a
+# median of 14-18; results/bench_optimize.md); a run needing many more has a copy in trouble.
 MAX_ITER = 100
 # Copies per stacked run. Per start, a run of problems/manipulators_robust.toml cost about the
 # same from 8 to 64 copies (1.4-1.8 ms), but one of problems/stairs_design.toml cost 4x more at

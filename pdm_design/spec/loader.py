@@ -11,6 +11,7 @@ import dataclasses
 import math
 import re
 import reprlib
+import stat
 import tomllib
 import typing
 from pathlib import Path
@@ -94,11 +95,15 @@ def read_spec_data(path: str | Path) -> dict:
         raise SpecError(source, "", "TOML nested at most a few hundred levels deep",
                         "deeper nesting") from None
     except ValueError as exc:  # e.g. an integer with thousands of digits
-        raise SpecError(source, "", "valid TOML", str(exc)) from None
+        found = ("an integer of more than 4300 digits" if "int_max_str_digits" in str(exc)
+                 else str(exc))  # (Python's advice on that limit is for programmers)
+        raise SpecError(source, "", "valid TOML", found) from None
 
 
 def _read_text(path: Path, source: str) -> str:
     try:
+        if stat.S_ISFIFO(path.stat().st_mode):  # opening one waits for a writer, maybe forever
+            raise SpecError(source, "", "a spec file", "a named pipe")
         with path.open("rb") as stream:
             raw = stream.read(MAX_FILE_BYTES + 1)
     except FileNotFoundError:
