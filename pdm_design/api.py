@@ -40,7 +40,7 @@ def evaluate(spec: Spec, *, verify: bool = True,
         raise ValueError("evaluate() needs a fixed design; use design() for free variables")
     accuracy = resolve_accuracy(accuracy or spec.verification.accuracy)
     point = spec.design_at()
-    analysis = analyse(spec.scene, point)
+    analysis = analyse(spec.scene, point, spec.verification.stages)
     violations = tuple(analysis.problems) + tuple(analysis.violations(spec.requirements))
     status = Status.EVALUATED if not violations else Status.INFEASIBLE
     verification = None
@@ -86,7 +86,7 @@ def optimize(spec: Spec, *, verify: bool = True,
     point = spec.design_at({name: min(max(result.design[name], spec.design[name].min),
                                       spec.design[name].max)
                             for name in spec.free_variables})
-    analysis = analyse(spec.scene, point)
+    analysis = analyse(spec.scene, point, spec.verification.stages)
     violations = tuple(v.text for v in result.violations) + tuple(analysis.problems)
     verification = None
     if verify and result.status.is_success:

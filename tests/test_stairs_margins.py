@@ -287,3 +287,39 @@ def test_a_flat_floor_is_periodic_only_without_loss():
     lossy = analyse(damped.scene, damped.design_at())
     assert lossy.periodic["impact_speed"] is None
     assert any("no periodic orbit" in p for p in lossy.problems)
+
+
+@pytest.mark.parametrize("rise", [0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.36, 0.4, 0.5, 0.6, 0.8])
+def test_the_approach_from_the_drop_height_is_judged_as_the_simulator_runs_it(rise):
+    """A given rise other than (1 - eps^2) h0 = 0.36 m starts the ball off its periodic orbit:
+    too low a rise and the first flights are too long (the ball skips a step), too high and
+    they fall short. The analysis follows those bounces in closed form; it must say the design
+    works exactly when the event simulator completes its bounces, and name the bounce that
+    skips a step as the simulator does."""
+    spec = parse_spec({"scene": {"kind": "stairs", "ball": {"radius": 0.0}},
+                       "initial": {"drop_height": H0},
+                       "design": {"restitution": 0.8, "launch_speed": 2.0, "rise": rise},
+                       "verification": {"stages": 12}})
+    analysis = analyse(spec.scene, spec.design_at(), spec.verification.stages)
+    run = simulate_stairs(spec.scene, spec.design_at(), stages=12).outcome
+    works = not analysis.problems and min(analysis.margins.values()) >= 0
+    assert works == run.completed
+    skips = [p for p in analysis.problems if "skips a step" in p]
+    if skips:
+        bounce = int(skips[0].split()[1])  # "bounce n of the approach ..."
+        assert (run.failure.kind, run.stages_passed) == ("skipped_step", bounce - 1)
+
+
+def test_a_tread_off_its_orbit_drifts_to_the_bounce_the_simulator_skips_at():
+    """A tread 1e-4 short of the periodic one: every bounce lands 1.6e-4 m further on, and after
+    about 5000 the ball passes a nose. The analysis follows the converged bounces as a straight
+    run; the simulator runs them one by one."""
+    data = {"scene": {"kind": "stairs", "ball": {"radius": 0.0}}, "initial": {"drop_height": H0},
+            "design": {"restitution": 0.8, "launch_speed": 2.0}, "verification": {"stages": 8000}}
+    periodic = parse_spec(data)
+    orbit = analyse(periodic.scene, periodic.design_at()).geometry["tread"]
+    data["design"]["tread"] = orbit * (1 - 1e-4)
+    spec = parse_spec(data)
+    (skip,) = analyse(spec.scene, spec.design_at(), spec.verification.stages).problems
+    run = simulate_stairs(spec.scene, spec.design_at(), stages=8000).outcome
+    assert (run.failure.kind, run.stages_passed) == ("skipped_step", int(skip.split()[1]) - 1)

@@ -3,13 +3,19 @@
 from __future__ import annotations
 
 import math
+import sys
+from dataclasses import dataclass
 
 from ..physics import stairs as phys
 from ..scenes import StairsDesign, StairsScene
 from .result import Analysis, margin
 
 
-def analyse_stairs(scene: StairsScene, design: StairsDesign) -> Analysis:
+def analyse_stairs(scene: StairsScene, design: StairsDesign,
+                   stages: int | None = None) -> Analysis:
+    """stages: also follow the approach from the drop height for that many bounces (a given rise
+    other than (1 - eps^2) h0 starts the ball off its periodic orbit): the clearance margins are
+    then the smallest over the periodic flight and those bounces."""
     g, h0 = scene.gravity, scene.initial.drop_height
     eps, v0 = design.restitution, design.launch_speed
     ball = scene.ball
@@ -62,16 +68,22 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign) -> Analysis:
         launch = phys.launch_clearances(v0, g, ball.radius, h0 - rise,
                                         v0 * vy_first / g - landing)
         margins["first_nose_clearance"] = float(min(launch) / tread)
+        nearest_riser = landing
+        if landing >= tread:
+            problems.append(f"landing_offset {landing:g} m is not on the tread (tread {tread:g} m)")
         if vx > 0.0:
             clearance = nose_clearance(vx, eps * vy_periodic, g, ball.radius, tread, landing)
+            if stages and landing < tread:
+                path = approach(g, eps, rise, vx, ball.radius, tread, landing, vy_first, stages)
+                clearance, nearest_riser = min(clearance, path.nose), min(landing, path.nearest)
+                if path.overshoot:
+                    problems.append(path.overshoot)
             geometry["nose_clearance"] = clearance
             margins["nose_clearance"] = float(clearance / tread)
         else:
             problems.append(f"the ball moves at {vx:g} m/s along the stairs after the first "
                             "impact: it does not go down them")
-        margins["riser_clearance"] = float((landing - ball.radius) / tread)
-        if landing >= tread:
-            problems.append(f"landing_offset {landing:g} m is not on the tread (tread {tread:g} m)")
+        margins["riser_clearance"] = float((nearest_riser - ball.radius) / tread)
 
     design_values = {
         "restitution": eps, "launch_speed": v0, "rise": rise, "tread": geometry["tread"],
@@ -102,6 +114,62 @@ def _periodic_vertical_speed(g, h0, eps, rise, derived, problems):
         return phys.impact_speed_vertical(g, h0)
     problems.append("restitution 1 with a rise > 0: every bounce gains energy, no periodic orbit")
     return None
+
+
+@dataclass(frozen=True)
+class Approach:
+    """The first bounces from the drop height: the smallest nose clearance of their flights (m),
+    the landing nearest the riser (m from the back of its tread), and, if a bounce lands beyond
+    the nose of its tread (the ball skips a step), that in words."""
+
+    nose: float
+    nearest: float
+    overshoot: str | None
+
+
+def approach(g, eps, rise, vx, radius, tread, landing, v1, stages, *, explicit=200_000):
+    """Bounce n lands L_n from the back of tread n at vertical speed v_n (L_1 = landing,
+    v_1 = sqrt(2 g h0)); it leaves at eps v_n, flies T_n = (eps v_n + v_{n+1}) / g with
+    v_{n+1}^2 = (eps v_n)^2 + 2 g rise, and L_{n+1} = L_n + vx T_n - tread. Once v_n has
+    converged (geometrically, by eps^2 a bounce) L drifts by a constant step, and the bounces
+    left are judged at the two ends of that straight run. Flights 1..stages-1 and landings
+    1..stages, as the simulator's `stages` bounces."""
+    v, L, n = v1, landing, 1
+    nose, nearest = math.inf, math.inf
+
+    def lands(n, L):
+        if L >= tread:
+            return (f"bounce {n} of the approach from the drop height lands {L:.4g} m from the "
+                    f"back of its tread, beyond its nose (tread {tread:.4g} m): the ball skips "
+                    "a step before it settles on the periodic orbit")
+        return None
+
+    while True:
+        nearest = min(nearest, L)
+        if (miss := lands(n, L)) or n >= stages:
+            return Approach(nose, nearest, miss)
+        up = eps * v
+        nose = min(nose, nose_clearance(vx, up, g, radius, tread, L))
+        v_next = math.sqrt(up * up + 2.0 * g * rise)
+        step = vx * (up + v_next) / g - tread
+        converged = abs(v_next - v) <= 4 * sys.float_info.epsilon * v
+        v, L, n = v_next, L + step, n + 1
+        if converged or n > explicit:  # the rest drift by `step` a bounce: a straight run
+            # to bounce `stages`, or to the first that lands beyond the nose or at the riser
+            stop = stages
+            if step > 0.0:
+                stop = min(stop, n + max(math.ceil((tread - L) / step), 0))
+            elif step < 0.0:
+                stop = min(stop, n + max(math.ceil((L - radius) / -step), 0))
+            last = L + (stop - n) * step
+            nearest = min(nearest, L, last)
+            if miss := lands(n, L) or lands(stop, last):
+                return Approach(nose, nearest, miss)
+            if stop - 1 >= n:  # flights n .. stop - 1, judged at their two ends
+                up = eps * v
+                nose = min(nose, nose_clearance(vx, up, g, radius, tread, L),
+                           nose_clearance(vx, up, g, radius, tread, L + (stop - 1 - n) * step))
+            return Approach(nose, nearest, None)
 
 
 def nose_clearance(vx, vy_up, g, radius, tread, landing):

@@ -189,7 +189,7 @@ def make_sheet(spec: Spec, status: str, tol: dict | None, note: str, count: int,
 
     if count < 1:
         raise SpecError("command line", "--count", "an integer >= 1", str(count))
-    analysis = analyse(spec.scene, spec.design_at())
+    analysis = analyse(spec.scene, spec.design_at(), spec.verification.stages)
     maker = _manipulators if spec.kind == "manipulators" else _stairs
     summary, items = maker(spec, analysis, tol, count)
     return BuildSheet(spec=spec, status=status, design=dict(analysis.design),

@@ -24,7 +24,7 @@ def analyse(spec, design: dict[str, float]):
     values = {k: design[k] for k in cls.VARIABLES if k in design and design[k] is not None}
     point = cls(**values)
     if spec.kind == "stairs":
-        return analyse_stairs(spec.scene, point)
+        return analyse_stairs(spec.scene, point, spec.verification.stages)
     return analyse_manipulators(spec.scene, point)
 
 
