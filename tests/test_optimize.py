@@ -529,3 +529,19 @@ def test_a_row_of_tiny_manipulators_has_the_same_optimum_to_scale():
     assert tiny.status is Status.OPTIMAL
     assert tiny.tolerance["dx"] / k == pytest.approx(one.tolerance["dx"], rel=5e-6)
     assert tiny.design["alpha"] == pytest.approx(one.design["alpha"], abs=1e-6)
+
+
+def test_bounds_spanning_decades_are_searched_in_log_scale():
+    """A link length free in [1e-6, 1e6] m with no guess: drawn evenly, 7 of 8 starts fell above
+    1e5 m, where the object starts below the first palm, and every start failed."""
+    import tomllib
+
+    from pdm_design.solve.ipopt import start_designs
+    from pdm_design.spec import parse_spec
+
+    starts = start_designs(["link_length"], [1e-6], [1e6], {"link_length": 1.0}, 8)
+    exponents = sorted(math.log10(s["link_length"]) for s in starts[1:])
+    assert exponents[0] < -3 and exponents[-1] > 3 and -3 < exponents[3] < 3
+    data = tomllib.loads((PROBLEMS / "manipulators_robust.toml").read_text())
+    data["design"]["link_length"] = {"min": 1e-6, "max": 1e6}
+    assert optimize(parse_spec(data), check_samples=0).status is Status.OPTIMAL
