@@ -74,8 +74,13 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign,
         if vx > 0.0:
             clearance = nose_clearance(vx, eps * vy_periodic, g, ball.radius, tread, landing)
             if stages and landing < tread:
+                # the flights the ball flies: off its orbit (a rise other than (1 - eps^2) h0)
+                # it settles at another landing point and never flies the periodic flight
+                # from landing_offset, so that one is not judged (it failed sound designs)
                 path = approach(g, eps, rise, vx, ball.radius, tread, landing, vy_first, stages)
-                clearance, nearest_riser = min(clearance, path.nose), min(landing, path.nearest)
+                nearest_riser = path.nearest
+                if math.isfinite(path.nose):  # a single bounce flies no flight after it
+                    clearance = path.nose
                 if path.overshoot:
                     problems.append(path.overshoot)
             geometry["nose_clearance"] = clearance

@@ -42,6 +42,14 @@ OBJECTIVE_SENSE = {  # +1: larger is better, -1: smaller is better
 }
 
 MARGIN, VALIDITY, MODEL = "margin", "validity", "model"
+# Every physical inequality row asks for a little more than its requirement: `backoff` (the last
+# NLP parameter) in the normalised row's units. IPOPT meets a row only to its tolerance (and
+# relaxes it by bound_relax_factor): optima on a limit came back 1e-8 past it, and the simulator,
+# run at the claimed box's corners and at the nominal design, failed 71 of 376 optimal designs
+# of 900 random specs on such ties (lift-off, tip, a stall at the top, a point ball on a nose).
+# The solver sets it to BACKOFF_FACTOR times its tolerance (1e-6 at the default 1e-8).
+BACKOFF_FACTOR = 100.0
+DEFAULT_BACKOFF = 1e-6
 
 
 @dataclass(frozen=True)
@@ -127,7 +135,7 @@ class Formulation:
     lbg: np.ndarray
     ubg: np.ndarray
     p_names: tuple[str, ...]  # requirement keys
-    p_default: np.ndarray  # the spec's required margins
+    p_default: np.ndarray  # the spec's required margins, then DEFAULT_BACKOFF
     conditions: tuple[ConditionInfo, ...]
     objective_names: tuple[str, ...]
     weights: dict[str, float]
@@ -147,11 +155,15 @@ class Formulation:
     def n_design(self) -> int:
         return len(self.design_names)
 
-    def parameters(self, requirements: dict[str, float] | None = None) -> np.ndarray:
-        """The parameter vector p (required margins by key) for a requirements mapping."""
+    def parameters(self, requirements: dict[str, float] | None = None, *,
+                   backoff: float = DEFAULT_BACKOFF) -> np.ndarray:
+        """The parameter vector p: the required margins by key (the spec's by default), then
+        the rows' backoff (see DEFAULT_BACKOFF)."""
         if requirements is None:
-            return self.p_default.copy()
-        return np.array([float(requirements.get(n, 0.0)) for n in self.p_names])
+            required = self.p_default[: len(self.p_names)]
+        else:
+            required = [float(requirements.get(n, 0.0)) for n in self.p_names]
+        return np.append(np.asarray(required, dtype=float), backoff)
 
     def requirement(self, info: ConditionInfo, p) -> float:
         """The required margin of one condition under parameters p (0 for non-margin kinds)."""
@@ -249,8 +261,9 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
     ubx = [bounds[n][1] for n in design_names] + [a[3] for a in model.aux]
 
     p_names = tuple(sorted({k for c in model.conditions if c.kind == MARGIN for k in c.keys}))
-    p = ca.SX.sym("required", len(p_names))
+    p = ca.SX.sym("required", len(p_names) + 1)  # the last: the rows' backoff
     p_of = {n: p[i] for i, n in enumerate(p_names)}
+    backoff = p[len(p_names)]
     t = model.margin_symbol if model.margin_symbol is not None else 0.0
 
     # Row normalisers: |scale| of each condition at the spec's guess (constants).
@@ -269,7 +282,9 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
             expr = c.slack - (need + (t if c.epigraph else 0.0)) * c.scale
         else:
             expr = c.slack
-        rows.append(expr / norms[i])
+        physical = not c.equality and c.kind != MODEL
+        # in the normalised row's units, those IPOPT's tolerances are measured in
+        rows.append(expr / norms[i] - (backoff if physical else 0.0))
         lbg.append(0.0)
         ubg.append(0.0 if c.equality else math.inf)
         infos.append(ConditionInfo(i, c.name, c.keys, c.where, c.kind, c.equality))
@@ -292,7 +307,8 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
     n_d = len(design_names)
     tol_index = aux_names.index("tolerance") + n_d if "tolerance" in aux_names else None
     m_index = aux_names.index("min_margin") + n_d if "min_margin" in aux_names else None
-    p_default = np.array([float(spec.requirements.get(n, 0.0)) for n in p_names])
+    p_default = np.array([float(spec.requirements.get(n, 0.0)) for n in p_names]
+                         + [DEFAULT_BACKOFF])
     fixed = {n: v for n, v in _fixed_values(spec).items()}
     return Formulation(
         kind=model.kind, key=key,

@@ -55,6 +55,7 @@ from .common import (
 DEFAULTS = {"first_pivot_x": 0.0, "first_pivot_y": 0.0}
 START_CLEARANCE = 1e-3  # (x link length): the object starts at least this far above palm 1
 TOLERANCE_CAP = 10.0  # upper bound of the box half-width variable, in link lengths
+ACOS_EDGE = 1e-15  # acos is taken of at most 1 - this: a finite slope
 
 
 def build(spec):
@@ -77,7 +78,7 @@ def build(spec):
            ("landing_speed_lo", u_lo, 0.0, math.inf),
            ("landing_speed_hi", u_hi, 0.0, math.inf)]
     if robust:
-        aux.append(("tolerance", tau, 0.0, TOLERANCE_CAP * l_max))
+        aux.append(("tolerance", tau, 0.0, tolerance_bound(values, bounds, l_max)))
     if epigraph:
         aux.append(("min_margin", t, 0.0, 1.0))
 
@@ -106,6 +107,17 @@ def build(spec):
         objective_scale=objective_scale(spec.objective, min(l_max, 1.0)),
     )
     return model, bounds, m
+
+
+def tolerance_bound(values, bounds, l_max) -> float:
+    """The tolerance variable's upper bound: TOLERANCE_CAP link lengths, or 50 times the largest
+    box the design box allows if that is less (the palm_clearance row asks 2 tol <= l (cos a -
+    cos b) <= l (1 - cos b)). IPOPT pushes tol off 0 by a hundredth of this bound (at most 1 cm):
+    that stays within half the handover drop, where the robust rows are numbers; with 10 link
+    lengths it was 1 cm above a 9.6 mm drop, and every start failed. (A bound as tight as the
+    drop itself cost the shipped problems 40 % more iterations.)"""
+    b_max = bounds["beta"][1] if "beta" in bounds else values["beta"]
+    return min(TOLERANCE_CAP, 50.0 * (1.0 - math.cos(b_max)) / 2.0) * l_max
 
 
 class _Model:
@@ -199,7 +211,12 @@ class _Model:
 
         if robust:
             cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
-            th_hi, th_lo = ca.acos(cm), ca.acos(cp)
+            # a number wherever IPOPT may step: its push of tau off 0 (1 cm, say) can take
+            # cos b + 2 tau / l past 1 where the handover drop l (1 - cos b) / 2 is smaller
+            # (every start Invalid_Number_Detected); the palm_clearance row keeps the feasible
+            # set inside, so the clip changes no answer
+            edge = 1.0 - ACOS_EDGE
+            th_hi, th_lo = ca.acos(ca.fmax(cm, -edge)), ca.acos(ca.fmin(cp, edge))
             thetas = [("smallest handover angle", th_lo), ("largest handover angle", th_hi)]
             Qs = [("palm 1 high", self.fall_speed(tau)), ("palm 1 low", self.fall_speed(-tau))]
         else:

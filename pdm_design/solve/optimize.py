@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from ..formulation import formulate
-from ..formulation.common import MODEL, OBJECTIVE_SENSE
+from ..formulation.common import BACKOFF_FACTOR, MODEL, OBJECTIVE_SENSE
 from ..status import Status
 from . import check, elastic
 from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
@@ -50,7 +50,7 @@ def optimize(
     form = formulate(spec)
     build_time = 0.0 if was_cached else form.build_time
     reqs = dict(spec.requirements if requirements is None else requirements)
-    p = form.parameters(reqs)
+    p = form.parameters(reqs, backoff=BACKOFF_FACTOR * max(tol, bound_relax_factor))
     options = SolverOptions(max_iter=max_iter, tol=tol, bound_relax_factor=bound_relax_factor)
     solver = solver_for(form.key, form.nlp, options)
 
