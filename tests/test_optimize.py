@@ -75,19 +75,21 @@ def test_min_drop_with_beta_free_is_where_the_over_the_top_margin_binds():
     b_star = _min_drop_beta(a, l, r=r)
     result = optimize(beta_spec({"min_drop": 1.0}, {"over_the_top": r}, 1.0, 0.8))
     assert result.status is Status.OPTIMAL
-    assert result.design["beta"] == pytest.approx(b_star, abs=1e-6)
+    # within the rows' backoff (100 times IPOPT's tol 1e-8: formulation/common.py), on its
+    # safe side: a larger beta, a larger drop
+    assert 0.0 <= result.design["beta"] - b_star <= 1e-5
     assert result.objectives["min_drop"] == pytest.approx(l * (math.cos(a) - math.cos(b_star)),
-                                                          abs=1e-6)
+                                                          abs=1e-5)
 
 
-def test_zero_bound_relaxation_puts_the_optimum_on_its_constraint():
-    # Same closed-form optimum as above; IPOPT's default bound relaxation (1e-8) leaves the
-    # answer ~1e-8 off it, the precise preset's bound_relax_factor = 0 does not.
+def test_zero_bound_relaxation_puts_the_optimum_next_to_its_constraint():
+    # Same closed-form optimum as above; the precise preset's tol 1e-11 and bound_relax_factor 0
+    # keep the answer within the rows' backoff of it (100 tol: 1e-9 of a row), on its safe side.
     b_star = _min_drop_beta(r=0.5)
     result = optimize(beta_spec({"min_drop": 1.0}, {"over_the_top": 0.5}, 1.0, 0.8),
                       tol=1e-11, bound_relax_factor=0.0)
     assert result.status is Status.OPTIMAL
-    assert result.design["beta"] == pytest.approx(b_star, abs=1e-9)
+    assert 0.0 <= result.design["beta"] - b_star <= 1e-8
 
 
 # -- honest status ----------------------------------------------------------------------------

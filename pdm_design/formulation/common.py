@@ -63,6 +63,9 @@ class Condition:
     kind: str = MARGIN
     equality: bool = False
     epigraph: bool = True  # counts in max_min_margin
+    # a model inequality whose slack has this unit keeps the backoff in it (a physical row keeps
+    # it in the normalised row's units); None: a model row without backoff
+    backoff_unit: object = None
 
     @property
     def name(self) -> str:
@@ -282,9 +285,14 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
             expr = c.slack - (need + (t if c.epigraph else 0.0)) * c.scale
         else:
             expr = c.slack
-        physical = not c.equality and c.kind != MODEL
         # in the normalised row's units, those IPOPT's tolerances are measured in
-        rows.append(expr / norms[i] - (backoff if physical else 0.0))
+        if c.equality:
+            rows.append(expr / norms[i])
+        elif c.kind != MODEL:
+            rows.append(expr / norms[i] - backoff)
+        else:
+            unit = 0.0 if c.backoff_unit is None else ca.fabs(c.backoff_unit)
+            rows.append((expr - backoff * unit) / norms[i])
         lbg.append(0.0)
         ubg.append(0.0 if c.equality else math.inf)
         infos.append(ConditionInfo(i, c.name, c.keys, c.where, c.kind, c.equality))
