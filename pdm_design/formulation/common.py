@@ -45,8 +45,9 @@ MARGIN, VALIDITY, MODEL = "margin", "validity", "model"
 # Every physical inequality row asks for a little more than its requirement: `backoff` (the last
 # NLP parameter) in the normalised row's units. IPOPT meets a row only to its tolerance (and
 # relaxes it by bound_relax_factor): optima on a limit came back 1e-8 past it, and the simulator,
-# run at the claimed box's corners and at the nominal design, failed 71 of 376 optimal designs
-# of 900 random specs on such ties (lift-off, tip, a stall at the top, a point ball on a nose).
+# run at the claimed box's corners and at the nominal design, failed 71 of 386 answers to 900
+# random manipulators specs on such ties (lift-off, tip, a stall at the top), and 36 stairs
+# boxes of a point ball on a nose.
 # The solver sets it to BACKOFF_FACTOR times its tolerance (1e-6 at the default 1e-8).
 BACKOFF_FACTOR = 100.0
 DEFAULT_BACKOFF = 1e-6
