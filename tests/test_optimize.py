@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -19,8 +20,9 @@ from pdm_design.analysis.stairs import nose_clearance
 from pdm_design.formulation import formulate
 from pdm_design.scenes import Body, ManipulatorsInitial, ManipulatorsScene, Palm
 from pdm_design.solve import map_status, optimize
+from pdm_design.solve.ipopt import start_designs
 from pdm_design.solve.tolerance import linear_safe_set
-from pdm_design.spec import load_spec
+from pdm_design.spec import load_spec, parse_spec
 from pdm_design.spec.model import Bounds, Spec
 from pdm_design.status import Status
 
@@ -470,8 +472,6 @@ def test_an_optimum_on_a_bound_is_reported_within_it():
     """Restitution free up to 1: the margins grow as the bounces lose less, so the optimum sits
     on the bound, where the rise (1 - eps^2) h0 is 0. IPOPT relaxes bounds by 1e-8; the design
     it reports must not be the restitution 1 + 7e-9 and rise -1e-8 that the re-check refuses."""
-    from pdm_design.spec import parse_spec
-
     spec = parse_spec({
         "scene": {"kind": "stairs", "ball": {"radius": 0.05}},
         "initial": {"drop_height": 1.0},
@@ -487,10 +487,6 @@ def test_an_optimum_on_a_bound_is_reported_within_it():
 def _robust_manipulators(scale: float = 1.0, stages: int = 6):
     """problems/manipulators_robust.toml with every length times `scale` (speeds times its
     square root, so that every angle and every ratio stays the same)."""
-    import tomllib
-
-    from pdm_design.spec import parse_spec
-
     data = tomllib.loads((PROBLEMS / "manipulators_robust.toml").read_text())
     body, palm, initial = data["scene"]["body"], data["scene"]["palm"], data["initial"]
     for table, keys in ((body, ("width", "height")), (palm, ("width", "thickness"))):
@@ -536,11 +532,6 @@ def test_a_row_of_tiny_manipulators_has_the_same_optimum_to_scale():
 def test_bounds_spanning_decades_are_searched_in_log_scale():
     """A link length free in [1e-6, 1e6] m with no guess: drawn evenly, 7 of 8 starts fell above
     1e5 m, where the object starts below the first palm, and every start failed."""
-    import tomllib
-
-    from pdm_design.solve.ipopt import start_designs
-    from pdm_design.spec import parse_spec
-
     starts = start_designs(["link_length"], [1e-6], [1e6], {"link_length": 1.0}, 8)
     exponents = sorted(math.log10(s["link_length"]) for s in starts[1:])
     assert exponents[0] < -3 and exponents[-1] > 3 and -3 < exponents[3] < 3
