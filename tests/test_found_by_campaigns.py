@@ -141,10 +141,98 @@ stages = 20
 """
 
 
+# Palms wider than three pitches and a front stop at 0.60 rad: the object, carried by palm 3,
+# came down on palm 1 parked at its front stop (the NLP had no row for parked palms).
+ONTO_A_PARKED_PALM = """
+[scene]
+kind = "manipulators"
+gravity = 9.81
+
+[scene.body]
+mass = 13.9657
+width = 0.2313
+height = 0.1842
+
+[scene.palm]
+width = 1.1054
+thickness = 0.0174
+friction = 0.649
+restitution = 0.0
+front_stop = 0.60156
+
+[initial]
+position = [-0.37023, 0.79996]
+velocity = [1.56568, 0.0]
+
+[design]
+alpha = 0.1204
+beta = { min = 0.187, max = 0.4918 }
+link_length = 0.6767
+mass_ratio = { min = 1.0, max = 5.617 }
+
+[objective]
+max_offset_tolerance = 1.0
+
+[requirements]
+slip_impact = -0.018
+over_the_top = 0.132
+
+[verification]
+stages = 5
+samples = 19
+accuracy = "fast"
+"""
+
+# The same with the box: at the alternating (-1, -1) corners the landing offset drifts 0.22 m
+# back over 18 stages, and the object on palm 18 came down on palm 14, parked. The parked-palm
+# rows must take the landing offset's whole range (the smallest of its lower bounds).
+ONTO_A_PARKED_PALM_IN_THE_BOX = """
+[scene]
+kind = "manipulators"
+gravity = 9.81
+
+[scene.body]
+mass = 24.4429
+width = 0.651
+height = 1.4033
+
+[scene.palm]
+width = 2.9838
+thickness = 0.0338
+friction = 0.87
+front_stop = 0.35631
+
+[initial]
+position = [-0.559, 1.51392]
+velocity = [2.53601, 0.15957]
+
+[design]
+alpha = { min = 0.1032, max = 0.6638, initial = 0.4923 }
+beta = { min = 0.1613, max = 0.2739 }
+link_length = 2.062
+mass_ratio = 15.642
+first_pivot_x = 1.462
+first_pivot_y = -1.7639
+
+[objective]
+max_offset_tolerance = 1.0
+
+[requirements]
+landing = 0.254
+slip_carry = 0.25
+
+[verification]
+stages = 19
+samples = 24
+"""
+
+
 @pytest.mark.parametrize("text", [LIFT_OFF_TIE, SMALL_DROP, STALL_AT_THE_TOP,
-                                  POINT_BALL_ON_A_NOSE, FREE_RISE],
+                                  POINT_BALL_ON_A_NOSE, FREE_RISE, ONTO_A_PARKED_PALM,
+                                  ONTO_A_PARKED_PALM_IN_THE_BOX],
                          ids=["lift_off_tie", "small_drop", "stall_at_the_top",
-                              "point_ball_on_a_nose", "free_rise"])
+                              "point_ball_on_a_nose", "free_rise", "onto_a_parked_palm",
+                              "onto_a_parked_palm_in_the_box"])
 def test_the_answer_is_optimal_and_the_simulator_confirms_it(text):
     outcome = design(parse_spec(tomllib.loads(text)))
     assert outcome.status is Status.OPTIMAL, outcome.solver

@@ -14,7 +14,7 @@ def analyse(scene, design, stages: int | None = None) -> Analysis:
         return analyse_stairs(scene, design, stages)
     from .manipulators import analyse_manipulators
 
-    return analyse_manipulators(scene, design)
+    return analyse_manipulators(scene, design, stages)
 
 
 __all__ = ["Analysis", "analyse", "margin"]

@@ -13,7 +13,10 @@ APPROACH_STAGES = 6
 _SPEED_DEPENDENT = ("over_the_top", "lift_off", "slip_impact", "tip_impact")
 
 
-def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign) -> Analysis:
+def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
+                         stages: int | None = None) -> Analysis:
+    """stages: manipulators in the row (default APPROACH_STAGES); palms parked behind the
+    carrying one are checked as far back as the row has them."""
     g, l = scene.gravity, design.link_length
     a, b, q = design.alpha, design.beta, design.mass_ratio
     body, palm = scene.body, scene.palm
@@ -47,6 +50,10 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign) -
         periodic.update(handover_speed=s, landing_speed=u, drop_per_stage=float(pitch_y))
         margins.update(_stage_margins(scene, design, (s * math.cos(b), -s * math.sin(b)), offset))
 
+    parked = parked_palms_margin(scene, design, offset, stages or APPROACH_STAGES)
+    if parked is not None:
+        margins["parked_palms"] = parked
+
     approach: dict[str, object] = {}
     if first:
         first_margins = _stage_margins(scene, design, first["velocity"], offset)
@@ -65,6 +72,32 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign) -
         approach=approach,
         problems=tuple(problems),
     )
+
+
+def parked_palms_margin(scene, design, offset, stages) -> float | None:
+    """Smallest slack (physics.parked_palm_clearance), in link lengths and clipped to [-1, 1],
+    of the carried object against the palms parked at their front stops behind its palm (None:
+    a row of one has none).
+
+    Every landing is at `offset` (nominal geometry) and every carry ends at beta, so the slack
+    to the palm n places back is the same at every stage after the n-th. The palm just released
+    is taken as parked from the handover on: conservative when it reaches its stop after the
+    object has passed (the simulator follows the timing)."""
+    l, fs = design.link_length, scene.palm.front_stop
+    pitch_x, pitch_y = (float(p) for p in phys.pitch(design.alpha, design.beta, l))
+    body, palm = scene.body, scene.palm
+    worst = None
+    for n in range(1, stages):
+        clearance = float(phys.parked_palm_clearance(
+            n, alpha=design.alpha, theta_end=design.beta, link_length=l, front_stop=fs,
+            pitch_x=pitch_x, pitch_y=pitch_y, offset_lo=offset, offset_hi=offset,
+            reach=(body.width + palm.width) / 2, depth=palm.thickness + body.height))
+        worst = clearance if worst is None else min(worst, clearance)
+        # every palm further back is behind the object from the start of the carry
+        if l * math.sin(fs) - n * pitch_x + (body.width + palm.width) / 2 - offset \
+                <= -l * math.sin(design.alpha):
+            break
+    return None if worst is None else max(-1.0, min(1.0, worst / l))
 
 
 def _first_landing(scene, design, problems):

@@ -10,15 +10,21 @@ from . import manipulator_offsets, manipulators, stairs, stairs_errors
 from .common import Formulation, assemble, spec_key
 
 _CACHE: dict[str, Formulation] = {}
+FULL = " +deferred rows"  # cache key suffix of a spec's NLP with its deferred rows
 _LOCK = threading.Lock()
 
 
-def formulate(spec, *, cache: bool = True) -> Formulation:
-    """The NLP of `spec` (cached by everything it depends on; requirements are parameters)."""
-    key = spec_key(spec)
+def formulate(spec, *, cache: bool = True, full: bool = False) -> Formulation:
+    """The NLP of `spec` (cached by everything it depends on; requirements are parameters).
+    full: with the deferred rows in the NLP (the same Formulation when there are none)."""
+    key = spec_key(spec) + (FULL if full else "")
     with _LOCK:
         if cache and key in _CACHE:
             return _CACHE[key]
+    if full:
+        core = formulate(spec, cache=cache)
+        if core.deferred is None:
+            return core
     start = time.perf_counter()
     module = stairs if spec.kind == "stairs" else manipulators
     model, bounds, closed_forms = module.build(spec)
@@ -26,7 +32,7 @@ def formulate(spec, *, cache: bool = True) -> Formulation:
         model = replace(model, scenario=stairs_errors.scenario(spec, model, closed_forms))
     else:
         model = replace(model, scenario=manipulator_offsets.scenario(spec, model, closed_forms))
-    form = assemble(spec, model, key=key, bounds=bounds)
+    form = assemble(spec, model, key=key, bounds=bounds, defer=not full)
     form = replace(form, build_time=time.perf_counter() - start)
     if cache:
         with _LOCK:

@@ -67,6 +67,9 @@ class Condition:
     # a model inequality whose slack has this unit keeps the backoff in it (a physical row keeps
     # it in the normalised row's units); None: a model row without backoff
     backoff_unit: object = None
+    # a row that seldom binds and costs IPOPT iterations when present: left out of the NLP
+    # first and added only if the answer without it breaks it (solve/optimize.py)
+    deferred: bool = False
 
     @property
     def name(self) -> str:
@@ -154,6 +157,17 @@ class Formulation:
     scenario: Scenario | None
     build_time: float = 0.0
     extras: dict = field(default_factory=dict)
+    # rows left out of this NLP (Condition.deferred): Function (x, p) -> (slack, scale, row),
+    # row >= 0 where the NLP's row would hold; None when every row is in the NLP
+    deferred: object = None
+    deferred_conditions: tuple[ConditionInfo, ...] = ()
+
+    def deferred_broken(self, x, p) -> bool:
+        """Whether x breaks a row this NLP leaves out."""
+        if self.deferred is None:
+            return False
+        rows = np.asarray(self.deferred(x, p)[2], dtype=float).ravel()
+        return bool(np.any(~(rows >= 0.0)))
 
     @property
     def n_design(self) -> int:
@@ -256,8 +270,10 @@ def design_inputs(spec, names: tuple[str, ...], defaults: dict[str, float]):
     return values, symbols, bounds
 
 
-def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
-    """The NLP of a scene model, with requirements as parameters."""
+def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
+             defer: bool = True) -> Formulation:
+    """The NLP of a scene model, with requirements as parameters; defer: leave the deferred
+    conditions out of it (Formulation.deferred evaluates them)."""
     design_names = tuple(model.design_symbols)
     aux_names = tuple(a[0] for a in model.aux)
     x = ca.vertcat(*model.design_symbols.values(), *(a[1] for a in model.aux))
@@ -280,9 +296,10 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
     norms = np.where(np.isfinite(norms) & (norms > 1e-9), norms, 1.0)
 
     rows, lbg, ubg, infos = [], [], [], []
+    later = []  # (condition, normaliser, row) of the deferred conditions
     for i, c in enumerate(model.conditions):
         if c.kind == MARGIN and not c.equality:
-            need = _fmax_all([p_of[k] for k in c.keys])
+            need = fmax_all([p_of[k] for k in c.keys])
             expr = c.slack - (need + (t if c.epigraph else 0.0)) * c.scale
         else:
             expr = c.slack
@@ -294,9 +311,21 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
         else:
             unit = 0.0 if c.backoff_unit is None else ca.fabs(c.backoff_unit)
             rows.append((expr - backoff * unit) / norms[i])
+        if c.deferred and defer:
+            later.append((c, norms[i], rows.pop()))
+            continue
         lbg.append(0.0)
         ubg.append(0.0 if c.equality else math.inf)
-        infos.append(ConditionInfo(i, c.name, c.keys, c.where, c.kind, c.equality))
+        infos.append(ConditionInfo(len(infos), c.name, c.keys, c.where, c.kind, c.equality))
+    conditions = [c for c in model.conditions if not (c.deferred and defer)]
+    norms = np.array([n for c, n in zip(model.conditions, norms) if not (c.deferred and defer)])
+    deferred = None
+    if later:
+        deferred = ca.Function("deferred", [x, p], [ca.vertcat(*[c.slack for c, _, _ in later]),
+                                                    ca.vertcat(*[c.scale for c, _, _ in later]),
+                                                    ca.vertcat(*[r for _, _, r in later])])
+    deferred_infos = tuple(ConditionInfo(i, c.name, c.keys, c.where, c.kind, c.equality)
+                           for i, (c, _, _) in enumerate(later))
 
     weights = {k: float(v) for k, v in spec.objective.items() if float(v) != 0.0}
     f = 0.0
@@ -308,8 +337,8 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
     derived_names = tuple(model.derived)
     evaluate = ca.Function(
         "evaluate", [x, p],
-        [ca.vertcat(*[c.slack for c in model.conditions]),
-         ca.vertcat(*[c.scale for c in model.conditions]), terms,
+        [ca.vertcat(*[c.slack for c in conditions]),
+         ca.vertcat(*[c.scale for c in conditions]), terms,
          ca.vertcat(*model.derived.values()) if model.derived else ca.SX(0, 1)],
     )
     x_names = design_names + aux_names
@@ -333,15 +362,25 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict) -> Formulation:
         aux_init=model.aux_init, tolerance_axes=model.tolerance_axes,
         tolerance_index=tol_index, margin_index=m_index, fixed=fixed,
         derived_names=derived_names, norms=norms, scenario=model.scenario,
+        deferred=deferred, deferred_conditions=deferred_infos,
     )
 
 
-def _fmax_all(values):
+def fmax_all(values):
+    """The largest of CasADi expressions (0 for none)."""
     if not values:
         return 0.0
     out = values[0]
     for v in values[1:]:
         out = ca.fmax(out, v)
+    return out
+
+
+def fmin_all(values):
+    """The smallest of CasADi expressions (at least one)."""
+    out = values[0]
+    for v in values[1:]:
+        out = ca.fmin(out, v)
     return out
 
 

@@ -68,6 +68,13 @@ def scenario(spec, model, m) -> Scenario:
         cth = ca.cos(b) + delta / l
         th = ca.acos(cth)
         add("palm_clearance", f"palm {K + 1}", m.pitch_y - delta, l)
+        for n in range(1, min(K - 1, m.parked) + 1):  # palm K - n, parked at its front stop
+            # pivot K - n from pivot K: n pitches back and up, plus the two offsets' difference
+            add("parked_palms", f"{where}, palm {K - n} parked", phys.parked_palm_clearance(
+                1, alpha=a, theta_end=th, link_length=l, front_stop=palm.front_stop,
+                pitch_x=n * m.pitch_x - (dx[K - n - 1] - dx[K - 1]),
+                pitch_y=n * m.pitch_y + (dy[K - n - 1] - dy[K - 1]), offset_lo=o, offset_hi=o,
+                reach=(w + W) / 2, depth=palm.thickness + h), l)
         if palm.front_stop < ca.pi / 2:
             add("front_stop", where, palm.front_stop - th, palm.front_stop)
         v2 = phys.carry_speed_squared(u, a, th, gravity=g, link_length=l)

@@ -49,12 +49,15 @@ from .common import (
     Condition,
     SceneModel,
     design_inputs,
+    fmax_all,
+    fmin_all,
     objective_scale,
 )
 
 DEFAULTS = {"first_pivot_x": 0.0, "first_pivot_y": 0.0}
 START_CLEARANCE = 1e-3  # (x link length): the object starts at least this far above palm 1
 TOLERANCE_CAP = 10.0  # upper bound of the box half-width variable, in link lengths
+PARKED_ROWS_CAP = 16  # parked palms checked behind the carrying one, at most (docs/optimizer.md)
 ACOS_EDGE = 1e-15  # acos is taken of at most 1 - this: a finite slope
 
 
@@ -72,7 +75,7 @@ def build(spec):
     t = ca.SX.sym("min_margin") if epigraph else None
     l_max = bounds["link_length"][1] if "link_length" in bounds else values["link_length"]
 
-    m = _Model(scene, values, stages)
+    m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages))
     conditions = m.conditions(S, u_lo, u_hi, tau, robust)
     aux = [("periodic_speed_sq", S, 0.0, math.inf),
            ("landing_speed_lo", u_lo, 0.0, math.inf),
@@ -109,6 +112,28 @@ def build(spec):
     return model, bounds, m
 
 
+def parked_rows(scene, values, bounds, stages) -> int:
+    """How many palms behind the carrying one can meet the carried object somewhere in the
+    design box (at most PARKED_ROWS_CAP and stages - 1). The palm n places back is behind the
+    object from the start of the carry once n pitch_x >= l (sin f + sin a) + (w + W) / 2 - o +
+    2 tol, with -o <= (W - w) / 2 (the landing rows) and 2 tol <= pitch_y <= l (the
+    palm_clearance row); each term is bounded over the box."""
+    def low(name):
+        return bounds[name][0] if name in bounds else values[name]
+
+    def high(name):
+        return bounds[name][1] if name in bounds else values[name]
+
+    palm = scene.palm
+    l_max = high("link_length")
+    pitch_min = low("link_length") * (math.sin(max(low("alpha"), 0.0))
+                                      + math.sin(max(low("beta"), 0.0)))
+    far = (l_max * (max(math.sin(palm.front_stop), 0.0) + math.sin(min(high("alpha"), 1.5)))
+           + palm.width + l_max)
+    reach = math.ceil(far / pitch_min) if pitch_min > 0.0 else PARKED_ROWS_CAP
+    return max(0, min(stages - 1, reach, PARKED_ROWS_CAP))
+
+
 def tolerance_bound(values, bounds, l_max) -> float:
     """The tolerance variable's upper bound: TOLERANCE_CAP link lengths, or 50 times the largest
     box the design box allows if that is less (the palm_clearance row asks 2 tol <= l (cos a -
@@ -123,8 +148,8 @@ def tolerance_bound(values, bounds, l_max) -> float:
 class _Model:
     """The closed forms of one manipulators scene on (possibly symbolic) design values."""
 
-    def __init__(self, scene, values, stages):
-        self.scene, self.stages = scene, stages
+    def __init__(self, scene, values, stages, parked=0):
+        self.scene, self.stages, self.parked = scene, stages, parked
         self.g = scene.gravity
         self.a, self.b = values["alpha"], values["beta"]
         self.l, self.q = values["link_length"], values["mass_ratio"]
@@ -285,6 +310,18 @@ class _Model:
                 palm.front_stop - th_hi, palm.front_stop, epigraph=False)
 
         (o1_hi, o1_lo), (o_hi, o_lo) = self.landing_ranges(tau, robust)
+        # Palms parked at their front stops behind the carrying one stay clear of the object
+        # (physics.parked_palm_clearance; each palm's landing offset lies between the smallest
+        # of the o_lo versions and the largest of the o_hi ones, each pivot within the box).
+        # Deferred: on problems where they do not bind they cost IPOPT 2 of 14 iterations.
+        parked = {"alpha": a, "theta_end": th_hi, "link_length": l,
+                  "front_stop": palm.front_stop, "pitch_x": self.pitch_x,
+                  "pitch_y": self.pitch_y, "offset_lo": fmin_all(o_lo),
+                  "offset_hi": fmax_all(o_hi), "reach": (w + W) / 2,
+                  "depth": palm.thickness + h, "shift": 2 * tau}
+        for n in range(1, self.parked + 1):
+            add("parked_palms", f"palm {n} back, at its front stop",
+                phys.parked_palm_clearance(n, **parked), l, epigraph=False, deferred=True)
         # Landing within the palm: |o| + w/2 <= W/2.
         for i, o in enumerate(o_hi):
             add("landing", _v("object furthest ahead", i, o_hi), W / 2 - o - w / 2, W / 2)

@@ -22,7 +22,7 @@ Derivations (docs/physics.md has them in full):
 
 from __future__ import annotations
 
-from .ops import cos, fabs, sin, sqrt, tan
+from .ops import cos, fabs, fmax, fmin, sin, sqrt, tan
 
 
 def momentum_fraction(mass_ratio):
@@ -115,3 +115,47 @@ def lift_off_ratio(speed_squared, theta, *, gravity, link_length):
 def friction_demand(theta):
     """Friction-to-normal force ratio needed to keep the object stuck at angle theta: |tan th|."""
     return fabs(tan(theta))
+
+
+def parked_palm_clearance(n, *, alpha, theta_end, link_length, front_stop, pitch_x, pitch_y,
+                          offset_lo, offset_hi, reach, depth, shift=0.0):
+    """Clearance (m; >= 0: no contact) between the object carried on a palm from -alpha to
+    theta_end and the palm n places behind, parked at its front stop (docs/optimizer.md).
+
+    Relative to the carrying palm's pivot, the object's base centre is at (l sin th + o, l cos th)
+    (o: its offset on the palm, in [offset_lo, offset_hi]) and the parked palm's top centre at
+    (l sin f - n pitch_x, l cos f + n pitch_y) (f: the front stop), the relative move of the two
+    pivots at most `shift` on either axis. They touch inside the box |gap_x| < reach = (w + W)/2,
+    -depth < gap_y < 0 (depth = T + h). Along the carry l sin th increases, so the object
+    overlaps the parked palm along the row while lo < l sin th < hi (one interval). No contact
+    iff the parked palm stays ahead (lo >= l sin theta_end), or the object starts past it
+    (hi <= -l sin alpha), or the object is above the parked top wherever they overlap (on the
+    falling side, the overlap ends before |sin th| exceeds s_top, the sine where l cos th meets
+    the top; likewise on the rising side), or below its underside wherever they overlap (the
+    overlap stays outside |sin th| < s_low). Exact with shift = 0 and one offset; with ranges an
+    outer bound. Only sines, cosines and square roots under max and min: no asin, whose clipped
+    arguments had stalled IPOPT (4 of 8 starts at 500 iterations on a random spec).
+    """
+    l = link_length
+    base = l * sin(front_stop) - n * pitch_x
+    lo = base - reach - offset_hi - shift  # overlap along the row: lo < l sin th < hi
+    hi = base + reach - offset_lo + shift
+    top = l * cos(front_stop) + n * pitch_y + shift  # the object must stay at or above
+    low = top - 2.0 * shift - depth  # or at or below
+    s_top = _sine_of_height(top / l, lower=True)
+    s_low = _sine_of_height(low / l, lower=False)
+    ahead = lo - l * sin(theta_end)
+    behind = -l * sin(alpha) - hi
+    above = fmin(fmax(l * s_top - hi, l * (s_top - sin(theta_end))),
+                 fmax(lo + l * s_top, l * (s_top - sin(alpha))))
+    below = fmax(low - l, fmax(-l * s_low - hi, lo - l * s_low))
+    return fmax(fmax(ahead, behind), fmax(above, below))
+
+
+def _sine_of_height(ratio, *, lower):
+    """sin th >= 0 where cos th = ratio, ratio clipped to [0, 1] (cos th > 0 on a carry): a lower
+    (lower=True) or upper bound within 1e-6, with a finite slope at ratio 1 (no inf * 0 where
+    the clip's slope is 0 in an NLP's or a linearisation's derivatives)."""
+    c = fmin(fmax(ratio, 0.0), 1.0)
+    tiny = 1e-12
+    return sqrt(1.0 - c * c + tiny) - (sqrt(tiny) if lower else 0.0)

@@ -24,12 +24,13 @@ SLIP_START_ATOLS = 100.0  # initial slip speed of a slip from relative rest, in 
 class OdePhases:
     """Sliding carry and bouncing phases (expects the attributes and helpers of Run)."""
 
-    def _integrate(self, rhs, t0, z0, physics, faces, max_step=math.inf):
+    def _integrate(self, rhs, t0, z0, physics, faces, max_step=math.inf, t_end=None):
         """Integrate from (t0, z0) until the first physics guard or valid face contact.
 
         physics: [(g(t, z), kind)] positive while the phase holds; a guard already negative at
         t0 fires at t0. faces: [(g, direction, valid, kind)] from face_guards.
-        Returns (t, z, kind, sol) with kind None if nothing happened within the phase time."""
+        Returns (t, z, kind, sol) with kind None if nothing happened by t_end (default: within
+        the phase time)."""
         for fun, kind in physics:
             if fun(t0, z0) < 0.0:
                 return t0, np.asarray(z0, dtype=float), kind, None
@@ -42,7 +43,8 @@ class OdePhases:
         # RK45 down to 1e-8, its cheaper steps win there (results/bench_accuracy.py).
         loosest = 1e-6 if max_step == math.inf else 1e-9
         method = "DOP853" if self.acc.rtol <= loosest else "RK45"
-        sol = solve_ivp(rhs, (t0, t0 + self.phase_time), z0, method=method, rtol=self.acc.rtol,
+        t_end = t0 + self.phase_time if t_end is None else min(t_end, t0 + self.phase_time)
+        sol = solve_ivp(rhs, (t0, t_end), z0, method=method, rtol=self.acc.rtol,
                         atol=self.acc.atol, events=events, dense_output=self.record,
                         max_step=max_step)
         best = (sol.t[-1], np.asarray(sol.y[:, -1]), None)
@@ -96,7 +98,9 @@ class OdePhases:
             faces += [(f, d, v, (kind, box.palm))
                       for f, d, v, kind in face_guards(lambda z, b=box: b, point)]
         z0 = [theta0, omega0, s0, sd0]
-        te, z, kind, sol = self._integrate(ph.slide_rhs(p), t0, z0, physics, faces)
+        t_split = self._next_arrival(t0, k)  # a palm at rest from then on is an obstacle
+        te, z, kind, sol = self._integrate(ph.slide_rhs(p), t0, z0, physics, faces,
+                                           t_end=t_split)
         if self.record and sol is not None:
             for t in np.linspace(t0, te, 60):
                 zz = sol.sol(t)
@@ -104,6 +108,8 @@ class OdePhases:
                 self._rec(t, st["x"], st["y"], st["vx"], st["vy"], zz[0], k + 1)
         theta, omega, s, sd = (float(v) for v in z)
         state = self._on_palm(k, theta, omega, s, sd)
+        if kind is None and t_split is not None and te >= t_split:
+            return lambda: self._sliding(te, k, theta, omega, s, sd)
         if kind is None:
             msg = sol.message if sol is not None and sol.status < 0 else "no event"
             return self._fail(te, "timeout", k + 1, state, f"sliding on palm {k + 1}: {msg}")
@@ -147,8 +153,9 @@ class OdePhases:
         return lambda: self._stuck(t, k, theta, imp.w, s)
 
     # ------------------------------------------------------------ bouncing (restitution > 0)
-    def _bouncing(self, t0, k, x, y, vx, vy, theta, omega):
-        """Object in flight above its palm k, which swings freely (l th'' = g sin th)."""
+    def _bouncing(self, t0, k, x, y, vx, vy, theta, omega, leaving=True):
+        """Object in flight above its palm k, which swings freely (l th'' = g sin th); leaving:
+        the object leaves the palm's top face at t0 (False: the phase goes on after a split)."""
         g, l = self.g, self.l
 
         def rhs(t, z):
@@ -165,19 +172,23 @@ class OdePhases:
         # The object leaves the carrier's top face at t0: its gap to that face starts at zero.
         # gap / (t - t0) starts at the separation speed instead and has the same later root.
         gap, gn0 = faces[0][0], vy + l * omega * math.sin(theta)
-        faces[0] = ((lambda t, z: gap(t, z) / (t - t0) if t > t0 else gn0),) + faces[0][1:]
+        if leaving:
+            faces[0] = ((lambda t, z: gap(t, z) / (t - t0) if t > t0 else gn0),) + faces[0][1:]
         for box in self._obstacles(t0, k):
             faces += [(f, d, v, (kind, box.palm))
                       for f, d, v, kind in face_guards(lambda z, b=box: b, point)]
         z0 = [x, y, vx, vy, theta, omega]
+        t_split = self._next_arrival(t0, k)  # a palm at rest from then on is an obstacle
         te, z, kind, sol = self._integrate(rhs, t0, z0, physics, faces,
-                                           max_step=0.05 * math.sqrt(l / g))
+                                           max_step=0.05 * math.sqrt(l / g), t_end=t_split)
         if self.record and sol is not None:
             ts = np.linspace(t0, te, 40)
             zz = sol.sol(ts)
             self._rec(ts, zz[0], zz[1], zz[2], zz[3], zz[4], k + 1)
         z = [float(v) for v in z]
         state = {"x": z[0], "y": z[1], "vx": z[2], "vy": z[3], "theta": z[4], "omega": z[5]}
+        if kind is None and t_split is not None and te >= t_split:
+            return lambda: self._bouncing(te, k, *z, leaving=False)
         if kind is None:
             return self._fail(te, "timeout", k + 1, state, "no event while bouncing")
         if kind in ("back_stop", "front_stop"):

@@ -16,6 +16,7 @@ from . import manip_phases as ph
 from .core import Event, Outcome, SimulationResult
 from .manip_geometry import Arc, Ballistic, build_row, first_contact
 from .manip_ode import OdePhases
+from .numerics import brentq
 
 FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object is given up
 ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact
@@ -40,6 +41,7 @@ class Run(OdePhases):
         self.initial = scene.initial
         self.rest_angle = [-self.alpha] * stages
         self.rest_since = [-math.inf] * stages
+        self.swinging: list[int] = []  # released palms, possibly not yet at rest (_release)
         self.y_floor = min(p[1] for p in self.row.pivots) - FALL_DEPTH * self.l
         self._pivot_order = sorted(range(stages), key=lambda j: self.row.pivots[j][0])
         self._pivot_x = [self.row.pivots[j][0] for j in self._pivot_order]
@@ -107,17 +109,17 @@ class Run(OdePhases):
             lo = bisect.bisect_left(self._pivot_x, near - reach)
             hi = bisect.bisect_right(self._pivot_x, near + reach)
             candidates = self._pivot_order[lo:hi]
-        out = []
-        cache = self._boxes
-        for j in candidates:
-            if j == carrier or self.rest_since[j] > t:
-                continue
-            key = (j, self.rest_angle[j])
-            box = cache.get(key)
-            if box is None:  # a palm at rest has the same box until it moves again
-                box = cache[key] = self.row.box(j, self.rest_angle[j])
-            out.append(box)
-        return out
+        return [self._rest_box(j) for j in candidates
+                if j != carrier and self.rest_since[j] <= t]
+
+    def _rest_box(self, j):
+        """Contact box of palm j at its rest angle (a palm at rest keeps its box until it moves
+        again, so boxes are cached by palm and angle)."""
+        key = (j, self.rest_angle[j])
+        box = self._boxes.get(key)
+        if box is None:
+            box = self._boxes[key] = self.row.box(j, self.rest_angle[j])
+        return box
 
     def _release(self, k, t, theta, w):
         """Palm k, now empty, swings on alone from (theta, w) to one of its stops; it is an
@@ -126,11 +128,25 @@ class Run(OdePhases):
                                                back_stop=-self.alpha, front_stop=self.fs,
                                                tol=self.acc.event_tol)
         self.rest_angle[k], self.rest_since[k] = stop, t + dt
+        self.swinging.append(k)
         if math.isfinite(dt):
             kind = "front_stop" if stop == self.fs else "back_stop"
             self.palm_events.append(Event(
                 float(t + dt), kind, k + 1, {"theta": float(stop), "omega": speed / self.l},
                 {"theta": float(stop), "omega": 0.0}, f"empty palm {k + 1} stopped"))
+
+    def _arrivals(self, t0, t1, carrier):
+        """Palms (not the carrier) that come to rest at a time in (t0, t1): a phase that does
+        not end before the first of them is split there, so that it is an obstacle from then
+        on (the swinging palm itself is not one)."""
+        rest = self.rest_since
+        self.swinging = [j for j in self.swinging if rest[j] > t0]
+        return [j for j in self.swinging if rest[j] < t1 and j != carrier]
+
+    def _next_arrival(self, t0, carrier):
+        """Time the first palm still swinging at t0 comes to rest (None: none does)."""
+        return min((self.rest_since[j] for j in self._arrivals(t0, math.inf, carrier)),
+                   default=None)
 
     def _on_palm(self, k, theta, omega, s, sd=0.0):
         x, y, vx, vy = ph.object_state_on_palm(self.row.pivots[k], theta, omega, s, sd, self.l)
@@ -146,7 +162,7 @@ class Run(OdePhases):
         t_floor = roots[-1] if y > self.y_floor and roots else t0
         entry = first_contact(path, self._obstacles(t0), t0, t_floor)
         t_hit = entry.tau if entry else t_floor
-        arriving = [r for r in self.rest_since if t0 < r < t_hit]
+        arriving = [self.rest_since[j] for j in self._arrivals(t0, t_hit, None)]
         if arriving:  # a swinging palm comes to rest during the flight: it becomes an obstacle
             t1 = min(arriving)
             self._rec_flight(path, t0, t1)
@@ -381,8 +397,8 @@ class Run(OdePhases):
             ends.append((self.beta, "complete"))
         theta_end, end_kind = min(ends)
         px, py = self.row.pivots[k]
-        entry = first_contact(Arc(px + s, py, l), self._obstacles(t0, k, near=px), theta0,
-                              theta_end)
+        arc = Arc(px + s, py, l)
+        entry = first_contact(arc, self._obstacles(t0, k, near=px), theta0, theta_end)
         candidates = [(theta_end, 5, end_kind)]
         if entry is not None:
             candidates.append((entry.tau, 4, "handover" if entry.kind == "top" else "blocked"))
@@ -393,11 +409,25 @@ class Run(OdePhases):
         candidates += ph.stuck_crossings(theta0, v0, cap, gravity=g, link_length=l,
                                          height=self.h, support=(lo, hi), mu=self.mu)
         theta_e, _, kind = min(candidates)
+        turn = turn if kind == "stall" else None
         te = t0 + ph.swing_time(theta0, theta_e, theta0, v0, gravity=g, link_length=l, tol=tol,
-                                turn=turn if kind == "stall" else None)
+                                turn=turn)
+        # A palm released earlier (palm k-1, say) may reach its stop during this carry, where
+        # the arc meets it: the carry is split at its arrival and goes on with it as an obstacle.
+        met = [self.rest_since[j] for j in self._arrivals(t0, te, k)
+               if first_contact(arc, [self._rest_box(j)], theta0, theta_e)]
+        if met:
+            t1 = min(met)
+            theta1 = brentq(lambda th: ph.swing_time(theta0, th, theta0, v0, gravity=g,
+                                                     link_length=l, turn=turn) - (t1 - t0),
+                            theta0, theta_e, xtol=tol)
+            v1 = math.sqrt(max(ph.speed_squared(theta1, theta0, v0, gravity=g, link_length=l),
+                               0.0))
+            self._rec_stuck(t0, k, theta0, v0, s, theta1, None)
+            return lambda: self._stuck(t1, k, theta1, v1, s)
         omega_e = math.sqrt(max(ph.speed_squared(theta_e, theta0, v0, gravity=g,
                                                  link_length=l), 0.0)) / l
-        self._rec_stuck(t0, k, theta0, v0, s, theta_e, turn if kind == "stall" else None)
+        self._rec_stuck(t0, k, theta0, v0, s, theta_e, turn)
         state = self._on_palm(k, theta_e, omega_e, s)
         if kind == "handover":
             return self._handover(te, k, theta_e, omega_e, s, 0.0, entry.palm)

@@ -25,7 +25,7 @@ def analyse(spec, design: dict[str, float]):
     point = cls(**values)
     if spec.kind == "stairs":
         return analyse_stairs(spec.scene, point, spec.verification.stages)
-    return analyse_manipulators(spec.scene, point)
+    return analyse_manipulators(spec.scene, point, spec.verification.stages)
 
 
 def closed_form_check(spec, design: dict[str, float], requirements: dict[str, float]) -> dict:

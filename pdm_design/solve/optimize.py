@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
 from ..formulation import formulate
+from ..formulation.build import FULL
 from ..formulation.common import BACKOFF_FACTOR, MODEL, OBJECTIVE_SENSE
 from ..status import Status
 from . import check, elastic
@@ -49,10 +51,12 @@ def optimize(
     was_cached = _is_cached(spec)
     form = formulate(spec)
     build_time = 0.0 if was_cached else form.build_time
+    ws = warm_start.solution if warm_start is not None else None
+    if ws is not None and ws.key == form.key + FULL:
+        form = formulate(spec, full=True)  # the warm start solved the NLP with every row
     reqs = dict(spec.requirements if requirements is None else requirements)
     p = form.parameters(reqs, backoff=BACKOFF_FACTOR * max(tol, bound_relax_factor))
     options = SolverOptions(max_iter=max_iter, tol=tol, bound_relax_factor=bound_relax_factor)
-    solver = solver_for(form.key, form.nlp, options)
 
     names = form.design_names
     guess = {n: spec.design[n].guess for n in names}
@@ -61,19 +65,19 @@ def optimize(
     designs = start_designs(names, lows, highs, guess, max(starts, 1), seed)
     x_starts = form.defined_starts(designs, guess, p)
 
-    runs, calls = [], []  # one Solve per start; one per IPOPT run (stacked starts share one)
-    if warm_start is not None and warm_start.solution is not None \
-            and warm_start.solution.key == form.key:
-        warm = solver_for(form.key, form.nlp, SolverOptions(
-            max_iter=max_iter, tol=tol, warm=True, bound_relax_factor=bound_relax_factor))
-        ws = warm_start.solution
-        runs.append(solve_once(warm, ws.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
-                               lam_x0=ws.lam_x, lam_g0=ws.lam_g, start=-1))
-        calls.append(runs[-1])
-    from_starts, start_calls, stacked_starts = _solve_starts(form, options, solver, x_starts, p)
-    runs += from_starts
-    calls += start_calls
+    runs, calls, stacked_starts = _multistart(form, options, x_starts, p, ws)
     chosen = best(runs)
+    if chosen.status in (Status.OPTIMAL, Status.ACCEPTABLE) and form.deferred_broken(chosen.x, p):
+        # The answer breaks a row left out of the NLP: solve every start again with every row
+        # (and diagnose with them if that fails). A spec that fails without them is diagnosed
+        # without them: the analysis' margins at the diagnosed point include theirs.
+        was_cached = _is_cached(spec, full=True)
+        form = formulate(spec, full=True)
+        build_time += 0.0 if was_cached else form.build_time
+        runs, more_calls, stacked_starts = _multistart(form, options, x_starts, p, None)
+        calls += more_calls
+        chosen = best(runs)
+    solver = solver_for(form.key, form.nlp, options)
     status, x = chosen.status, chosen.x
     violations, at_bounds = (), ()
     extra_iters, extra_time = 0, 0.0
@@ -107,6 +111,11 @@ def optimize(
         tolerance = {axis: tol_value for axis in form.tolerance_axes}
     robust_margins = {info.label: normalised_margin(slack[info.index], scale[info.index])
                       for info in form.conditions if info.kind != MODEL}
+    if form.deferred is not None:  # the rows this answer was checked against, not solved with
+        d_slack, d_scale, _ = (np.asarray(v, dtype=float).ravel() for v in form.deferred(x, p))
+        robust_margins.update({info.label: normalised_margin(d_slack[info.index],
+                                                             d_scale[info.index])
+                               for info in form.deferred_conditions})
     score = None
     if status is not Status.INFEASIBLE:
         score = float(sum(w * OBJECTIVE_SENSE[n] * objectives[n] for n, w in form.weights.items()))
@@ -161,6 +170,21 @@ def optimize(
     )
 
 
+def _multistart(form, options, x_starts, p, warm_solution):
+    """(one Solve per start, the IPOPT runs made, how many starts shared a stacked run), the
+    warm start's run first when it solved this NLP."""
+    runs, calls = [], []  # one Solve per start; one per IPOPT run (stacked starts share one)
+    if warm_solution is not None and warm_solution.key == form.key:
+        warm = solver_for(form.key, form.nlp, replace(options, warm=True))
+        ws = warm_solution
+        runs.append(solve_once(warm, ws.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
+                               lam_x0=ws.lam_x, lam_g0=ws.lam_g, start=-1))
+        calls.append(runs[-1])
+    solver = solver_for(form.key, form.nlp, options)
+    from_starts, start_calls, stacked_starts = _solve_starts(form, options, solver, x_starts, p)
+    return runs + from_starts, calls + start_calls, stacked_starts
+
+
 def _solve_starts(form, options, solver, x_starts, p):
     """(one Solve per start, the IPOPT runs made, how many starts shared a stacked run). The
     starts are solved together in groups (solve/stacked.py); a group whose stacked run does not
@@ -184,11 +208,11 @@ def _solve_starts(form, options, solver, x_starts, p):
     return runs, calls, shared
 
 
-def _is_cached(spec) -> bool:
+def _is_cached(spec, full=False) -> bool:
     from ..formulation import build
     from ..formulation.common import spec_key
 
-    return spec_key(spec) in build._CACHE
+    return spec_key(spec) + (build.FULL if full else "") in build._CACHE
 
 
 def _length_scale(spec, design) -> float:

@@ -112,8 +112,10 @@ def linearised_tolerance(form, x, p, *, cap: float, length: float) -> Linearised
                                status="; ".join(problems) or "optimal")
 
 
-def _solved(problem, what: str, problems: list[str], tight: bool = False) -> bool:
-    """Solve with Clarabel; False (and a line in `problems`) unless it is optimal."""
+def _solved(problem, what: str, problems: list[str], tight: bool = False,
+            inaccurate: bool = False) -> bool:
+    """Solve with Clarabel; False (and a line in `problems`) unless it is optimal (or, with
+    `inaccurate`, optimal_inaccurate: the caller makes the point feasible)."""
     options = {"tol_gap_abs": 1e-12, "tol_gap_rel": 1e-12, "tol_feas": 1e-12} if tight else {}
     try:
         with warnings.catch_warnings():
@@ -122,6 +124,8 @@ def _solved(problem, what: str, problems: list[str], tight: bool = False) -> boo
     except cp.error.SolverError as exc:
         problems.append(f"{what} not computed: {exc}")
         return False
+    if problem.status == cp.OPTIMAL_INACCURATE and inaccurate:
+        return True
     if problem.status != cp.OPTIMAL:
         problems.append(f"{what} not computed: cvxpy status {problem.status}")
         return False
@@ -157,9 +161,15 @@ def _ellipsoid(A, b, names, cap, problems):
         P = cp.Variable((n, n), PSD=True)
         if not _solved(cp.Problem(cp.Maximize(cp.log_det(P)),
                                   [cp.sum(cp.multiply(C @ P, C), axis=1) <= 1,
-                                   cp.diag(P) <= cap**2]), "ellipsoid", problems):
+                                   cp.diag(P) <= cap**2]), "ellipsoid", problems,
+                       inaccurate=True):
             return {}
-        w, V = np.linalg.eigh(0.5 * (P.value + P.value.T))
+        # Clarabel stops "inaccurate" on some rows of near-parallel constraints (at the same
+        # log det to 8 digits as without them): shrunk onto the constraints, any P is inside.
+        P_value = 0.5 * (P.value + P.value.T)
+        P_value /= max(1.0, float(np.max(np.sum((C @ P_value) * C, axis=1))),
+                       float(np.max(np.diag(P_value))) / cap**2)
+        w, V = np.linalg.eigh(P_value)
         E = V @ np.diag(np.sqrt(np.clip(w, 0.0, None))) @ V.T
         shape = "full"
     else:
@@ -168,9 +178,12 @@ def _ellipsoid(A, b, names, cap, problems):
         rows = cp.multiply(C, cp.reshape(e, (1, n), order="C"))
         if not _solved(cp.Problem(cp.Maximize(cp.sum(cp.log(e))),
                                   [cp.norm(rows, 2, axis=1) <= 1, e <= cap]),
-                       "ellipsoid", problems):
+                       "ellipsoid", problems, inaccurate=True):
             return {}
-        E = np.diag(e.value)
+        e_value = np.clip(e.value, 0.0, None)
+        e_value /= max(1.0, float(np.max(np.linalg.norm(C * e_value, axis=1))),
+                       float(np.max(e_value)) / cap)
+        E = np.diag(e_value)
         shape = "axis-aligned"
     axes = np.clip(np.linalg.eigvalsh(E), 0.0, None)
     return {

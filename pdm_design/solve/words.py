@@ -29,6 +29,8 @@ CONDITIONS = {
     "palm_clearance": ("the next palm stays below the object until the handover",
                        "larger beta - alpha (more drop per stage) or a smaller offset box"),
     "front_stop": ("the palm hands over before its front stop", "smaller beta or a later stop"),
+    "parked_palms": ("the carried object clears the palms parked at their front stops behind it",
+                     "a later front stop, narrower palms, or a longer pitch (larger alpha + beta)"),
     "forward_landing": ("the landing pushes the palm forward", "smaller alpha + beta"),
     "start_height": ("the object starts above the first palm", "lower the first manipulator"),
     # stairs

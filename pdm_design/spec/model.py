@@ -31,6 +31,7 @@ OBJECTIVES = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_con
 MANIPULATOR_MARGINS = (
     "landing", "over_the_top", "lift_off", "slip_carry", "tip_carry", "slip_impact", "tip_impact",
     "first_over_the_top", "first_lift_off", "first_slip_impact", "first_tip_impact",
+    "parked_palms",
 )
 STAIRS_MARGINS = ("first_impact_friction", "nose_clearance", "first_nose_clearance",
                   "riser_clearance")
