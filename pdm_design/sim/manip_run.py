@@ -41,7 +41,7 @@ class Run(OdePhases):
         self.initial = scene.initial
         self.rest_angle = [-self.alpha] * stages
         self.rest_since = [-math.inf] * stages
-        self.swinging: list[int] = []  # released palms, possibly not yet at rest (_release)
+        self.swinging: list[int] = []  # released palms, some perhaps at rest by now
         self.y_floor = min(p[1] for p in self.row.pivots) - FALL_DEPTH * self.l
         self._pivot_order = sorted(range(stages), key=lambda j: self.row.pivots[j][0])
         self._pivot_x = [self.row.pivots[j][0] for j in self._pivot_order]
@@ -109,8 +109,14 @@ class Run(OdePhases):
             lo = bisect.bisect_left(self._pivot_x, near - reach)
             hi = bisect.bisect_right(self._pivot_x, near + reach)
             candidates = self._pivot_order[lo:hi]
-        return [self._rest_box(j) for j in candidates
-                if j != carrier and self.rest_since[j] <= t]
+        out = []
+        cache, rest_since, rest_angle = self._boxes, self.rest_since, self.rest_angle
+        for j in candidates:  # (inline: this runs every phase, at every palm within reach)
+            if j == carrier or rest_since[j] > t:
+                continue
+            box = cache.get((j, rest_angle[j]))
+            out.append(self._rest_box(j) if box is None else box)
+        return out
 
     def _rest_box(self, j):
         """Contact box of palm j at its rest angle (a palm at rest keeps its box until it moves
@@ -128,6 +134,8 @@ class Run(OdePhases):
                                                back_stop=-self.alpha, front_stop=self.fs,
                                                tol=self.acc.event_tol)
         self.rest_angle[k], self.rest_since[k] = stop, t + dt
+        if len(self.swinging) > 2:  # palms at rest by now are dropped now and then
+            self.swinging = [j for j in self.swinging if self.rest_since[j] > t]
         self.swinging.append(k)
         if math.isfinite(dt):
             kind = "front_stop" if stop == self.fs else "back_stop"
@@ -140,8 +148,7 @@ class Run(OdePhases):
         not end before the first of them is split there, so that it is an obstacle from then
         on (the swinging palm itself is not one)."""
         rest = self.rest_since
-        self.swinging = [j for j in self.swinging if rest[j] > t0]
-        return [j for j in self.swinging if rest[j] < t1 and j != carrier]
+        return [j for j in self.swinging if t0 < rest[j] < t1 and j != carrier]
 
     def _next_arrival(self, t0, carrier):
         """Time the first palm still swinging at t0 comes to rest (None: none does)."""
@@ -414,10 +421,14 @@ class Run(OdePhases):
                                 turn=turn)
         # A palm released earlier (palm k-1, say) may reach its stop during this carry, where
         # the arc meets it: the carry is split at its arrival and goes on with it as an obstacle.
-        met = [self.rest_since[j] for j in self._arrivals(t0, te, k)
-               if first_contact(arc, [self._rest_box(j)], theta0, theta_e)]
-        if met:
-            t1 = min(met)
+        t1 = math.inf  # (a loop, not _arrivals: this runs at every carry)
+        for j in self.swinging:
+            if t0 < self.rest_since[j] < min(te, t1) and j != k:
+                box = self._rest_box(j)
+                lowest = py + l * min(math.cos(theta0), math.cos(theta_e))  # |th| < pi/2
+                if box.y_high > lowest and first_contact(arc, [box], theta0, theta_e):
+                    t1 = self.rest_since[j]
+        if t1 < te:
             theta1 = brentq(lambda th: ph.swing_time(theta0, th, theta0, v0, gravity=g,
                                                      link_length=l, turn=turn) - (t1 - t0),
                             theta0, theta_e, xtol=tol)
