@@ -520,11 +520,14 @@ def test_many_offsets_leave_the_robust_box_and_say_why_the_linearised_sets_are_m
 
 def test_a_row_of_tiny_manipulators_has_the_same_optimum_to_scale():
     """Dimensional analysis: links of 40 microns tolerate 2e-5 times the offsets of 2 m links
-    (IPOPT's absolute tolerances on an objective in metres stopped it 2.2e-5 short there)."""
+    (IPOPT's absolute tolerances on an objective in metres stopped it 2.2e-5 short there), and
+    every start finds it (IPOPT's push of the tolerance off 0, a hundredth of its bound, was 8 %
+    of such a link, and 3 of 8 starts ended Invalid_Number_Detected)."""
     k = 2e-5
     one, tiny = (optimize(_robust_manipulators(s), check_samples=0, linearise=False)
                  for s in (1.0, k))
     assert tiny.status is Status.OPTIMAL
+    assert set(tiny.stats.return_statuses) == {"Solve_Succeeded"}
     assert tiny.tolerance["dx"] / k == pytest.approx(one.tolerance["dx"], rel=5e-6)
     assert tiny.design["alpha"] == pytest.approx(one.design["alpha"], abs=1e-6)
 

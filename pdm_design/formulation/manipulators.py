@@ -137,12 +137,16 @@ def parked_rows(scene, values, bounds, stages) -> int:
 def tolerance_bound(values, bounds, l_max) -> float:
     """The tolerance variable's upper bound: TOLERANCE_CAP link lengths, or 50 times the largest
     box the design box allows if that is less (the palm_clearance row asks 2 tol <= l (cos a -
-    cos b) <= l (1 - cos b)). IPOPT pushes tol off 0 by a hundredth of this bound (at most 1 cm):
-    that stays within half the handover drop, where the robust rows are numbers; with 10 link
-    lengths it was 1 cm above a 9.6 mm drop, and every start failed. (A bound as tight as the
-    drop itself cost the shipped problems 40 % more iterations.)"""
+    cos b) <= l (1 - cos b)), and below a metre at most one link length. IPOPT pushes tol off 0
+    by a hundredth of this bound (at most 1 cm): that stays within half the handover drop, where
+    the robust rows are numbers; with 10 link lengths it was 1 cm above a 9.6 mm drop, and every
+    start failed. Under a metre the hundredth of 10 link lengths was 5 to 16 times the push a
+    2 m row gets, relative to its size: 1 of 8 starts at 0.2 m links and 3 of 8 at 2 mm and at
+    40 microns ended Invalid_Number_Detected. (A bound as tight as the drop itself cost the
+    shipped problems 40 % more iterations.)"""
     b_max = bounds["beta"][1] if "beta" in bounds else values["beta"]
-    return min(TOLERANCE_CAP, 50.0 * (1.0 - math.cos(b_max)) / 2.0) * l_max
+    bound = min(TOLERANCE_CAP, 50.0 * (1.0 - math.cos(b_max)) / 2.0) * l_max
+    return min(bound, l_max) if l_max < 1.0 else bound
 
 
 class _Model:
