@@ -323,3 +323,32 @@ def test_a_tread_off_its_orbit_drifts_to_the_bounce_the_simulator_skips_at():
     (skip,) = analyse(spec.scene, spec.design_at(), spec.verification.stages).problems
     run = simulate_stairs(spec.scene, spec.design_at(), stages=8000).outcome
     assert (run.failure.kind, run.stages_passed) == ("skipped_step", int(skip.split()[1]) - 1)
+
+
+def test_below_a_riser_lower_than_the_ball_the_landing_limit_is_the_corners():
+    """A riser lower than the radius (rise (1 - eps^2) h0 = 3.1 cm, ball 10 cm): the disc resting
+    on the tread meets only the riser's top corner, so it may land closer than a radius, down to
+    sqrt(rise (2 r - rise)) = 7.25 cm, where the simulator's run flips; the analysis' margin and
+    the NLP's row (each asked landing >= r before) flip there too."""
+    r, h0, eps = 0.1, 0.1, 0.83
+
+    def make(landing):
+        data = {"scene": {"kind": "stairs", "friction": 0.0, "ball": {"radius": r}},
+                "initial": {"drop_height": h0},
+                "design": {"restitution": eps, "launch_speed": 1.0, "landing_offset": landing},
+                "verification": {"stages": 20}}
+        return parse_spec(data)
+
+    rise = (1 - eps**2) * h0
+    corner = math.sqrt(rise * (2 * r - rise))
+    simulator = flip(lambda L: simulated(make(L))[0], 0.05, 0.1)
+    analysis = flip(lambda L: margins(make(L))["riser_clearance"] >= 0.0, 0.05, 0.1)
+    form = formulate(make({"min": 0.0, "max": 0.2}), cache=False)
+    rows = [c.index for c in form.conditions if c.name == "riser_clearance"]
+
+    def nlp(L):
+        slack = form.evaluate(form.start_vector({"landing_offset": L}), form.parameters({}))[0]
+        return float(np.min(np.asarray(slack).ravel()[rows]))
+    assert simulator == pytest.approx(corner, abs=1e-7)
+    assert analysis == pytest.approx(corner, abs=1e-7)
+    assert flip(lambda L: nlp(L) >= 0.0, 0.05, 0.1) == pytest.approx(corner, abs=1e-7)

@@ -88,7 +88,8 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign,
         else:
             problems.append(f"the ball moves at {vx:g} m/s along the stairs after the first "
                             "impact: it does not go down them")
-        margins["riser_clearance"] = float((nearest_riser - ball.radius) / tread)
+        margins["riser_clearance"] = float((nearest_riser - phys.riser_reach(rise, ball.radius))
+                                           / tread)
 
     design_values = {
         "restitution": eps, "launch_speed": v0, "rise": rise, "tread": geometry["tread"],

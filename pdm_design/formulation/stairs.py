@@ -273,7 +273,9 @@ class _Model:
         for n in range(self.stages):
             stage = n + 1
             where = f"landing {stage}, shortest drift" if robust else f"landing {stage}"
-            add("riser_clearance", where, L_short[n] - r, tread, unit=length)
+            # the riser behind landing n, tau too high at worst, reaches furthest
+            add("riser_clearance", where, L_short[n] - phys.riser_reach(self.rise + tau, r),
+                tread, unit=length)
             ends = [("", tread - L_long[n])] if not robust else [
                 (", nose nearest", tread - tau - L_long[n]),
                 (", nose furthest", tread + tau - L_short[n]),

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from ..physics import stairs as phys
 from .common import MARGIN, ConditionInfo, Scenario
 
 
@@ -24,7 +25,8 @@ def scenario(spec, model, m) -> Scenario:
     scale = m.tread * m.vx**2
     rows = []
     for n in range(N):
-        rows.append(("riser_clearance", f"landing {n + 1}", L[n] - r, m.tread))
+        rows.append(("riser_clearance", f"landing {n + 1}",
+                     L[n] - phys.riser_reach(m.rise + er[n], r), m.tread))
         for where, slack in m.nose_slack(v[n], m.tread + et[n] - L[n]):
             rows.append(("nose_clearance", f"flight {n + 1}, {where}", slack, scale))
     x = ca.vertcat(*model.design_symbols.values(), *(s for _, s, _, _ in model.aux))

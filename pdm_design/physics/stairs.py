@@ -21,7 +21,9 @@ floats); the NLP's smooth rows cost IPOPT far fewer iterations (docs/optimizer.m
 
 from __future__ import annotations
 
-from .ops import acos, acosh, asinh, cos, cosh, fabs, fmax, fmin, sinh, sqrt, where
+import math
+
+from .ops import acos, acosh, asinh, cos, cosh, fabs, fmax, fmin, is_symbolic, sinh, sqrt, where
 
 _TINY = 1e-30  # keeps the unused branch of a root formula finite
 # keeps acos / acosh off their infinite-slope ends; that moves a root (by ~1e-6 of itself) only next
@@ -68,6 +70,26 @@ def rolling_impulse_ratio(vx, omega, vy_impact, restitution, *, radius, mass, in
     tangential = fabs(slip) * mass * inertia / (inertia + mass * radius**2)
     normal = mass * (1.0 + restitution) * fabs(vy_impact)
     return tangential / normal
+
+
+RISER_KNEE = 1e-3  # (x radius) below this rise, riser_reach is its tangent line
+
+
+def riser_reach(rise, radius):
+    """How far ahead of the riser behind it the ball's centre must land for its disc to clear
+    the riser: the radius when the riser is at least that high; below, the disc resting on the
+    tread (centre `radius` above it) only meets the riser's top corner, at distance
+    sqrt(x^2 + (radius - rise)^2) = radius when x = sqrt(rise (2 radius - rise)). Under
+    RISER_KNEE radii that square root's slope grows without bound (IPOPT stalled on a flat
+    floor, the optimum of a restitution free up to 1): there its tangent at the knee, above it
+    (the root is concave), at most 0.023 radius at a rise of 0. A point ball's reach is 0."""
+    if not is_symbolic(radius) and radius == 0.0:
+        return 0.0 * rise
+    low = fmin(fmax(rise, 0.0), radius)  # the part of the riser the disc can reach
+    knee = RISER_KNEE * radius
+    at_knee = math.sqrt(knee * (2.0 - RISER_KNEE) * radius)
+    tangent = at_knee + (radius - knee) / at_knee * (low - knee)
+    return where(low >= knee, sqrt(fmax(low * (2.0 * radius - low), 0.0)), tangent)
 
 
 def periodic_tread(vx, gravity, drop_height, restitution):
