@@ -67,11 +67,12 @@ def nose_margin(spec):
     return min(m["nose_clearance"], m["first_nose_clearance"])
 
 
-def nlp_nose_rows(spec, free):
-    """value -> the smallest nose row of the NLP (normalised) with `free` set to value: one NLP,
-    built once with that variable free, evaluated on the design (no solve)."""
+def nlp_nose_rows(spec, free, suffix="nose_clearance"):
+    """value -> the smallest nose row (or rows named ...suffix) of the NLP (normalised) with
+    `free` set to value: one NLP, built once with that variable free, evaluated on the design
+    (no solve)."""
     form = formulate(spec, cache=False)
-    rows = [c.index for c in form.conditions if c.name.endswith("nose_clearance")]
+    rows = [c.index for c in form.conditions if c.name.endswith(suffix)]
 
     def smallest(value):
         slack = form.evaluate(form.start_vector({free: value}), form.parameters({}))[0]
@@ -343,12 +344,7 @@ def test_below_a_riser_lower_than_the_ball_the_landing_limit_is_the_corners():
     corner = math.sqrt(rise * (2 * r - rise))
     simulator = flip(lambda L: simulated(make(L))[0], 0.05, 0.1)
     analysis = flip(lambda L: margins(make(L))["riser_clearance"] >= 0.0, 0.05, 0.1)
-    form = formulate(make({"min": 0.0, "max": 0.2}), cache=False)
-    rows = [c.index for c in form.conditions if c.name == "riser_clearance"]
-
-    def nlp(L):
-        slack = form.evaluate(form.start_vector({"landing_offset": L}), form.parameters({}))[0]
-        return float(np.min(np.asarray(slack).ravel()[rows]))
+    nlp = nlp_nose_rows(make({"min": 0.0, "max": 0.2}), "landing_offset", "riser_clearance")
     assert simulator == pytest.approx(corner, abs=1e-7)
     assert analysis == pytest.approx(corner, abs=1e-7)
     assert flip(lambda L: nlp(L) >= 0.0, 0.05, 0.1) == pytest.approx(corner, abs=1e-7)
