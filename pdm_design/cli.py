@@ -105,11 +105,6 @@ def optimize(spec, fmt, accuracy, no_verify):
     return outcome.exit_code
 
 
-def _not_yet(name: str):
-    click.echo(f"pdm-design {name}: not available yet in this version.", err=True)
-    return EXIT_FAILED
-
-
 def _parse_pairs(values, label, what, count):
     """Parse 'K:A,B' options (1 <= K <= count, each K once) into (K, A, B), or a clear error
     naming the option. A and B are lengths, held to the spec loader's limit: a larger one would

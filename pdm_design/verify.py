@@ -9,16 +9,11 @@ from __future__ import annotations
 
 import math
 
-from .accuracy import ACCURACY_PRESETS
 from .accuracy import accuracy as accuracy_preset
 from .analysis import Analysis
+from .physics import manipulators as phys
 from .sim.core import SimulationRefused
 from .spec.model import Spec
-
-# Relative agreement demanded between simulator and closed form, per accuracy preset
-# (Accuracy.agreement; a custom Accuracy carries its own). results/accuracy.md has the errors
-# each preset actually makes.
-AGREEMENT = {name: acc.agreement for name, acc in ACCURACY_PRESETS.items()}
 
 
 def simulate_spec(spec: Spec, design, *, stages=None, offsets=None, step_errors=None,
@@ -91,7 +86,7 @@ def _agreement(spec, analysis, result):
         simulated = [s["impact_speed"] for s in result.stages]
         quantity = "the impact speeds"
     else:
-        predicted = _handover_speeds(analysis, len(result.stages))
+        predicted = _handover_speeds(spec, analysis, len(result.stages))
         simulated = [s["handover_speed"] for s in result.stages if s["handover_speed"] is not None]
         quantity = "the handover speeds"
     if not simulated or not predicted:
@@ -116,13 +111,14 @@ def _impact_speeds(spec, analysis, stages):
     return speeds
 
 
-def _handover_speeds(analysis, stages):
+def _handover_speeds(spec, analysis, stages):
     """Closed-form handover speeds of the first `stages` stages (extends the analysis' list)."""
     speeds = list(analysis.approach.get("handover_speeds", []))
-    fixed = analysis.periodic.get("handover_speed")
-    c = analysis.periodic.get("contraction")
-    if not speeds or fixed is None:
+    if not speeds or analysis.periodic.get("handover_speed") is None:
         return speeds
+    d = analysis.design
     while len(speeds) < stages:
-        speeds.append(math.sqrt(c * speeds[-1] ** 2 + fixed**2 * (1 - c)))
+        speeds.append(float(phys.next_handover_speed(
+            speeds[-1], d["alpha"], d["beta"], d["mass_ratio"], gravity=spec.scene.gravity,
+            link_length=d["link_length"])))
     return speeds

@@ -54,7 +54,34 @@ def test_manipulators_analysis_is_finite_everywhere(alpha, beta, mass_ratio, lin
         analysis = analyse(manipulators_scene(), design)
     assert _finite_or_none(analysis)
     assert all(-1.0 <= m <= 1.0 for m in analysis.margins.values())
-    assert (analysis.periodic["handover_speed"] is None) == (beta <= alpha)
+    if abs(alpha + beta - HALF_PI) > 1e-12:  # the sign of cos(alpha + beta) is not rounding's
+        assert (analysis.periodic["handover_speed"] is None) == (beta <= alpha
+                                                                 or alpha + beta > HALF_PI)
+
+
+@settings(max_examples=25, deadline=None)
+@given(alpha=st.floats(0.05, 1.2), extra=st.floats(0.01, 1.0), speed=st.floats(0.0, 12.0))
+def test_no_periodic_handover_beyond_a_right_angle_the_simulator_agrees(alpha, extra, speed):
+    """alpha + beta > pi/2: the object handed over moves along t(beta), which points into the
+    next palm's back stop, so that palm cannot carry it forward. The analysis says so, predicts
+    no handover beyond the ones the simulator makes (it counts the carries that pass the top),
+    and the simulator never completes a row of three however fast the object starts."""
+    from pdm_design.sim.manipulators import simulate_manipulators
+
+    scene = manipulators_scene()
+    scene = scene.__class__(body=scene.body, palm=scene.palm, initial=ManipulatorsInitial(
+        position=scene.initial.position, velocity=(speed, 0.0)))
+    beta = min(alpha + extra, HALF_PI - 1e-3)  # beyond alpha: the carry gains height
+    design = ManipulatorsDesign(alpha=alpha, beta=beta, link_length=2.0, mass_ratio=10.0)
+    analysis = analyse(scene, design, 3)
+    run = simulate_manipulators(scene, design, stages=3)
+    beyond = alpha + beta > HALF_PI + 1e-9
+    assert any("not below pi/2" in p for p in analysis.problems) == beyond
+    if beyond:
+        assert analysis.periodic["handover_speed"] is None
+        assert not run.outcome.completed
+        handovers = sum(e.kind == "handover" for e in run.events)
+        assert len(analysis.approach.get("handover_speeds", [])) >= handovers
 
 
 @settings(max_examples=300, deadline=None)

@@ -652,15 +652,15 @@ def test_verification_demands_the_presets_agreement():
     """verify_nominal compares the simulated handover speeds with the closed forms to the
     accuracy's `agreement`: the paper's design agrees to ~1e-16, so it passes every preset and
     fails only an agreement below that."""
-    from pdm_design.accuracy import accuracy
+    from pdm_design.accuracy import ACCURACY_PRESETS, accuracy
     from pdm_design.analysis import analyse
     from pdm_design.spec import load_spec
-    from pdm_design.verify import AGREEMENT, verify_nominal
+    from pdm_design.verify import verify_nominal
 
     spec = load_spec(Path(__file__).resolve().parents[1] / "problems" / "paper_manipulators.toml")
     point = spec.design_at()
     analysis = analyse(spec.scene, point)
-    for preset in AGREEMENT:
+    for preset in ACCURACY_PRESETS:
         report = verify_nominal(spec, point, analysis, accuracy=preset)
         assert report["passed"] and report["accuracy"] == preset
         assert report["agreement"]["relative_error"] < 1e-14

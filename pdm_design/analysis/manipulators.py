@@ -47,7 +47,12 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
     else:
         s = math.sqrt(s2)
         u = float(phys.landing_speed(s * math.cos(b), -s * math.sin(b), a, q))
-        periodic.update(handover_speed=s, landing_speed=u, drop_per_stage=float(pitch_y))
+        if u > 0.0:
+            periodic.update(handover_speed=s, landing_speed=u, drop_per_stage=float(pitch_y))
+        else:  # s*^2 = D / (1 - c) solves the map's algebra, but no object is carried on it
+            problems.append(f"alpha + beta = {a + b:g} rad is not below pi/2: a handover drives "
+                            "the next palm back onto its stop, so there is no periodic handover")
+        # the margins at s* say how far such a design is from working
         margins.update(_stage_margins(scene, design, (s * math.cos(b), -s * math.sin(b)), offset))
 
     parked = parked_palms_margin(scene, design, offset, stages or APPROACH_STAGES)
@@ -163,17 +168,15 @@ def _tip_margin(support, force_point):
 
 
 def _predicted_handover_speeds(scene, design, velocity, stages=APPROACH_STAGES):
-    """Handover speeds of the first stages by the closed-form map (nominal geometry)."""
+    """Handover speeds of the first stages by the closed-form map (nominal geometry), up to the
+    first carry that cannot pass the top (sim.manipulators.handover_map is nan there too)."""
     g, l = scene.gravity, design.link_length
     a, b, q = design.alpha, design.beta, design.mass_ratio
+    top = float(phys.top_speed_squared_needed(a, gravity=g, link_length=l))
     u = float(phys.landing_speed(*velocity, a, q))
-    speed2 = float(phys.carry_speed_squared(u, a, b, gravity=g, link_length=l))
-    c = float(phys.contraction(a, b, q))
-    gain = float(phys.energy_gain_squared(a, b, gravity=g, link_length=l))
     speeds = []
-    for _ in range(stages):
-        if speed2 <= 0.0:
-            break
-        speeds.append(math.sqrt(speed2))
-        speed2 = c * speed2 + gain
+    while len(speeds) < stages and u > 0.0 and u * u >= top:
+        speeds.append(math.sqrt(float(phys.carry_speed_squared(u, a, b, gravity=g,
+                                                               link_length=l))))
+        u = float(phys.momentum_fraction(q)) * speeds[-1] * math.cos(a + b)
     return speeds

@@ -49,7 +49,7 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign,
     geometry: dict[str, float | None] = {"rise": rise, "tread": design.tread}
     periodic: dict[str, float | None] = {"impact_speed": None}
     if vy_periodic is not None and eps > 0.0:
-        flight = (1.0 + eps) * vy_periodic / g
+        flight = float(phys.flight_time(g, vy_periodic**2 / (2.0 * g), eps))
         orbit_tread = vx * flight
         tread = orbit_tread if design.tread is None else design.tread
         geometry["tread"] = tread
@@ -111,7 +111,7 @@ def _periodic_vertical_speed(g, h0, eps, rise, derived, problems):
     if derived:
         return phys.impact_speed_vertical(g, h0)
     if eps < 1.0 and rise > 0.0:
-        return math.sqrt(2.0 * g * rise / (1.0 - eps**2))
+        return float(phys.periodic_vertical_speed(g, rise, eps))
     if eps < 1.0:
         problems.append(f"rise 0 with restitution {eps:g} < 1: every bounce loses height and no "
                         "step gives it back, so there is no periodic orbit")

@@ -27,7 +27,7 @@ Condition kinds:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
@@ -116,7 +116,6 @@ class SceneModel:
     aux: tuple[tuple[str, object, float, float], ...]  # (name, SX, lower, upper)
     conditions: tuple[Condition, ...]
     objective_terms: dict[str, object]  # objective name -> SX (natural value)
-    tolerance_symbol: object | None  # SX of the box half-width when robust, else None
     margin_symbol: object | None  # SX of the epigraph variable t when max_min_margin, else None
     aux_init: object  # casadi Function design -> aux start values (aux order)
     derived: dict[str, object]  # named design quantities (SX) reported with the design
@@ -156,7 +155,6 @@ class Formulation:
     norms: np.ndarray  # constant row normalisers of g
     scenario: Scenario | None
     build_time: float = 0.0
-    extras: dict = field(default_factory=dict)
     # rows left out of this NLP (Condition.deferred): Function (x, p) -> (slack, scale, row),
     # row >= 0 where the NLP's row would hold; None when every row is in the NLP
     deferred: object = None
@@ -246,10 +244,6 @@ class Formulation:
 
 def _between(a: dict[str, float], b: dict[str, float], t: float) -> dict[str, float]:
     return {n: a[n] + t * (b[n] - a[n]) for n in a}
-
-
-def requirement_value(requirements: dict[str, float], keys: tuple[str, ...]) -> float:
-    return max((float(requirements.get(k, 0.0)) for k in keys), default=0.0)
 
 
 def design_inputs(spec, names: tuple[str, ...], defaults: dict[str, float]):

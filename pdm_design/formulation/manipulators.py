@@ -102,7 +102,7 @@ def build(spec):
     model = SceneModel(
         kind="manipulators", design_symbols=symbols, aux=tuple(aux),
         conditions=tuple(conditions), objective_terms=objective_terms,
-        tolerance_symbol=tau if robust else None, margin_symbol=t, aux_init=aux_init,
+        margin_symbol=t, aux_init=aux_init,
         derived={}, tolerance_axes=("dx", "dy"),
         # a device under a metre long: IPOPT's absolute tolerances on an objective in metres
         # stopped it 2e-5 short at 40-micron links; at a metre and above they are fine as they

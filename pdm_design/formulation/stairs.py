@@ -116,7 +116,7 @@ def build(spec):
             "min_drop": ca.SX(m.rise) if not isinstance(m.rise, ca.SX) else m.rise,
             "fastest_convergence": m.eps**2,
         },
-        tolerance_symbol=tau if robust else None, margin_symbol=t, aux_init=aux_init,
+        margin_symbol=t, aux_init=aux_init,
         derived={"rise": m.rise, "tread": m.tread, "landing_offset": m.L1,
                  "horizontal_speed": m.vx, "periodic_vertical_speed": m.V},
         tolerance_axes=("rise", "tread"),

@@ -41,6 +41,13 @@ def periodic_rise(drop_height, restitution):
     return (1.0 - restitution**2) * drop_height
 
 
+def periodic_vertical_speed(gravity, rise, restitution):
+    """Vertical impact speed of the orbit with one bounce a step of `rise`: each bounce leaves at
+    eps v* and falls `rise` further, so v*^2 (1 - eps^2) = 2 g rise; 1 - eps^2 is taken as
+    (1 - eps)(1 + eps), exact as eps -> 1. (A rise of (1 - eps^2) h0 gives sqrt(2 g h0).)"""
+    return sqrt(2.0 * gravity * rise / ((1.0 - restitution) * (1.0 + restitution)))
+
+
 def flight_time(gravity, drop_height, restitution):
     """Time between two periodic impacts: (1 + eps) sqrt(2 h0 / g)."""
     return (1.0 + restitution) * sqrt(2.0 * drop_height / gravity)

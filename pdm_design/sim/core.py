@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 
 from ..accuracy import Accuracy
 from ..errors import PdmError
-from .numerics import BRENT_RTOL, brentq
 
 # A length, speed or ratio more than SCALE_LIMIT times the scene's own scale (the link length,
 # sqrt(g l), 1, ...) is refused: double precision cannot follow a motion spread over more
@@ -110,9 +109,3 @@ class SimulationResult:
             "accuracy": self.accuracy.name,
             "accuracy_settings": self.accuracy.settings(),
         }
-
-
-def locate(fun, a: float, b: float, tol: float) -> float:
-    """Root of a guard that changes sign on [a, b], to absolute tolerance tol (Brent's method;
-    numerics.brentq, the same iteration as scipy.optimize.brentq without its import cost)."""
-    return brentq(fun, a, b, xtol=tol, rtol=BRENT_RTOL, maxiter=200)

@@ -106,10 +106,6 @@ class Box:
     def inside(self, x: float, y: float) -> bool:
         return abs(x - self.cx) < self.half_width and self.y_low < y < self.y_high
 
-    def penetration(self, x: float, y: float) -> float:
-        """Positive inside the box, negative outside, zero on its boundary (continuous)."""
-        return min(self.half_width - abs(x - self.cx), y - self.y_low, self.y_high - y)
-
 
 @dataclass(frozen=True)
 class Entry:

@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .core import locate
 from .numerics import carlson_rf
 
 # ---------------------------------------------------------------- impacts
@@ -166,11 +165,11 @@ def turning_angle(theta0, v0, *, gravity, link_length, forward=True):
     return -turn if forward else turn
 
 
-def swing_time(a, b, theta0, v0, *, gravity, link_length, tol=0.0, turn=None):
+def swing_time(a, b, theta0, v0, *, gravity, link_length, turn=None):
     """Time to swing from angle a to b (|v| > 0 inside), energy fixed by (th0, v0).
 
     dt = l dth / v(th) with v^2 = 2 g l (E + 2 sin^2(th/2)) integrates in closed form to
-    Carlson's R_F (exact to rounding; `tol` is accepted for the callers' symmetry and unused):
+    Carlson's R_F (exact to rounding):
       E > 0 (over the top): T(th) = sqrt(2 l / g) sin(th/2) R_F(E cos^2(th/2), E + 2 sin^2(th/2),
             E), the time from the top to th (odd in th); the swing time is |T(b) - T(a)|.
       E < 0 (turning at |th| = th_t, r = sin(th_t/2)): with s = sin(|th|/2), the time from the
@@ -199,7 +198,8 @@ def swing_time(a, b, theta0, v0, *, gravity, link_length, tol=0.0, turn=None):
 
 
 def _time_between(a, b, e):
-    """_time_from_top(b, e) - _time_from_top(a, e) with one R_F: by the addition theorem of
+    """T(b) - T(a) of swing_time (E > 0, T(th) = sin(th/2) R_F(E cos^2(th/2), E + 2 sin^2(th/2),
+    E) the scaled time from the top) with one R_F: by the addition theorem of
     F(phi | m), m = -2/E, F(phi_b) - F(phi_a) = F(sigma) with (D = E + 2 sa^2 sb^2, sx, cx the
     sine and cosine of phi_x = th_x / 2, Dx = sqrt(E + 2 sx^2))
         sin sigma = sqrt(E) (sb ca Da - sa cb Db) / D,  cos sigma = (E ca cb + sa sb Da Db) / D,
@@ -225,12 +225,6 @@ def _time_between(a, b, e):
     return value
 
 
-def _time_from_top(theta, e):
-    """sin(th/2) R_F(E cos^2(th/2), E + 2 sin^2(th/2), E): see swing_time."""
-    s, c = math.sin(0.5 * theta), math.cos(0.5 * theta)
-    return s * carlson_rf(e * c * c, e + 2.0 * s * s, e)
-
-
 def _time_from_turn(theta, th_t):
     """sqrt(s - r) R_F(...) of swing_time, s = sin(|th|/2), r = sin(th_t/2); 0 at the turn."""
     x = abs(theta)
@@ -242,7 +236,7 @@ def _time_from_turn(theta, th_t):
                                        2.0 * r * (1.0 - r) * (1.0 + s))
 
 
-def free_palm_arrival(theta0, w0, *, gravity, link_length, back_stop, front_stop, tol):
+def free_palm_arrival(theta0, w0, *, gravity, link_length, back_stop, front_stop):
     """Where and when a palm swinging alone from (th0, speed w0 along t) comes to a stop.
 
     Returns (dt, stop_angle, speed_at_stop). A palm exactly balanced at the top never arrives."""
@@ -252,7 +246,7 @@ def free_palm_arrival(theta0, w0, *, gravity, link_length, back_stop, front_stop
         return math.inf, 0.0, 0.0
     v0 = abs(w0)
     turn = turning_angle(theta0, v0, gravity=g, link_length=l, forward=forward)
-    kw = dict(gravity=g, link_length=l, tol=tol)
+    kw = dict(gravity=g, link_length=l)
     if turn is None:
         target = front_stop if forward else back_stop
         dt = swing_time(theta0, target, theta0, v0, **kw)
@@ -279,8 +273,8 @@ def stuck_force_point(theta, height):
 
 def stuck_crossings(theta0, v0, cap, *, gravity, link_length, height, support, mu):
     """First crossings of the stuck carry's guards on [theta0, cap] (cap < pi/2), in closed form:
-    [(angle, priority, kind)] for lift-off (0), tip (1) and slip (2), each as first_crossing
-    would report it (the start if already violated; else the root, on its violated side).
+    [(angle, priority, kind)] for lift-off (0), tip (1) and slip (2): the start if already
+    violated, else the root, on its violated side (so the next phase starts inside its guards).
 
       lift-off  v^2 - g l cos th = v0^2 + 2 g l cos th0 - 3 g l cos th: falls until th = 0, then
                 rises through 0 at sin^2(th/2) = (g l (1 + 4 sin^2(th0/2)) - v0^2) / (6 g l);
@@ -321,28 +315,6 @@ def stuck_crossings(theta0, v0, cap, *, gravity, link_length, height, support, m
         if guard(root) >= 0.0:
             out.append((root, prio, kind))
     return out
-
-
-def first_crossing(guard, a, b, tol, breaks=()):
-    """First th in [a, b] where guard goes from < 0 to >= 0, to tol; None if it does not.
-
-    guard must be monotone between consecutive `breaks`; a guard already >= 0 at a fires at a.
-    The angle returned is within tol of the root and on its violated side (guard >= 0)."""
-    if guard(a) >= 0.0:
-        return a
-    points = [a] + sorted(p for p in breaks if a < p < b) + [b]
-    for lo, hi in zip(points, points[1:]):
-        g_lo, g_hi = guard(lo), guard(hi)
-        if g_lo < 0.0 <= g_hi:
-            if g_hi == 0.0:
-                return hi
-            root = locate(guard, lo, hi, tol)
-            for _ in range(8):  # report a point on the violated side, so the next phase
-                if guard(root) >= 0.0:  # starts strictly inside its own guards
-                    return root
-                root = min(hi, root + tol)
-            return hi
-    return None
 
 
 # ---------------------------------------------------------------- sliding carry

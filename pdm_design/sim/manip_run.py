@@ -131,8 +131,7 @@ class Run(OdePhases):
         """Palm k, now empty, swings on alone from (theta, w) to one of its stops; it is an
         obstacle again once it is there."""
         dt, stop, speed = ph.free_palm_arrival(theta, w, gravity=self.g, link_length=self.l,
-                                               back_stop=-self.alpha, front_stop=self.fs,
-                                               tol=self.acc.event_tol)
+                                               back_stop=-self.alpha, front_stop=self.fs)
         self.rest_angle[k], self.rest_since[k] = stop, t + dt
         if len(self.swinging) > 2:  # palms at rest by now are dropped now and then
             self.swinging = [j for j in self.swinging if self.rest_since[j] > t]
@@ -253,7 +252,7 @@ class Run(OdePhases):
                 if self._bouncing_in_place(j, x, y, imp.vx, t):
                     hops = self._hops_left(imp.vy)
                     if hops > EVENTS_PER_STAGE // 2:  # fewer are followed event by event
-                        return self._settle_in_place(t, j, theta, offset, imp.vy, hops, after)
+                        return self._settle_in_place(t, j, theta, imp.vy, hops, after)
                 return lambda: self._flight(t, x, y, imp.vx, imp.vy, stage=j + 1)
             self.rest_since[j] = math.inf
             return lambda: self._bouncing(t, j, x, y, imp.vx, imp.vy, theta, imp.w / self.l)
@@ -288,7 +287,7 @@ class Run(OdePhases):
             return math.inf
         return math.floor(math.log(self.zeno_speed / vy) / math.log(self.eps)) + 1
 
-    def _settle_in_place(self, t, j, theta, offset, vy, hops, state):
+    def _settle_in_place(self, t, j, theta, vy, hops, state):
         """Closed form of an object hopping in place on a held palm: the same vertical hop at
         vy, eps vy, eps^2 vy, ... until a hop would leave slower than the Zeno speed (as the
         event loop would do hop by hop, in 2 vy (1 - eps^n) / (g (1 - eps)) for n hops); then
@@ -417,8 +416,7 @@ class Run(OdePhases):
                                          height=self.h, support=(lo, hi), mu=self.mu)
         theta_e, _, kind = min(candidates)
         turn = turn if kind == "stall" else None
-        te = t0 + ph.swing_time(theta0, theta_e, theta0, v0, gravity=g, link_length=l, tol=tol,
-                                turn=turn)
+        te = t0 + ph.swing_time(theta0, theta_e, theta0, v0, gravity=g, link_length=l, turn=turn)
         # A palm released earlier (palm k-1, say) may reach its stop during this carry, where
         # the arc meets it: the carry is split at its arrival and goes on with it as an obstacle.
         t1 = math.inf  # (a loop, not _arrivals: this runs at every carry)
@@ -470,7 +468,7 @@ class Run(OdePhases):
         for i, th in enumerate(ths):
             if i:
                 t += ph.swing_time(ths[i - 1], th, theta0, v0, gravity=g, link_length=l,
-                                   tol=1e-10, turn=turn if i == len(ths) - 1 else None)
+                                   turn=turn if i == len(ths) - 1 else None)
             v = math.sqrt(max(ph.speed_squared(th, theta0, v0, gravity=g, link_length=l), 0.0))
             st = self._on_palm(k, th, v / l, s)
             self._rec(t, st["x"], st["y"], st["vx"], st["vy"], th, k + 1)

@@ -22,6 +22,7 @@ import math
 import numpy as np
 
 from ..accuracy import accuracy as resolve_accuracy
+from ..physics import manipulators as phys
 from .core import SimulationResult, check_scales
 from .manip_run import Run
 
@@ -106,9 +107,11 @@ def handover_map(speeds, alpha, beta, mass_ratio, g, l, *, arrival_angle=None,
     s = np.asarray(speeds, dtype=float)
     arr = beta if arrival_angle is None else np.asarray(arrival_angle, dtype=float)
     dep = beta if departure_angle is None else np.asarray(departure_angle, dtype=float)
-    k = mass_ratio / (1.0 + mass_ratio)
-    u = k * s * np.cos(alpha + arr)
-    v2 = u * u + 2.0 * g * l * (np.cos(alpha) - np.cos(dep))
-    passes = (u >= 0.0) & (u * u >= 2.0 * g * l * (1.0 - np.cos(alpha)))
+    # the physics closed forms: cos a - cos dep and 1 - cos a without cancellation (at
+    # alpha = 1e-6 the plain differences lost 11 of 16 digits of the fixed point)
+    u = phys.momentum_fraction(mass_ratio) * s * np.cos(alpha + arr)
+    v2 = phys.carry_speed_squared(u, alpha, dep, gravity=g, link_length=l)
+    passes = (u >= 0.0) & (u * u >= phys.top_speed_squared_needed(alpha, gravity=g,
+                                                                     link_length=l))
     with np.errstate(invalid="ignore"):
         return np.where(passes & (v2 >= 0.0), np.sqrt(np.maximum(v2, 0.0)), np.nan)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from ..physics import stairs as phys
 from ..scenes import StairsDesign, StairsScene
 from .core import SimulationRefused
 from .stairs_maps import impact_once
@@ -92,14 +93,14 @@ def stairs_geometry(scene: StairsScene, design: StairsDesign, step_errors=()) ->
         if design.rise is None or (rise == 0.0 and eps == 1.0):
             v_star = math.sqrt(2.0 * g * h0)
         elif eps < 1.0:
-            v_star = math.sqrt(2.0 * g * rise / (1.0 - eps**2))
+            v_star = float(phys.periodic_vertical_speed(g, rise, eps))
         else:
             raise SimulationRefused("restitution 1 with a rise > 0 has no periodic orbit: give "
                                     "the tread")
         ball = scene.ball
         vx1 = impact_once(v0, -math.sqrt(2.0 * g * h0), scene.initial.spin, eps, scene.friction,
                       ball.radius, ball.mass, ball.inertia)[0]
-        tread = vx1 * (1.0 + eps) * v_star / g
+        tread = float(phys.periodic_tread(vx1, g, v_star**2 / (2.0 * g), eps))
         if not tread > 0.0:
             raise SimulationRefused(f"the derived tread is {tread:g} m (restitution {eps:g}, "
                                     f"horizontal speed after the first impact {vx1:g} m/s): "

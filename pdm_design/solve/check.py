@@ -11,26 +11,22 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..analysis.manipulators import analyse_manipulators
-from ..analysis.stairs import analyse_stairs
+from ..analysis import analyse
 
 CHECK_TOL = 1e-6
 # Margins whose optimizer meaning differs from the analysis' (checked at 0: the condition holds).
 _CHECK_AT_ZERO = {"stairs": {"nose_clearance", "first_nose_clearance"}, "manipulators": set()}
 
 
-def analyse(spec, design: dict[str, float]):
+def _design_point(spec, design: dict[str, float]):
+    """The design object of an optimizer answer (values left None are derived by the analysis)."""
     cls = spec.design_class
-    values = {k: design[k] for k in cls.VARIABLES if k in design and design[k] is not None}
-    point = cls(**values)
-    if spec.kind == "stairs":
-        return analyse_stairs(spec.scene, point, spec.verification.stages)
-    return analyse_manipulators(spec.scene, point, spec.verification.stages)
+    return cls(**{k: design[k] for k in cls.VARIABLES if design.get(k) is not None})
 
 
 def closed_form_check(spec, design: dict[str, float], requirements: dict[str, float]) -> dict:
     try:
-        analysis = analyse(spec, design)
+        analysis = analyse(spec.scene, _design_point(spec, design), spec.verification.stages)
     except (ValueError, TypeError) as exc:  # the design cannot even be built
         return {"passed": False, "failures": [f"design rejected: {exc}"], "analysis": None}
     at_zero = _CHECK_AT_ZERO[spec.kind]

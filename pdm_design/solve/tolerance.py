@@ -21,7 +21,6 @@ import threading
 import warnings
 
 import casadi as ca
-import cvxpy as cp
 import numpy as np
 
 from .result import LinearisedTolerance
@@ -88,6 +87,7 @@ def linearised_tolerance(form, x, p, *, cap: float, length: float) -> Linearised
     A, b = A_all[keep] * length, np.maximum(b_all[keep], 0.0)
     absA, top = np.abs(A), cap / length
     problems = []
+    import cvxpy as cp  # here, not at the top: optimize runs that never get here skip its 0.14 s
 
     tau, square = cp.Variable(nonneg=True), 0.0
     if _solved(cp.Problem(cp.Maximize(tau), [b - tau * absA.sum(axis=1) >= 0, tau <= top]),
@@ -116,6 +116,8 @@ def _solved(problem, what: str, problems: list[str], tight: bool = False,
             inaccurate: bool = False) -> bool:
     """Solve with Clarabel; False (and a line in `problems`) unless it is optimal (or, with
     `inaccurate`, optimal_inaccurate: the caller makes the point feasible)."""
+    import cvxpy as cp
+
     options = {"tol_gap_abs": 1e-12, "tol_gap_rel": 1e-12, "tol_feas": 1e-12} if tight else {}
     try:
         with warnings.catch_warnings():
@@ -151,6 +153,8 @@ def _ellipsoid(A, b, names, cap, problems):
     ellipsoid (an SOCP: max sum log e_j s.t. ||c_i * e|| <= 1), since cvxpy's log-det cone
     grows too slow for interactive use (about 10 s at 40 coordinates).
     """
+    import cvxpy as cp
+
     n = len(names)
     if np.any(b <= 0):
         problems.append("ellipsoid degenerate: a condition is at its limit at the design itself")
