@@ -158,10 +158,11 @@ def _contact_force_by_newton(theta, speed):
 
 
 @pytest.mark.parametrize("theta, speed", [(0.6, 3.0), (-0.2, 2.0), (0.3, 4.5)])
-def test_lift_off_ratio_matches_newton(theta, speed):
+def test_lift_off_capacity_matches_newton(theta, speed):
     force = _contact_force_by_newton(theta, speed)
-    normal_positive = force[1] > 0
-    assert (manip.lift_off_ratio(speed**2, theta, gravity=G, link_length=L) < 1) == normal_positive
+    normal_positive = force[1] > 0  # the palm's top is horizontal: its normal is y
+    held = manip.lift_off_capacity(theta, gravity=G, link_length=L)
+    assert (speed**2 < held) == normal_positive
 
 
 @pytest.mark.parametrize("theta, speed", [(0.6, 3.0), (-0.2, 2.0), (0.5, 1.0)])

@@ -136,13 +136,13 @@ def _stage_margins(scene, design, velocity, offset) -> dict[str, float]:
         "over_the_top": margin(u**2 if u > 0 else 0.0,
                                float(phys.top_speed_squared_needed(a, gravity=g, link_length=l))),
         "lift_off": min(
-            margin(g * l * math.cos(a), u**2),
-            margin(g * l * math.cos(b), v_beta2),
+            margin(float(phys.lift_off_capacity(a, gravity=g, link_length=l)), u**2),
+            margin(float(phys.lift_off_capacity(b, gravity=g, link_length=l)), v_beta2),
         ),
         "slip_carry": margin(palm.friction, float(phys.friction_demand(max(a, b)))),
         "tip_carry": min(
-            _tip_margin(support, -half_h * math.tan(-a)),
-            _tip_margin(support, -half_h * math.tan(b)),
+            _tip_margin(support, float(phys.carry_force_point(-a, body.height))),
+            _tip_margin(support, float(phys.carry_force_point(b, body.height))),
         ),
     }
     if py > 0.0:

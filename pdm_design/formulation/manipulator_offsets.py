@@ -53,14 +53,15 @@ def scenario(spec, model, m) -> Scenario:
     o = m.C0 + m.vx0 * m.flight_time(dy[0]) - dx[0]
     px, py = phys.landing_impulse(m.vx0, -Q, a, q)
     impact("first_", 1, px, py, o)
-    fp_back = h / 2 * ca.tan(a)
+    fp_back = phys.carry_force_point(-a, h)  # ahead of the centre
     for K in range(1, N + 1):
         first = "first_" if K == 1 else ""
         where = f"palm {K}"
         add("landing", f"{where}, ahead", W / 2 - o - w / 2, W / 2)
         add("landing", f"{where}, behind", W / 2 + o - w / 2, W / 2)
         add(f"{first}over_the_top", where, u**2 - m.top_needed, u**2)
-        add(f"{first}lift_off", f"{where}, back stop", g * l * ca.cos(a) - u**2, g * l * ca.cos(a))
+        held = phys.lift_off_capacity(a, gravity=g, link_length=l)
+        add(f"{first}lift_off", f"{where}, back stop", held - u**2, held)
         add("slip_carry", f"{where}, back stop", mu - phys.friction_demand(a), mu)
         add("tip_carry", f"{where}, back stop, object's front edge", w / 2 - fp_back, w / 2)
         add("tip_carry", f"{where}, back stop, palm's front edge", W / 2 - o - fp_back, W / 2 - o)
@@ -78,9 +79,10 @@ def scenario(spec, model, m) -> Scenario:
         if palm.front_stop < ca.pi / 2:
             add("front_stop", where, palm.front_stop - th, palm.front_stop)
         v2 = phys.carry_speed_squared(u, a, th, gravity=g, link_length=l)
-        add(f"{first}lift_off", f"{where}, handover", g * l * cth - v2, g * l * cth)
+        held = g * l * cth  # lift_off_capacity(th), without cos(acos(.))
+        add(f"{first}lift_off", f"{where}, handover", held - v2, held)
         add("slip_carry", f"{where}, handover", mu - phys.friction_demand(th), mu)
-        fp_front = h / 2 * ca.tan(th)
+        fp_front = -phys.carry_force_point(th, h)  # behind the centre
         add("tip_carry", f"{where}, handover, object's rear edge", w / 2 - fp_front, w / 2)
         add("tip_carry", f"{where}, handover, palm's rear edge", W / 2 + o - fp_front, W / 2 + o)
         if K == N:

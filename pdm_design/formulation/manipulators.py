@@ -300,11 +300,12 @@ class _Model:
         # Carry conditions on every palm (the first included: u_lo <= u_1 <= u_hi).
         add(("over_the_top", "first_over_the_top"), "slowest landing on any palm",
             u_lo**2 - self.top_needed, u_lo**2)
+        held = phys.lift_off_capacity(a, gravity=g, link_length=l)
         add(("lift_off", "first_lift_off"), "at the back stop, fastest landing",
-            g * l * ca.cos(a) - u_hi**2, g * l * ca.cos(a))
+            held - u_hi**2, held)
         v2 = phys.carry_speed_squared(u_hi, a, th_hi, gravity=g, link_length=l)
-        add(("lift_off", "first_lift_off"), "at the handover, fastest carry",
-            g * l * ca.cos(th_hi) - v2, g * l * ca.cos(th_hi))
+        held = phys.lift_off_capacity(th_hi, gravity=g, link_length=l)
+        add(("lift_off", "first_lift_off"), "at the handover, fastest carry", held - v2, held)
         add("slip_carry", "at the back stop", mu - phys.friction_demand(a), mu)
         add("slip_carry", "at the largest handover angle", mu - phys.friction_demand(th_hi), mu)
         add("palm_clearance", "next palm below the object until the handover",
@@ -331,13 +332,14 @@ class _Model:
             add("landing", _v("object furthest ahead", i, o_hi), W / 2 - o - w / 2, W / 2)
         for i, o in enumerate(o_lo):
             add("landing", _v("object furthest behind", i, o_lo), W / 2 + o - w / 2, W / 2)
-        # Tipping during the carry: force point (h/2) tan th from the centre within the support.
-        fp_back = h / 2 * ca.tan(a)
+        # Tipping during the carry: the force point within the support (ahead of the centre at
+        # the back stop, behind it at the handover).
+        fp_back = phys.carry_force_point(-a, h)
         add("tip_carry", "at the back stop, object's front edge", w / 2 - fp_back, w / 2)
         for i, o in enumerate(o_hi):
             add("tip_carry", _v("at the back stop, palm's front edge", i, o_hi),
                 W / 2 - o - fp_back, W / 2 - o)
-        fp_front = h / 2 * ca.tan(th_hi)
+        fp_front = -phys.carry_force_point(th_hi, h)
         add("tip_carry", "at the handover, object's rear edge", w / 2 - fp_front, w / 2)
         for i, o in enumerate(o_lo):
             add("tip_carry", _v("at the handover, palm's rear edge", i, o_lo),

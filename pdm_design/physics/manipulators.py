@@ -107,9 +107,17 @@ def palm_centre(pivot_x, pivot_y, theta, link_length):
     return pivot_x + link_length * sin(theta), pivot_y + link_length * cos(theta)
 
 
-def lift_off_ratio(speed_squared, theta, *, gravity, link_length):
-    """v^2 / (g l cos theta): the palm's normal force vanishes when this reaches 1."""
-    return speed_squared / (gravity * link_length * cos(theta))
+def lift_off_capacity(theta, *, gravity, link_length):
+    """g l cos theta: the squared speed below which the palm at theta still presses the stuck
+    object (the contact force m (g cos th - v^2 / l) r is a push only while v^2 < g l cos th)."""
+    return gravity * link_length * cos(theta)
+
+
+def carry_force_point(theta, height):
+    """Where the contact force on the stuck object crosses its base, from the base's centre,
+    forward (+x) positive: friction / normal = tan th puts it (h / 2) tan th behind for th > 0
+    and ahead for th < 0."""
+    return -0.5 * height * tan(theta)
 
 
 def friction_demand(theta):
