@@ -212,8 +212,9 @@ def test_carried_object_hitting_the_next_palm_side_is_blocked():
 
 
 def algebraic_plastic_impact(vx, vy, w, theta, m, inv_m, mu):
-    """The plastic impact by the brief's rule: the sticking impulse if it is inside the friction
-    cone, else Coulomb sliding throughout (|p_t| = mu p_n, g_n ends at 0)."""
+    """The plastic impact by the model's rule (docs/manipulators_model.md 2.2): the sticking
+    impulse if it is inside the friction cone, else Coulomb sliding throughout (|p_t| = mu p_n,
+    g_n ends at 0)."""
     wm = delassus(theta, m, inv_m)
     s, c = math.sin(theta), math.cos(theta)
     g = np.array([vx - w * c, vy + w * s])

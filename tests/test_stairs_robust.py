@@ -9,7 +9,7 @@ worst case. Also: the launch must clear the top landing's nose (step 0), which w
 flights' rows do not imply. Every number asserted here comes from the simulator; the design and
 the claimed box from the optimizer.
 
-Also the size of the stairs (audit): below a rise of about 1 cm every start ended in
+Also the size of the stairs: below a rise of about 1 cm every start ended in
 Invalid_Number_Detected (the tolerance's bound was 1 m, so IPOPT started it at 1 cm, above the
 rise, where the flights' square roots are of negative numbers), and at restitution 0.999 the
 claimed box was larger than the rise (the rise row was normalised by the tread, so IPOPT's
@@ -166,7 +166,7 @@ def full_size():
 
 @pytest.mark.parametrize("k", [0.01, 1e-4])
 def test_the_error_box_scales_with_the_stairs(full_size, k):
-    # k = 0.01 is the audit's spec (rise 3.6 mm): every start ended Invalid_Number_Detected
+    # k = 0.01 (a rise of 3.6 mm): every start once ended Invalid_Number_Detected
     spec = scaled_spec(k)
     result = optimize(spec)
     assert result.status is Status.OPTIMAL, result.stats.return_statuses

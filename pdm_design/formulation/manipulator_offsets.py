@@ -19,6 +19,7 @@ import casadi as ca
 
 from ..physics import manipulators as phys
 from .common import MARGIN, VALIDITY, ConditionInfo, Scenario
+from .manipulators import impact_rows
 
 
 def scenario(spec, model, m) -> Scenario:
@@ -34,17 +35,8 @@ def scenario(spec, model, m) -> Scenario:
         rows.append(((key,), where, slack, scale, kind))
 
     def impact(prefix, stage, px, py, o):
-        where = f"palm {stage}"
-        add(f"{prefix}slip_impact", f"{where}, sliding back", mu * py - px, mu * py)
-        add(f"{prefix}slip_impact", f"{where}, sliding forward", mu * py + px, mu * py)
-        add(f"{prefix}tip_impact", f"{where}, object's front edge", w / 2 * py + h / 2 * px,
-            w / 2 * py)
-        add(f"{prefix}tip_impact", f"{where}, object's rear edge", w / 2 * py - h / 2 * px,
-            w / 2 * py)
-        add(f"{prefix}tip_impact", f"{where}, palm's front edge",
-            (W / 2 - o) * py + h / 2 * px, (W / 2 - o) * py)
-        add(f"{prefix}tip_impact", f"{where}, palm's rear edge",
-            (W / 2 + o) * py - h / 2 * px, (W / 2 + o) * py)
+        impact_rows(add, spec.scene, f"{prefix}slip_impact", f"{prefix}tip_impact",
+                    f"palm {stage}", px, py, [o], [o])
 
     add("start_height", "palm 1", m.H - dy[0], l, VALIDITY)
     Q = m.fall_speed(dy[0])

@@ -349,30 +349,34 @@ class _Model:
         if self.stages >= 2:
             for where, th in thetas:
                 px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a, self.q)
-                self._impact(add, "slip_impact", "tip_impact", where, px, py, o_hi, o_lo)
+                impact_rows(add, self.scene, "slip_impact", "tip_impact", where, px, py, o_hi,
+                            o_lo)
         for where, Q in Qs:
             px, py = phys.landing_impulse(self.vx0, -Q, a, self.q)
-            self._impact(add, "first_slip_impact", "first_tip_impact", where, px, py,
-                         [o1_hi], [o1_lo])
+            impact_rows(add, self.scene, "first_slip_impact", "first_tip_impact", where, px, py,
+                        [o1_hi], [o1_lo])
         return out
 
-    def _impact(self, add, slip, tip, where, px, py, o_hi, o_lo):
-        """Stick (|px| <= mu py) and no tip (impulse line through the support) at a landing."""
-        body, palm = self.scene.body, self.scene.palm
-        mu, W, w, h = palm.friction, palm.width, body.width, body.height
-        sep = ", " if where else ""
-        add(slip, f"{where}{sep}sliding back", mu * py - px, mu * py)
-        add(slip, f"{where}{sep}sliding forward", mu * py + px, mu * py)
-        # Force point -(h/2) px/py from the centre: ahead (px < 0) within min(w/2, W/2 - o),
-        # behind within min(w/2, W/2 + o). Multiplied by py > 0 (implied by the stick rows).
-        add(tip, f"{where}{sep}over the object's front edge", w / 2 * py + h / 2 * px, w / 2 * py)
-        add(tip, f"{where}{sep}over the object's rear edge", w / 2 * py - h / 2 * px, w / 2 * py)
-        for i, o in enumerate(o_hi):
-            add(tip, _v(f"{where}{sep}over the palm's front edge", i, o_hi),
-                (W / 2 - o) * py + h / 2 * px, (W / 2 - o) * py)
-        for i, o in enumerate(o_lo):
-            add(tip, _v(f"{where}{sep}over the palm's rear edge", i, o_lo),
-                (W / 2 + o) * py - h / 2 * px, (W / 2 + o) * py)
+
+def impact_rows(add, scene, slip, tip, where, px, py, o_hi, o_lo):
+    """Stick (|px| <= mu py) and no tip (impulse line through the support) at a landing with
+    impulse (px, py) and landing offsets o_hi (furthest ahead) and o_lo (furthest behind):
+    add(key, where, slack, scale) once per row."""
+    body, palm = scene.body, scene.palm
+    mu, W, w, h = palm.friction, palm.width, body.width, body.height
+    sep = ", " if where else ""
+    add(slip, f"{where}{sep}sliding back", mu * py - px, mu * py)
+    add(slip, f"{where}{sep}sliding forward", mu * py + px, mu * py)
+    # Force point -(h/2) px/py from the centre: ahead (px < 0) within min(w/2, W/2 - o),
+    # behind within min(w/2, W/2 + o). Multiplied by py > 0 (implied by the stick rows).
+    add(tip, f"{where}{sep}over the object's front edge", w / 2 * py + h / 2 * px, w / 2 * py)
+    add(tip, f"{where}{sep}over the object's rear edge", w / 2 * py - h / 2 * px, w / 2 * py)
+    for i, o in enumerate(o_hi):
+        add(tip, _v(f"{where}{sep}over the palm's front edge", i, o_hi),
+            (W / 2 - o) * py + h / 2 * px, (W / 2 - o) * py)
+    for i, o in enumerate(o_lo):
+        add(tip, _v(f"{where}{sep}over the palm's rear edge", i, o_lo),
+            (W / 2 + o) * py - h / 2 * px, (W / 2 + o) * py)
 
 
 def _v(text, i, versions):

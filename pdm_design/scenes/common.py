@@ -28,4 +28,9 @@ QuarterTurn = Annotated[float, Strict(), Field(ge=0, lt=math.pi / 2)]
 PositiveQuarterTurn = Annotated[float, Strict(), Field(gt=0, lt=math.pi / 2)]
 Point = tuple[Number, Number]
 
+
+def is_number(value) -> bool:
+    """A TOML number (int or float; TOML's booleans are not numbers here)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
 STANDARD_GRAVITY = 9.81

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import PdmError, SpecError
+from ..physics import manipulators as phys
 from ..spec import load_spec
 from ..spec.model import MAX_OPTIMISED_BOUNCES, Bounds, Spec
 
@@ -208,14 +209,15 @@ def _manipulators(spec, analysis, tol, count):
     items = []
     for k in range(1, count + 1):
         x, y = x0 + (k - 1) * px, y0 - (k - 1) * py
+        back_x, back_y = (float(v) for v in phys.palm_centre(x, y, -a, l))
+        hand_x, hand_y = (float(v) for v in phys.palm_centre(x, y, b, l))
         items.append({
             "manipulator": k, "pivot_x_m": x, "pivot_y_m": y,
             "pivot_x_tolerance_m": tx, "pivot_y_tolerance_m": ty,
             "back_stop_rad": -a, "handover_rad": b, "front_stop_rad": scene.palm.front_stop,
             "link_length_m": l, "palm_mass_kg": palm_mass,
-            "palm_at_back_stop_x_m": x - l * math.sin(a),
-            "palm_at_back_stop_y_m": y + l * math.cos(a),
-            "handover_x_m": x + l * math.sin(b), "handover_y_m": y + l * math.cos(b),
+            "palm_at_back_stop_x_m": back_x, "palm_at_back_stop_y_m": back_y,
+            "handover_x_m": hand_x, "handover_y_m": hand_y,
         })
     summary = [
         ("manipulators", count, "", None),

@@ -38,7 +38,7 @@ Event kinds:
     bounced_back    failure: the ball flies back up and lands on an earlier step
     no_rebound      failure: the ball leaves a tread with no vertical speed (restitution 0); it
                     would roll or slide along the tread, which the model does not cover
-``left_stairs`` is never produced: the staircase is built as far as the requested bounces need.
+The staircase is built as far as the requested bounces need: the ball never runs off its end.
 
 Long runs: full stage records and events are kept for the first ``record_limit`` bounces
 (default 10 000) plus the last one; `StairsSimulationResult.summary` carries running statistics

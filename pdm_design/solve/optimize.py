@@ -85,16 +85,16 @@ def optimize(
     if status in (Status.INFEASIBLE, Status.SOLVER_ERROR) and diagnose:
         diag = elastic.diagnose(form, p, x_starts[: min(len(x_starts), 4)], max_iter=max_iter)
         extra_iters, extra_time = diag.iterations, diag.seconds
-        if diag.status not in (Status.OPTIMAL, Status.ACCEPTABLE):
-            pass  # the elastic problem failed too: keep IPOPT's own status, claim nothing more
-        elif diag.total <= FEASIBILITY_TOL:  # feasible after all: restart from the elastic point
+        # (an elastic problem that fails too leaves IPOPT's own status: nothing more is claimed)
+        solved = diag.status in (Status.OPTIMAL, Status.ACCEPTABLE)
+        if solved and diag.total <= FEASIBILITY_TOL:  # feasible after all: restart from there
             retry = solve_once(solver, diag.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
                                start=len(runs))
             runs.append(retry)
             calls.append(retry)
             if retry.status in (Status.OPTIMAL, Status.ACCEPTABLE):
                 chosen, status, x = retry, retry.status, retry.x
-        else:
+        elif solved:
             status, x, violations = Status.INFEASIBLE, diag.x, diag.violations
             at_bounds = diag.at_bounds
 

@@ -23,7 +23,7 @@ from pydantic import Field, Strict, TypeAdapter
 from ..accuracy import Accuracy, AccuracyError, accuracy
 from ..errors import SpecError, did_you_mean
 from ..scenes import ManipulatorsDesign, ManipulatorsScene, StairsDesign, StairsScene
-from ..scenes.common import CONFIG
+from ..scenes.common import CONFIG, is_number
 from .model import (
     MANIPULATOR_MARGINS,
     MAX_MANIPULATOR_STAGES,
@@ -277,7 +277,7 @@ def _design(table: dict, design_class) -> dict[str, float | Bounds]:
         if isinstance(value, dict):
             _check_keys(value, BOUNDS_KEYS, path)
             values[name] = _build(Bounds, value, path)
-        elif _is_number(value):
+        elif is_number(value):
             values[name] = value
         else:
             raise _Invalid(path, FREE_OR_FIXED, _show(value))
@@ -412,7 +412,7 @@ def _expected(error: dict) -> str:
         "dataclass_type": "a table", "dataclass_args_type": "a table", "dict_type": "a table",
         "tuple_type": "an array", "list_type": "an array",
     }
-    if kind == "float_type" and _is_number(error["input"]):  # an integer too big for a float
+    if kind == "float_type" and is_number(error["input"]):  # an integer too big for a float
         return "a finite number"
     if kind in simple:
         return simple[kind]
@@ -439,9 +439,6 @@ def _locate(base: str, loc: tuple, data: Any) -> tuple[str, Any]:
 
 
 # --------------------------------------------------------------------------- small helpers
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
 def _key(key: Any) -> str:

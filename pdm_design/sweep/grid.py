@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import SpecError
 from ..scenes import ManipulatorsDesign, ManipulatorsScene, StairsDesign, StairsScene
+from ..scenes.common import is_number
 
 OPTION = "--sweep"
 SYNTAX = "NAME=START:STOP:COUNT, e.g. mass_ratio=5:20:4"
@@ -107,7 +108,7 @@ def numeric_parameters(data: dict) -> list[tuple[str, ...]]:
         if key in _SKIPPED_TABLES:
             continue
         if key == "design" and isinstance(value, dict):
-            paths.update(("design", k) for k, v in value.items() if _is_number(v)
+            paths.update(("design", k) for k, v in value.items() if is_number(v)
                          or isinstance(v, dict))
         else:
             _numeric_leaves(value, (key,), paths)
@@ -122,7 +123,7 @@ def numeric_parameters(data: dict) -> list[tuple[str, ...]]:
 
 
 def _numeric_leaves(value, path, out):
-    if _is_number(value):
+    if is_number(value):
         out.add(path)
     elif isinstance(value, dict):
         for key, child in value.items():
@@ -150,9 +151,6 @@ def _is_float_annotation(annotation) -> bool:
         return bool(args) and all(_is_float_annotation(a) for a in args)
     return False
 
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
 def resolve_name(data: dict, name: str) -> tuple[str, ...]:
@@ -231,7 +229,7 @@ def point_data(data: dict, axes_paths, values, warm: dict[str, float] | None = N
             if not isinstance(bounds, dict) or guess is None or not math.isfinite(guess):
                 continue
             low, high = bounds.get("min"), bounds.get("max")
-            if _is_number(low) and _is_number(high) and low <= high:
+            if is_number(low) and is_number(high) and low <= high:
                 bounds["initial"] = min(max(float(guess), float(low)), float(high))
     return out
 

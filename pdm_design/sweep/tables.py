@@ -13,6 +13,7 @@ import io
 import math
 
 from ..scenes import ManipulatorsDesign, StairsDesign
+from ..scenes.common import is_number
 from ..spec.model import MANIPULATOR_MARGINS, STAIRS_MARGINS
 
 DESIGN = {"manipulators": ManipulatorsDesign.VARIABLES, "stairs": StairsDesign.VARIABLES}
@@ -65,11 +66,11 @@ def outcome_cells(outcome, kind: str) -> dict[str, str]:
     objective = outcome.objective or {}
     row["objective"] = objective.get("value") if isinstance(objective, dict) else None
     tolerance = outcome.tolerance or {}
-    sides = [float(v) for k, v in tolerance.items() if _is_number(v) and k != "volume"]
+    sides = [float(v) for k, v in tolerance.items() if is_number(v) and k != "volume"]
     row["tolerance"] = min(sides) if sides else None
     for axis in TOLERANCE_AXES[kind]:
         value = tolerance.get(axis)
-        row[f"tolerance.{axis}"] = value if _is_number(value) else None
+        row[f"tolerance.{axis}"] = value if is_number(value) else None
     margins = analysis.margins
     if margins:
         # Ties within rounding (a frictionless launch is flight 1's own nose condition) go to the
@@ -86,7 +87,7 @@ def outcome_cells(outcome, kind: str) -> dict[str, str]:
         row["verification"] = verification.get("summary", "")
     solver = outcome.solver or {}
     iterations = solver.get("iterations") if isinstance(solver, dict) else None
-    row["solver_iterations"] = iterations if _is_number(iterations) else None
+    row["solver_iterations"] = iterations if is_number(iterations) else None
     row["reason"] = _reason(outcome)
     return {k: cell(v) for k, v in row.items()}
 
@@ -105,9 +106,6 @@ def _reason(outcome) -> str:
         return f"verification failed: {verification.get('summary', '')}"
     return ""
 
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
 # --------------------------------------------------------------------------- CSV
