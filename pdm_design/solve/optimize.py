@@ -77,26 +77,12 @@ def optimize(
         runs, more_calls, stacked_starts = _multistart(form, options, x_starts, p, None)
         calls += more_calls
         chosen = best(runs)
-    solver = solver_for(form.key, form.nlp, options)
     status, x = chosen.status, chosen.x
     violations, at_bounds = (), ()
     extra_iters, extra_time = 0, 0.0
-
     if status in (Status.INFEASIBLE, Status.SOLVER_ERROR) and diagnose:
-        diag = elastic.diagnose(form, p, x_starts[: min(len(x_starts), 4)], max_iter=max_iter)
-        extra_iters, extra_time = diag.iterations, diag.seconds
-        # (an elastic problem that fails too leaves IPOPT's own status: nothing more is claimed)
-        solved = diag.status in (Status.OPTIMAL, Status.ACCEPTABLE)
-        if solved and diag.total <= FEASIBILITY_TOL:  # feasible after all: restart from there
-            retry = solve_once(solver, diag.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
-                               start=len(runs))
-            runs.append(retry)
-            calls.append(retry)
-            if retry.status in (Status.OPTIMAL, Status.ACCEPTABLE):
-                chosen, status, x = retry, retry.status, retry.x
-        elif solved:
-            status, x, violations = Status.INFEASIBLE, diag.x, diag.violations
-            at_bounds = diag.at_bounds
+        chosen, status, x, violations, at_bounds, extra_iters, extra_time = _diagnose(
+            form, options, x_starts, p, chosen, runs, calls)
 
     # IPOPT relaxes bounds by bound_relax_factor: restitution 1 came back as 1 + 7e-9, a rise
     # of -1e-8 followed, and the re-check refused it. The design is what lies within them.
@@ -109,25 +95,17 @@ def optimize(
     if robust and status not in (Status.INFEASIBLE,):
         tol_value = float(x[form.tolerance_index])
         tolerance = {axis: tol_value for axis in form.tolerance_axes}
-    robust_margins = {info.label: normalised_margin(slack[info.index], scale[info.index])
-                      for info in form.conditions if info.kind != MODEL}
-    if form.deferred is not None:  # the rows this answer was checked against, not solved with
-        d_slack, d_scale, _ = (np.asarray(v, dtype=float).ravel() for v in form.deferred(x, p))
-        robust_margins.update({info.label: normalised_margin(d_slack[info.index],
-                                                             d_scale[info.index])
-                               for info in form.deferred_conditions})
+    robust_margins = _robust_margins(form, x, p, slack, scale)
     score = None
     if status is not Status.INFEASIBLE:
         score = float(sum(w * OBJECTIVE_SENSE[n] * objectives[n] for n, w in form.weights.items()))
 
-    checks: dict[str, object] = {}
-    margins: dict[str, float] = {}
-    periodic: dict[str, float | None] = {}
     closed = check.closed_form_check(spec, design, reqs)
-    if closed["analysis"] is not None:
-        margins = dict(closed["analysis"].margins)
-        periodic = dict(closed["analysis"].periodic)
-    checks["closed_form"] = {"passed": closed["passed"], "failures": closed["failures"]}
+    analysis = closed["analysis"]
+    margins = dict(analysis.margins) if analysis is not None else {}
+    periodic = dict(analysis.periodic) if analysis is not None else {}
+    checks: dict[str, object] = {"closed_form": {"passed": closed["passed"],
+                                                 "failures": closed["failures"]}}
     if robust and tolerance and check_samples > 0 and status is not Status.INFEASIBLE:
         checks["sampled_offsets"] = check.sampled_offsets_check(
             form, x, p, float(x[form.tolerance_index]), samples=check_samples, seed=seed)
@@ -143,13 +121,6 @@ def optimize(
             status = Status.UNVERIFIED
         elif status is Status.OPTIMAL and not form.design_names:
             status = Status.EVALUATED
-    message = status.message
-    if violations:
-        message += " Cannot be met: " + "; ".join(v.text for v in violations[:5]) + "."
-        if at_bounds:
-            message += " At the least-violation design " + ", ".join(at_bounds) + \
-                ": widening those bounds may help."
-
     stats = SolverStats(
         iterations=chosen.iterations,
         total_iterations=sum(r.iterations for r in calls) + extra_iters,
@@ -165,9 +136,54 @@ def optimize(
         status=status, design=design, objective=score, objectives=objectives,
         tolerance=tolerance, linearised=linearised, margins=margins,
         robust_margins=robust_margins, periodic=periodic, violations=tuple(violations),
-        checks=checks, stats=stats, message=message,
+        checks=checks, stats=stats, message=_message(status, violations, at_bounds),
         solution=Solution(form.key, x, chosen.lam_x, chosen.lam_g),
     )
+
+
+def _diagnose(form, options, x_starts, p, chosen, runs, calls):
+    """No start succeeded: solve the elastic problem (solve/elastic.py). If it finds the spec
+    feasible after all, IPOPT restarts from its point (appended to runs and calls); if it finds
+    it infeasible, its least-violation design and violations are the answer; if it fails too,
+    IPOPT's own status stands and nothing more is claimed.
+    Returns (chosen, status, x, violations, at_bounds, its iterations, its seconds)."""
+    diag = elastic.diagnose(form, p, x_starts[: min(len(x_starts), 4)],
+                            max_iter=options.max_iter)
+    status, x, violations, at_bounds = chosen.status, chosen.x, (), ()
+    if diag.status in (Status.OPTIMAL, Status.ACCEPTABLE):
+        if diag.total <= FEASIBILITY_TOL:
+            solver = solver_for(form.key, form.nlp, options)
+            retry = solve_once(solver, diag.x, p, form.lbx, form.ubx, form.lbg, form.ubg,
+                               start=len(runs))
+            runs.append(retry)
+            calls.append(retry)
+            if retry.status in (Status.OPTIMAL, Status.ACCEPTABLE):
+                chosen, status, x = retry, retry.status, retry.x
+        else:
+            status, x, violations = Status.INFEASIBLE, diag.x, diag.violations
+            at_bounds = diag.at_bounds
+    return chosen, status, x, violations, at_bounds, diag.iterations, diag.seconds
+
+
+def _robust_margins(form, x, p, slack, scale) -> dict[str, float]:
+    """Each row's normalised margin at x, the deferred rows' included (checked, not solved)."""
+    out = {info.label: normalised_margin(slack[info.index], scale[info.index])
+           for info in form.conditions if info.kind != MODEL}
+    if form.deferred is not None:
+        d_slack, d_scale, _ = (np.asarray(v, dtype=float).ravel() for v in form.deferred(x, p))
+        out.update({info.label: normalised_margin(d_slack[info.index], d_scale[info.index])
+                    for info in form.deferred_conditions})
+    return out
+
+
+def _message(status, violations, at_bounds) -> str:
+    message = status.message
+    if violations:
+        message += " Cannot be met: " + "; ".join(v.text for v in violations[:5]) + "."
+        if at_bounds:
+            message += (" At the least-violation design " + ", ".join(at_bounds)
+                        + ": widening those bounds may help.")
+    return message
 
 
 def _multistart(form, options, x_starts, p, warm_solution):
