@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,10 +26,20 @@ class CheckResult:
 
     def line(self) -> str:
         if self.error:
-            return f"ERROR {self.source}: {self.error}"
+            return printable(f"ERROR {self.source}: {self.error}")
         if self.failures:
-            return f"FAIL  {self.source}: {'; '.join(self.failures)}"
-        return f"PASS  {self.source}"
+            return printable(f"FAIL  {self.source}: {'; '.join(self.failures)}")
+        return printable(f"PASS  {self.source}")
+
+
+# control characters, lone surrogates (undecodable file names) and the two non-characters:
+# none may stand in XML 1.0, and a raw newline would split a spec's one line in two
+_UNPRINTABLE = re.compile("[\x00-\x1f\x7f\ud800-\udfff\ufffe\uffff]")
+
+
+def printable(text: str) -> str:
+    """text with every character of _UNPRINTABLE written as a \\uXXXX escape."""
+    return _UNPRINTABLE.sub(lambda m: f"\\u{ord(m.group()):04x}", text)
 
 
 def spec_paths(targets: list[str]) -> list[Path]:
@@ -87,6 +98,11 @@ def unmet_expectations(outcome: DesignOutcome) -> list[str]:
         out.append(f"expected verified = {expect.verified}, got {verified}"
                    + (f" ({verification.get('summary')})" if verification else
                       " (not verified)"))
+    elif expect.verified is None and feasible and verification and not verified:
+        # a design the simulator refutes does not work, whatever the closed forms say: a gate
+        # that passed it would miss exactly the regressions verification exists to catch
+        out.append(f"the simulator refutes the design ({verification.get('summary')}); "
+                   "[expect] verified = false accepts that")
     if expect.min_objective is not None:
         value = (outcome.objective or {}).get("value")
         if value is None or value < expect.min_objective:
@@ -127,9 +143,9 @@ def junit_xml(results: list[CheckResult]) -> str:
                        errors=str(sum(r.error is not None for r in results)))
     for result in results:
         case = ET.SubElement(suite, "testcase", classname="pdm-design.check",
-                             name=result.source, time=f"{result.seconds:.3f}")
+                             name=printable(result.source), time=f"{result.seconds:.3f}")
         if result.error:
-            ET.SubElement(case, "error", message=result.error)
+            ET.SubElement(case, "error", message=printable(result.error))
         for failure in result.failures:
-            ET.SubElement(case, "failure", message=failure)
+            ET.SubElement(case, "failure", message=printable(failure))
     return ET.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"

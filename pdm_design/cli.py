@@ -307,13 +307,19 @@ def sheet(source, out, count, no_tolerance, no_drawing):
 def check(targets, junit):
     """CI gate: solve and verify each spec (or every *.toml in a directory) and test its
     [expect] table. One line per spec; exit 1 if any expectation fails, 2 on bad input."""
+    from pathlib import Path
+
     from .check import check_spec, junit_xml, spec_paths
     from .errors import SpecError
 
     if junit is not None and not junit:  # else the report the user asked for is silently lost
         raise SpecError("command line", "--junit", "a file name", "''")
+    paths = spec_paths(list(targets))
+    if junit and Path(junit).resolve() in {p.resolve() for p in paths}:
+        raise SpecError("command line", "--junit", "a file that is not one of the specs checked",
+                        junit)
     results = []
-    for path in spec_paths(list(targets)):
+    for path in paths:
         results.append(check_spec(path))
         click.echo(results[-1].line())
     if junit:

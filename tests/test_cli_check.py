@@ -135,3 +135,44 @@ def test_empty_junit_path_is_bad_input(tmp_path):
     assert code == 2
     assert out == ""  # refused before any spec is checked
     assert err == "error: command line: --junit: expected a file name, found ''\n"
+
+
+def test_a_design_the_simulator_refutes_fails_the_gate(tmp_path):
+    """The paper's design with a bouncy palm (restitution 0.9): the closed forms, which assume a
+    plastic landing, find it feasible; the simulator sees the object tip on its first palm. So
+    `feasible = true` alone fails, and passes only with the refutation accepted in words."""
+    from pdm_design.sim.manipulators import simulate_manipulators
+    from pdm_design.spec import load_spec
+
+    text = PAPER.read_text().replace("restitution = 0.0 ", "restitution = 0.9 ")
+    bouncy = tmp_path / "bouncy.toml"
+    bouncy.write_text(text.split("[expect]")[0] + "[expect]\nfeasible = true\n")
+    spec = load_spec(bouncy)
+    assert spec.scene.palm.restitution == 0.9
+    assert not simulate_manipulators(spec.scene, spec.design_at(), stages=6).outcome.completed
+
+    code, out, _ = run(bouncy)
+    assert code == 1 and out.startswith("FAIL") and "simulator refutes" in out
+    bouncy.write_text(bouncy.read_text() + "verified = false\n")
+    code, out, _ = run(bouncy)
+    assert code == 0 and out.startswith("PASS")
+
+
+def test_junit_report_onto_a_spec_checked_is_refused(tmp_path):
+    spec = _spec_with_expect(tmp_path, "feasible = true")
+    before = spec.read_text()
+    code, _, err = run(tmp_path, "--junit", spec)
+    assert code == 2 and "--junit" in err
+    assert spec.read_text() == before
+
+
+def test_control_characters_in_a_key_stay_on_one_line_and_in_valid_xml(tmp_path):
+    odd = tmp_path / "odd.toml"
+    odd.write_text(PAPER.read_text().replace("[expect]", '[expect]\n"we\\u0001ird\\nkey" = 1'))
+    report = tmp_path / "report.xml"
+    code, out, _ = run(odd, "--junit", report)
+    assert code == 2
+    assert len(out.splitlines()) == 1 and out.startswith("ERROR")
+    assert '"we\\u0001ird\\nkey"' in out  # the key as TOML would write it
+    message = ET.parse(report).getroot().find("testcase/error").get("message")
+    assert '"we\\u0001ird\\nkey"' in message

@@ -8,6 +8,7 @@ checks the layout around them and turns pydantic's errors into key paths of the 
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import re
 import reprlib
@@ -442,9 +443,12 @@ def _locate(base: str, loc: tuple, data: Any) -> tuple[str, Any]:
 
 
 def _key(key: Any) -> str:
-    """A key as TOML would write it: bare when it can be, quoted otherwise."""
+    """A key as TOML would write it: bare when it can be, else a basic string with its control
+    characters escaped (a raw newline would split the one-line error)."""
     key = str(key)
-    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else '"' + key.replace('"', '\\"') + '"'
+    if re.fullmatch(r"[A-Za-z0-9_-]+", key):
+        return key
+    return json.dumps(key, ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 def _join(path: str, key: Any) -> str:
