@@ -131,6 +131,21 @@ def _parse_pairs(values, label, what, count):
     return parsed
 
 
+def _with_spec_items(spec_items, given: dict, index: str, key: str, row: int, spec: str):
+    """The spec's offsets (or step errors) with the command line's in place of those of the
+    same K. One of the spec's beyond a shorter --stages row is refused, not dropped: the run
+    would silently be another build than the spec's."""
+    from .errors import SpecError
+
+    merged = {getattr(item, index): item for item in spec_items}
+    beyond = [k for k in merged if k > row and k not in given]
+    if beyond:
+        raise SpecError("command line", "--stages", f"at least {max(beyond)}: {spec}'s {key} "
+                        f"set {index} {max(beyond)}", str(row))
+    merged.update(given)
+    return tuple(merged[k] for k in sorted(merged))
+
+
 def _check_plot_path(plot: str) -> None:
     """Refuse a --plot file whose extension matplotlib cannot write, before any work (matplotlib
     picks the format from the extension; it is imported only here: it is slow to import)."""
@@ -140,7 +155,13 @@ def _check_plot_path(plot: str) -> None:
 
     from .errors import SpecError
 
-    formats = Figure().canvas.get_supported_filetypes()
+    formats = dict(Figure().canvas.get_supported_filetypes())
+    import shutil
+
+    import matplotlib
+
+    if not shutil.which(matplotlib.rcParams["pgf.texsystem"]):  # pgf typesets with LaTeX
+        formats.pop("pgf", None)
     if Path(plot).suffix[1:].lower() not in formats:
         raise SpecError("command line", "--plot", "a file name ending in .png, .svg, .pdf or "
                         f"another format matplotlib writes ({', '.join(sorted(formats))})",
@@ -152,9 +173,11 @@ def _check_plot_path(plot: str) -> None:
 @click.option("--stages", type=click.IntRange(1, 10_000_000), default=None,
               help="Manipulators in the row, or bounces (default: the spec's verification.stages).")
 @click.option("--offset", "offsets", multiple=True, metavar="K:DX,DY",
-              help="Offset manipulator K (from 1) by DX, DY metres (y up). Repeatable.")
+              help="Offset manipulator K (from 1) by DX, DY metres (y up), in place of the "
+              "spec's offset for K; the spec's others stay. Repeatable.")
 @click.option("--step-error", "step_errors", multiple=True, metavar="K:DRISE,DTREAD",
-              help="Add DRISE, DTREAD metres to step K's rise and tread. Repeatable.")
+              help="Add DRISE, DTREAD metres to step K's rise and tread, in place of the spec's "
+              "error for K; the spec's others stay. Repeatable.")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Write figures like the paper's to this file; its extension picks the "
               "format (png, svg, pdf, ...).")
@@ -186,13 +209,16 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
                         "manipulators (each stage's record is kept in memory)", str(stages))
     row = stages or loaded.verification.stages
     kwargs = {}
-    if offsets:
-        kwargs["offsets"] = tuple(ManipulatorOffset(manipulator=k, dx=a, dy=b) for k, a, b in
-                                  _parse_pairs(offsets, "--offset", "K:DX,DY", row))
-    if step_errors:
-        kwargs["step_errors"] = tuple(StepError(step=k, rise=a, tread=b) for k, a, b in
-                                      _parse_pairs(step_errors, "--step-error", "K:DRISE,DTREAD",
-                                                   row))
+    if loaded.kind == "manipulators":
+        given = {k: ManipulatorOffset(manipulator=k, dx=a, dy=b)
+                 for k, a, b in _parse_pairs(offsets, "--offset", "K:DX,DY", row)}
+        kwargs["offsets"] = _with_spec_items(loaded.verification.offsets, given, "manipulator",
+                                             "verification.offsets", row, spec)
+    else:
+        given = {k: StepError(step=k, rise=a, tread=b) for k, a, b in
+                 _parse_pairs(step_errors, "--step-error", "K:DRISE,DTREAD", row)}
+        kwargs["step_errors"] = _with_spec_items(loaded.verification.step_errors, given, "step",
+                                                 "verification.step_errors", row, spec)
     point = loaded.design_at()
     if loaded.free_variables:
         point = loaded.design_at(design(loaded, verify=False).analysis.design)
@@ -205,7 +231,7 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
         from .report.plots import plot_simulation
 
         plot_simulation(loaded, point, result, plot, stages=stages,
-                        offsets=kwargs.get("offsets", loaded.verification.offsets))
+                        offsets=kwargs.get("offsets", ()))
     if fmt == "json":
         from .report.jsonable import jsonable
 

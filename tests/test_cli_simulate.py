@@ -143,3 +143,47 @@ def test_stages_beyond_the_manipulator_limit_is_bad_input():
     assert code == 2
     assert err.startswith("error: command line: --stages: expected at most 100000 manipulators")
     assert err.endswith("found 100001\n")
+
+
+def _paper_with_offset(tmp_path, manipulator=5, dx=0.3):
+    text = Path(PAPER).read_text().replace(
+        "[verification]", f"[verification]\noffsets = [{{manipulator = {manipulator}, dx = {dx}}}]")
+    path = tmp_path / "offset.toml"
+    path.write_text(text)
+    return path
+
+
+def test_command_line_offsets_join_the_spec_s_own(tmp_path):
+    """The spec moves pivot 5 by 0.3 m; --offset moves pivot 2 by 1 cm. With the heights
+    untouched every carry ends at beta, so a landing is the previous one's offset less the
+    difference of the two pivots' shifts: palm 2's 1 cm short, palm 5's 0.3 m short."""
+    from pdm_design.sim.manipulators import simulate_manipulators
+    from pdm_design.spec import load_spec
+    from pdm_design.spec.model import ManipulatorOffset
+
+    spec = _paper_with_offset(tmp_path)
+    code, out, _ = run(spec, "--offset", "2:0.01,0", "--format", "json")
+    assert code == 0
+    got = [s["landing_offset"] for s in json.loads(out)["stages"]]
+    loaded = load_spec(spec)
+    both = (ManipulatorOffset(manipulator=2, dx=0.01, dy=0.0),
+            ManipulatorOffset(manipulator=5, dx=0.3, dy=0.0))
+    expected = [s["landing_offset"] for s in simulate_manipulators(
+        loaded.scene, loaded.design_at(), stages=loaded.verification.stages,
+        offsets=both).stages]
+    assert got == pytest.approx(expected, abs=1e-12)
+    assert got[1] == pytest.approx(got[0] - 0.01, abs=1e-9)
+    assert got[4] == pytest.approx(got[0] - 0.3, abs=1e-9)
+
+
+def test_a_shorter_row_than_the_spec_s_offsets_is_bad_input(tmp_path):
+    code, _, err = run(_paper_with_offset(tmp_path), "--stages", "3")
+    assert code == 2 and "--stages" in err and "verification.offsets" in err
+
+
+def test_pgf_is_refused_before_any_work_without_latex(tmp_path, monkeypatch):
+    import shutil
+
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    code, _, err = run(PAPER, "--plot", tmp_path / "figure.pgf")
+    assert code == 2 and "--plot" in err and not (tmp_path / "figure.pgf").exists()
