@@ -316,11 +316,16 @@ def sheet(source, out, count, no_tolerance, no_drawing):
     what = "manipulators" if built.kind == "manipulators" else "steps"
     click.echo(f"build sheet of {built.count} {what} (status {built.status}; tolerance: "
                f"{built.tolerance_note})")
+    if built.tolerance and built.tolerance_covers < built.count:
+        click.echo(f"note: the tolerance holds for {what} 1 to {built.tolerance_covers} only "
+                   "(the spec's verification.stages); the sheet says how to get it for all")
     for path in files:
         click.echo(f"  {path}")
-    if built.status not in ("optimal", "evaluated"):
-        click.echo(f"warning: the design's status is {built.status}: it does not work as "
-                   "built; see the problems in the sheet", err=True)
+    if built.failures:
+        click.echo("warning: this design does not work; the sheet is written with this "
+                   "warning at its top:", err=True)
+        for failure in built.failures:
+            click.echo(f"  {failure}", err=True)
         return EXIT_FAILED
     return EXIT_OK
 

@@ -5,6 +5,7 @@ import csv
 import io
 import json
 import math
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -12,6 +13,7 @@ from click.testing import CliRunner
 
 from pdm_design.cli import main
 from pdm_design.sheet import sheet_for
+from pdm_design.spec import load_spec
 from pdm_design.spec.model import ManipulatorOffset, StepError
 from pdm_design.verify import simulate_spec
 
@@ -170,3 +172,115 @@ def test_an_edited_design_json_is_bad_input_naming_its_key(tmp_path, saved_stair
     code, _, err = run("sheet", path, "--out", tmp_path / "out", "--no-drawing")
     assert code == 2 and f"{path}: {key}: expected" in err
     assert not (tmp_path / "out").exists()
+
+
+# ------------------------------------------------------------------- the simulator's verdict
+
+def bouncing_object_spec(tmp_path):
+    """The paper's row with an object that bounces on the palm (restitution 0.9): the closed
+    forms, which assume a plastic landing, still call it a success."""
+    spec = tmp_path / "bouncing.toml"
+    text = MANIP.read_text()
+    assert "restitution = 0.0 " in text
+    spec.write_text(text.replace("restitution = 0.0 ", "restitution = 0.9 "))
+    return spec
+
+
+@pytest.mark.parametrize("source", ["spec", "saved json", "saved json, not verified"])
+def test_sheet_of_a_design_the_simulator_refutes_warns_and_exits_1(tmp_path, source):
+    spec = bouncing_object_spec(tmp_path)
+    # the simulator's verdict on the design as built, independent of the sheet
+    loaded = load_spec(spec)
+    outcome = simulate_spec(loaded, loaded.design_at()).outcome
+    assert not outcome.completed
+    named = f"{outcome.failure.kind} at stage {outcome.failure.stage}"
+    target = spec
+    if source != "spec":
+        flags = ["--no-verify"] if source.endswith("not verified") else []
+        code, out, _ = run("optimize", spec, "--format", "json", *flags)
+        assert code == (0 if flags else 1)
+        target = tmp_path / "design.json"
+        target.write_text(out)
+    code, _, err = run("sheet", target, "--out", tmp_path / "out", "--no-tolerance")
+    assert code == 1 and named in err
+    text = (tmp_path / "out" / "sheet.md").read_text()
+    warning = text.index("WARNING: this design does not work")
+    assert warning < text.index("Spec:") and named in text[warning:text.index("Spec:")]
+    assert len(csv_rows(tmp_path / "out" / "sheet.csv")) == 6  # written all the same
+    assert b"DO NOT BUILD" in (tmp_path / "out" / "sheet.svg").read_bytes()
+
+
+def test_sheet_of_a_design_the_simulator_confirms_carries_no_warning(tmp_path):
+    loaded = load_spec(MANIP)
+    assert simulate_spec(loaded, loaded.design_at()).outcome.completed
+    code, _, err = run("sheet", MANIP, "--out", tmp_path, "--no-drawing", "--no-tolerance")
+    assert code == 0 and "warning" not in err
+    text = (tmp_path / "sheet.md").read_text()
+    assert "WARNING" not in text and "Verification (the event simulator): passed" in text
+
+
+# --------------------------------------------------------------------------- tolerance rows
+
+TOLERANCE_COLUMNS = {"manipulators": ("pivot_x_tolerance_m", "pivot_y_tolerance_m"),
+                     "stairs": ("rise_tolerance_m", "tread_tolerance_m")}
+
+
+@pytest.mark.parametrize("spec, count", [(STAIRS, 60), (MANIP, 10)])
+def test_tolerance_is_listed_only_for_the_stages_it_was_solved_for(tmp_path, spec, count):
+    with open(spec, "rb") as handle:
+        raw = tomllib.load(handle)
+    stages, kind = raw["verification"]["stages"], raw["scene"]["kind"]
+    assert count > stages
+    code, out, err = run("sheet", spec, "--out", tmp_path, "--count", count, "--no-drawing")
+    assert code == 0, err
+    rows = csv_rows(tmp_path / "sheet.csv")
+    assert len(rows) == count
+    for k, row in enumerate(rows, start=1):
+        for column in TOLERANCE_COLUMNS[kind]:  # the columns stay; the cells beyond are blank
+            assert (row[column] != "") == (k <= stages), (k, column)
+    text = (tmp_path / "sheet.md").read_text()
+    assert f"first {stages} " in text and f"`verification.stages = {count}`" in text
+
+
+def test_the_tolerance_of_a_short_staircase_does_not_hold_for_a_longer_one():
+    """Why the sheet leaves the rows past verification.stages blank (the simulator's word)."""
+    sheet = sheet_for(STAIRS, count=40)
+    stages = sheet.spec.verification.stages
+    tol = sheet.tolerance
+
+    def build(steps):  # every step low by the rise tolerance and long by the tread's
+        errors = tuple(StepError(step=k, rise=-tol["rise"], tread=tol["tread"])
+                       for k in range(1, steps + 1))
+        return simulate_spec(sheet.spec, sheet.spec.design_at(), stages=steps,
+                             step_errors=errors).outcome
+
+    assert build(stages).completed
+    assert not build(2 * stages).completed
+
+
+# --------------------------------------------------------------------------- stale drawings
+
+def test_sheet_without_drawing_removes_an_earlier_drawing_only(tmp_path):
+    assert run("sheet", MANIP, "--out", tmp_path, "--no-tolerance")[0] == 0
+    assert (tmp_path / "sheet.png").exists() and (tmp_path / "sheet.svg").exists()
+    (tmp_path / "notes.txt").write_text("the workshop's")
+    (tmp_path / "sheet.pdf").write_text("not the sheet's")
+    code, out, err = run("sheet", STAIRS, "--out", tmp_path, "--no-tolerance", "--no-drawing")
+    assert code == 0, err
+    assert not (tmp_path / "sheet.png").exists() and not (tmp_path / "sheet.svg").exists()
+    assert len(csv_rows(tmp_path / "sheet.csv")) == 20 and "sheet.svg" not in (
+        tmp_path / "sheet.md").read_text()
+    assert (tmp_path / "notes.txt").read_text() == "the workshop's"
+    assert (tmp_path / "sheet.pdf").read_text() == "not the sheet's"
+
+
+def test_stale_drawing_removal_leaves_folders_and_link_targets(tmp_path):
+    out, elsewhere = tmp_path / "out", tmp_path / "elsewhere.svg"
+    (out / "sheet.png").mkdir(parents=True)
+    (out / "sheet.png" / "kept.txt").write_text("kept")
+    elsewhere.write_text("<svg/>")
+    (out / "sheet.svg").symlink_to(elsewhere)
+    code, _, err = run("sheet", STAIRS, "--out", out, "--no-tolerance", "--no-drawing")
+    assert code == 0, err
+    assert (out / "sheet.png" / "kept.txt").read_text() == "kept"
+    assert not (out / "sheet.svg").is_symlink() and elsewhere.read_text() == "<svg/>"

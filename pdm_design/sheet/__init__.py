@@ -3,16 +3,20 @@
 
 from __future__ import annotations
 
+import stat
 from pathlib import Path
 
 from .build import BuildSheet, make_sheet, sheet_csv, sheet_for, sheet_markdown
+from .drawing import DRAWING_FORMATS
 
 STEM = "sheet"
 
 
 def write_sheet(sheet: BuildSheet, folder, *, drawing: bool = True) -> tuple[Path, ...]:
     """Write sheet.md, sheet.csv and (unless drawing=False) sheet.png and sheet.svg: all of them
-    or, when one cannot be written, none."""
+    or, when one cannot be written, none. Without the drawing, an earlier sheet's sheet.png and
+    sheet.svg in the folder are removed once the new files are in place (they would show
+    another design)."""
     from ..io import write_all
 
     folder = Path(folder)
@@ -24,7 +28,26 @@ def write_sheet(sheet: BuildSheet, folder, *, drawing: bool = True) -> tuple[Pat
         files |= {folder / name: payload
                   for name, payload in drawing_files(sheet, STEM).items()}
     write_all(files)
+    for stale in (folder / f"{STEM}.{fmt}" for fmt in DRAWING_FORMATS):
+        if stale not in files:
+            _remove_stale(stale)
     return tuple(files)
+
+
+def _remove_stale(path: Path) -> None:
+    """Remove an earlier sheet's drawing: a file or a link by the drawing's own name, never a
+    folder, a device or a pipe (as write_all writes into those rather than replace them)."""
+    from ..errors import PdmError
+
+    try:
+        mode = path.lstat().st_mode
+        if stat.S_ISREG(mode) or stat.S_ISLNK(mode):
+            path.unlink()
+    except FileNotFoundError:
+        return
+    except OSError as error:
+        raise PdmError(f"cannot remove {path}, an earlier sheet's drawing (it shows another "
+                       f"design): {error.strerror or error}") from error
 
 
 __all__ = ["BuildSheet", "make_sheet", "sheet_csv", "sheet_for", "sheet_markdown",

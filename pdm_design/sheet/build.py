@@ -10,7 +10,12 @@ at x = 0; nominal tread 1 is at y = 0).
 The design comes from solving the spec (`pdm_design.api.design`) or from a saved design JSON
 (`pdm-design optimize --format json`). The tolerance is the optimizer's robust box
 (`max_offset_tolerance`): the design's own when its spec asks for it, otherwise solved for the
-finished design with that objective alone (which does not move a fixed design).
+finished design with that objective alone (which does not move a fixed design). It was solved
+for the spec's `verification.stages` manipulators or steps, so only those rows carry it.
+
+The simulator's verdict travels with the sheet: the design's verification (a saved JSON's, or
+the nominal run simulated now when it carries none). A design whose status is not a success or
+whose verification failed gets a warning on the sheet naming what failed (`BuildSheet.failures`).
 """
 
 from __future__ import annotations
@@ -24,7 +29,8 @@ from pathlib import Path
 from ..errors import PdmError, SpecError
 from ..physics import manipulators as phys
 from ..spec import load_spec
-from ..spec.model import MAX_OPTIMISED_BOUNCES, Bounds, Spec
+from ..spec.model import MAX_MANIPULATOR_STAGES, MAX_OPTIMISED_BOUNCES, Bounds, Spec
+from ..status import Status
 
 JSON_SCHEMA_PREFIX = "pdm-design/optimize/"
 MARKDOWN_ROWS = 100
@@ -34,7 +40,10 @@ TOLERANCE_AXES = {"manipulators": ("dx", "dy"), "stairs": ("rise", "tread")}
 @dataclass(frozen=True)
 class BuildSheet:
     """One design's build sheet. summary: (quantity, value, unit, tolerance or None) rows;
-    items: one dict per manipulator or step (CSV columns, SI units in the names)."""
+    items: one dict per manipulator or step (CSV columns, SI units in the names); the tolerance
+    columns are None past the spec's verification.stages (`tolerance_covers`). violations and
+    verification: why the design does not meet its requirements, and the simulator's verdict
+    (`passed`, `summary`, `failures`; None when it was not run)."""
 
     spec: Spec
     status: str
@@ -47,6 +56,8 @@ class BuildSheet:
     items: list[dict[str, float | int]]
     source: str = ""
     notes: tuple[str, ...] = field(default=())
+    violations: tuple[str, ...] = field(default=())
+    verification: dict | None = None
 
     @property
     def kind(self) -> str:
@@ -55,6 +66,25 @@ class BuildSheet:
     @property
     def count(self) -> int:
         return len(self.items)
+
+    @property
+    def tolerance_covers(self) -> int:
+        """How many of the listed items the tolerance holds for: the first
+        verification.stages, the rows it was solved for (0 without a tolerance)."""
+        return min(self.count, self.spec.verification.stages) if self.tolerance else 0
+
+    @property
+    def failures(self) -> tuple[str, ...]:
+        """What makes the design not work, in words; empty when it works (a success status
+        and a passed verification)."""
+        found = []
+        if not _is_success(self.status):
+            found.append(f"status {self.status or '(none)'}: {_status_message(self.status)}")
+            found += [f"requirement not met: {v}" for v in self.violations]
+        if self.verification is not None and not self.verification.get("passed"):
+            failed = self.verification.get("failures") or [self.verification.get("summary")]
+            found += [f"the simulator's verification FAILED: {f}" for f in failed]
+        return tuple(found)
 
 
 # --------------------------------------------------------------------------- the design
@@ -68,7 +98,7 @@ def sheet_for(path: str | Path, *, count: int | None = None,
     """
     path = Path(path)
     if path.suffix.lower() == ".json":
-        spec, values, status, tol = _from_json(path)
+        spec, values, status, tol, violations, verification = _from_json(path)
     else:
         from ..api import design
 
@@ -76,13 +106,39 @@ def sheet_for(path: str | Path, *, count: int | None = None,
         outcome = design(spec)
         values = dict(outcome.analysis.design)
         status, tol = outcome.status.value, outcome.tolerance
+        violations, verification = tuple(outcome.violations), outcome.verification
     fixed = fixed_spec(spec, values, source=str(path))
+    if verification is None and _is_success(status):  # saved with --no-verify: simulate it now
+        verification = _verify_now(fixed)
     tol, note = _tolerance(fixed, tol, tolerance)
     count = spec.verification.stages if count is None else count
     try:
-        return make_sheet(fixed, status, tol, note, count, source=str(path))
+        return make_sheet(fixed, status, tol, note, count, source=str(path),
+                          violations=violations, verification=verification)
     except ValueError as exc:  # e.g. a staircase that cannot be built from this design
         raise PdmError(f"{path}: no build sheet: {exc}") from None
+
+
+def _verify_now(spec: Spec) -> dict:
+    """The simulator's nominal run of a fixed-design spec (as `optimize` verifies it)."""
+    from ..analysis import analyse
+    from ..verify import verify_nominal
+
+    point = spec.design_at()
+    verdict = verify_nominal(spec, point, analyse(spec.scene, point, spec.verification.stages))
+    return verdict | {"summary": f"{verdict['summary']} (simulated for this sheet: the saved "
+                                 "design carried no verification)"}
+
+
+def _is_success(status: str) -> bool:
+    return status in {s.value for s in Status if s.is_success}
+
+
+def _status_message(status: str) -> str:
+    try:
+        return Status(status).message
+    except ValueError:
+        return "not a status pdm-design reports as a success."
 
 
 def fixed_spec(spec: Spec, values: dict, source: str | None = None) -> Spec:
@@ -111,7 +167,8 @@ def fixed_spec(spec: Spec, values: dict, source: str | None = None) -> Spec:
 
 
 def _from_json(path: Path):
-    """(spec, design values, status, tolerance) of a saved `optimize --format json` document."""
+    """(spec, design values, status, tolerance, violations, verification) of a saved
+    `optimize --format json` document."""
     source = str(path)
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
@@ -140,7 +197,16 @@ def _from_json(path: Path):
     for axis, value in (tol.items() if isinstance(tol, dict) else ()):
         if axis in TOLERANCE_AXES[spec.kind] and not (_finite(value) and value >= 0):
             raise SpecError(source, f"tolerance.{axis}", "a number >= 0 (m)", repr(value))
-    return spec, values, str(doc.get("status", "")), tol if isinstance(tol, dict) else None
+    verification = doc.get("verification")
+    if verification is not None and not (isinstance(verification, dict)
+                                         and isinstance(verification.get("passed"), bool)):
+        raise SpecError(source, "verification", "the simulator's verdict (a table with "
+                        "`passed` true or false) or null", repr(verification))
+    violations = doc.get("violations") or []
+    violations = tuple(str(v) for v in (violations if isinstance(violations, list)
+                                        else [violations]))
+    return (spec, values, str(doc.get("status", "")), tol if isinstance(tol, dict) else None,
+            violations, verification)
 
 
 def _get(doc, key):
@@ -184,8 +250,10 @@ def _finite(value) -> bool:
 # --------------------------------------------------------------------------- the sheet
 
 def make_sheet(spec: Spec, status: str, tol: dict | None, note: str, count: int, *,
-               source: str = "") -> BuildSheet:
-    """The sheet of a fixed-design spec (every variable a number)."""
+               source: str = "", violations: tuple[str, ...] = (),
+               verification: dict | None = None) -> BuildSheet:
+    """The sheet of a fixed-design spec (every variable a number). The tolerance is listed for
+    the first spec.verification.stages items only: it was solved for those."""
     from ..analysis import analyse
 
     if count < 1:
@@ -196,7 +264,8 @@ def make_sheet(spec: Spec, status: str, tol: dict | None, note: str, count: int,
     return BuildSheet(spec=spec, status=status, design=dict(analysis.design),
                       geometry=dict(analysis.geometry), periodic=dict(analysis.periodic),
                       tolerance=tol, tolerance_note=note, summary=summary, items=items,
-                      source=source, notes=tuple(analysis.problems))
+                      source=source, notes=tuple(analysis.problems),
+                      violations=tuple(violations), verification=verification)
 
 
 def _manipulators(spec, analysis, tol, count):
@@ -206,6 +275,7 @@ def _manipulators(spec, analysis, tol, count):
     x0, y0 = d["first_pivot_x"], d["first_pivot_y"]
     palm_mass = scene.body.mass / d["mass_ratio"]
     tx, ty = (tol["dx"], tol["dy"]) if tol else (None, None)
+    covered = spec.verification.stages
     items = []
     for k in range(1, count + 1):
         x, y = x0 + (k - 1) * px, y0 - (k - 1) * py
@@ -213,7 +283,8 @@ def _manipulators(spec, analysis, tol, count):
         hand_x, hand_y = (float(v) for v in phys.palm_centre(x, y, b, l))
         items.append({
             "manipulator": k, "pivot_x_m": x, "pivot_y_m": y,
-            "pivot_x_tolerance_m": tx, "pivot_y_tolerance_m": ty,
+            "pivot_x_tolerance_m": tx if k <= covered else None,
+            "pivot_y_tolerance_m": ty if k <= covered else None,
             "back_stop_rad": -a, "handover_rad": b, "front_stop_rad": scene.palm.front_stop,
             "link_length_m": l, "palm_mass_kg": palm_mass,
             "palm_at_back_stop_x_m": back_x, "palm_at_back_stop_y_m": back_y,
@@ -244,11 +315,13 @@ def _stairs(spec, analysis, tol, count):
 
     geo = stairs_geometry(spec.scene, spec.design_at())
     tr, tt = (tol["rise"], tol["tread"]) if tol else (None, None)
+    covered = spec.verification.stages
     items = []
     for k in range(1, count + 1):
         items.append({
             "step": k, "rise_m": geo.rise_height(k), "tread_m": geo.tread_length(k),
-            "rise_tolerance_m": tr, "tread_tolerance_m": tt,
+            "rise_tolerance_m": tr if k <= covered else None,
+            "tread_tolerance_m": tt if k <= covered else None,
             "back_x_m": geo.back_x(k), "nose_x_m": geo.nose_x(k), "level_m": geo.level(k),
             "landing_from_back_m": geo.landing_offset,
         })
@@ -282,17 +355,30 @@ def sheet_csv(sheet: BuildSheet) -> str:
 def sheet_markdown(sheet: BuildSheet, drawing: str | None = None) -> str:
     spec = sheet.spec
     unit_word = "manipulator" if sheet.kind == "manipulators" else "step"
-    lines = [f"# Build sheet: {spec.name or Path(spec.source).stem}", "",
-             f"Spec: `{spec.source}` ({sheet.kind}); from `{sheet.source}`; status: "
-             f"{sheet.status}.", "",
-             f"Tolerance: {sheet.tolerance_note}"
-             + (" (half-widths: build each within +- this of its nominal)." if sheet.tolerance
-                else "."), ""]
+    lines = [f"# Build sheet: {spec.name or Path(spec.source).stem}", ""]
+    if sheet.failures:
+        lines += ["## WARNING: this design does not work. Do not build it.", "",
+                  *(f"- {f}" for f in sheet.failures), ""]
+    lines += [f"Spec: `{spec.source}` ({sheet.kind}); from `{sheet.source}`; status: "
+              f"{sheet.status}.", ""]
+    v = sheet.verification
+    if v is not None:
+        verdict = "passed" if v.get("passed") else "FAILED"
+        lines += [f"Verification (the event simulator): {verdict}: {v.get('summary')}.", ""]
+    lines += [f"Tolerance: {sheet.tolerance_note}"
+              + (" (half-widths: build each within +- this of its nominal)." if sheet.tolerance
+                 else "."), ""]
+    limit = tolerance_limit(sheet)
+    if limit:
+        lines += [limit, ""]
     if drawing:
         lines += [f"![drawing]({drawing})", ""]
+    covered = (f" ({unit_word}s 1 to {sheet.tolerance_covers} only)"
+               if sheet.tolerance and sheet.tolerance_covers < sheet.count else "")
     lines += ["| quantity | value | unit | tolerance (+-) |", "|---|---|---|---|"]
     for name, value, unit, tol in sheet.summary:
-        lines.append(f"| {name} | {_show(value)} | {unit} | {_show(tol) if tol else '-'} |")
+        shown = _show(tol) + covered if tol else "-"
+        lines.append(f"| {name} | {_show(value)} | {unit} | {shown} |")
     header = list(sheet.items[0])
     lines += ["", f"## Every {unit_word}", "",
               "| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
@@ -303,6 +389,27 @@ def sheet_markdown(sheet: BuildSheet, drawing: str | None = None) -> str:
     if sheet.notes:
         lines += ["", "## Problems", "", *(f"- {n}" for n in sheet.notes)]
     return "\n".join(lines) + "\n"
+
+
+def tolerance_limit(sheet: BuildSheet) -> str:
+    """In words, when more items are listed than the tolerance holds for: which ones carry it
+    and how to get it for all (empty otherwise)."""
+    covers, count = sheet.tolerance_covers, sheet.count
+    if not sheet.tolerance or covers >= count:
+        return ""
+    unit_word = "manipulators" if sheet.kind == "manipulators" else "steps"
+    # the most stages a tolerance is solved for: stairs' NLP has rows for every bounce; the
+    # simulator keeps every manipulator's record
+    most = MAX_OPTIMISED_BOUNCES if sheet.kind == "stairs" else MAX_MANIPULATOR_STAGES
+    how = (f"For a tolerance on all {count}, set `verification.stages = {count}` in the spec "
+           "and make the sheet again." if count <= most else
+           f"A tolerance is solved for at most {most} {unit_word} (`verification.stages` = "
+           f"{most}): a longer device cannot be given one.")
+    return (f"The tolerance holds for a device of the first {covers} {unit_word} only: it was "
+            f"solved for the spec's `verification.stages` = {covers}. For {unit_word} "
+            f"{covers + 1} to {count} none is known (blank in the CSV): the errors it allows "
+            f"may add up over more {unit_word} to a device that fails, even when those are "
+            f"built exactly. {how}")
 
 
 def _show(value) -> str:

@@ -10,17 +10,20 @@ simulated. At most MAX_DRAWN manipulators or steps are drawn; the CSV lists all.
 from __future__ import annotations
 
 import math
+import textwrap
 
 from ..report.render import render_figure
 from .build import BuildSheet
 
 MAX_DRAWN = 8
+DRAWING_FORMATS = ("png", "svg")
+WARNING_WIDTH, WARNING_LINES = 110, 3  # characters a line, lines: the drawing's warning
 
 
 def drawing_files(sheet: BuildSheet, stem: str = "sheet") -> dict[str, bytes]:
     """{file name: bytes}: the drawing as PNG and SVG."""
     figure = draw(sheet)
-    return {f"{stem}.{fmt}": _render(figure, fmt) for fmt in ("png", "svg")}
+    return {f"{stem}.{fmt}": _render(figure, fmt) for fmt in DRAWING_FORMATS}
 
 
 def draw(sheet: BuildSheet):
@@ -37,12 +40,26 @@ def draw(sheet: BuildSheet):
     name = sheet.spec.name or sheet.spec.source
     if sheet.kind == "manipulators":
         _manipulators(ax, sheet, shown)
-        figure.suptitle(f"{name}: {sheet.count} manipulators{more}")
+        title = f"{name}: {sheet.count} manipulators{more}"
     else:
         _stairs(ax, sheet, shown)
-        figure.suptitle(f"{name}: {sheet.count} steps{more}")
+        title = f"{name}: {sheet.count} steps{more}"
+    if sheet.failures:  # the workshop sees it on the drawing too, not only in sheet.md
+        warning = textwrap.wrap(f"DOES NOT WORK - DO NOT BUILD: {sheet.failures[0]}",
+                                WARNING_WIDTH, max_lines=WARNING_LINES)
+        figure.suptitle("\n".join([title, *warning]), color="tab:red", fontweight="bold")
+    else:
+        figure.suptitle(title)
     _fit(figure, ax)
     return figure
+
+
+def _covered(sheet) -> str:
+    """'pivots 1 to N only' when the tolerance holds for fewer than are listed, else ''."""
+    if not sheet.tolerance or sheet.tolerance_covers >= sheet.count:
+        return ""
+    what = "pivots" if sheet.kind == "manipulators" else "steps"
+    return f"{what} 1 to {sheet.tolerance_covers} only"
 
 
 # --------------------------------------------------------------------------- manipulators
@@ -109,7 +126,8 @@ def _manipulators(ax, sheet, shown):
     tol = sheet.tolerance
     if tol:
         _tolerance_inset(ax, x1, y1, tol)
-    text = (f"red box (inset; the same at every pivot): pivot tolerance "
+    where = _covered(sheet) or "the same at every pivot"
+    text = (f"red box (inset; {where}): pivot tolerance "
             f"+-{tol['dx'] * 1e3:.3g} mm (x), +-{tol['dy'] * 1e3:.3g} mm (y)" if tol else
             "pivot tolerance: " + sheet.tolerance_note)
     legend = ("solid: links and palms at the back stop; dashed: at the handover angle; "
@@ -214,7 +232,9 @@ def _stairs(ax, sheet, shown):
     for item in items:
         ax.annotate(str(item["step"]), (item["back_x_m"], item["level_m"]), xytext=(4, 3),
                     textcoords="offset points", fontsize=8, ha="left", va="bottom")
-    ax.text(0.99, 0.99, f"every step: rise {rise:.5g} m{tr}, tread {tread:.5g} m{tt}\n"
+    limit = _covered(sheet)
+    ax.text(0.99, 0.99, f"every step: rise {rise:.5g} m{tr}, tread {tread:.5g} m{tt}"
+            + (f"; tolerances for {limit}" if limit else "") + "\n"
             "dashed: the ball's centre (simulated)", transform=ax.transAxes, fontsize=8,
             ha="right", va="top")
     ax.autoscale_view()
