@@ -142,3 +142,98 @@ def test_fixed_rise_stairs_verify_against_the_closed_form_transient(tmp_path):
     assert code == 0, doc["verification"]
     assert doc["verification"]["passed"]
     assert doc["verification"]["agreement"]["compared"] == 20
+
+
+# --- every documented key is in the document (docs/json-schema.md, parsed here) ---
+
+SCHEMA_DOC = Path(__file__).resolve().parents[1] / "docs" / "json-schema.md"
+
+
+def _without_parentheses(text):
+    """text with every balanced (...) removed: the names in a bullet, not those it mentions."""
+    out, depth = [], 0
+    for ch in text:
+        depth += ch == "("
+        if depth == 0:
+            out.append(ch)
+        depth -= ch == ")" and depth > 0
+    return "".join(out)
+
+
+def _names(text):
+    import re
+
+    return re.findall(r"`([a-z_]+)`", _without_parentheses(text))
+
+
+def documented_keys():
+    """{"top": [...], "verification": [...], (scene, object): [...]} from docs/json-schema.md."""
+    text = SCHEMA_DOC.read_text().split("## `pdm-design simulate")[0]
+    keys = {"top": [], "verification": []}
+    for line in text.splitlines():
+        if line.startswith("| `"):
+            name = line.split("`")[1]
+            keys["top"].append(name)
+            if name == "verification":
+                keys["verification"] = _names(line.split("|")[3])
+    keys["verification"] += [m for m in ("accuracy", "accuracy_settings")
+                             if f"`verification.{m}`" in text]
+    for scene in ("manipulators", "stairs"):
+        section = text.split(f"### {scene.capitalize()}")[1].split("###")[0]
+        for bullet in section.split("\n- ")[1:]:
+            bullet = " ".join(bullet.split())
+            name, rest = bullet.split(":", 1)
+            keys[(scene, name.strip("`"))] = _names(rest)
+    return keys
+
+
+def test_the_schema_parser_reads_the_documented_keys():
+    keys = documented_keys()
+    assert "tolerance_failures" in keys["verification"] and "agreement" in keys["verification"]
+    assert keys[("stairs", "periodic")] == ["impact_speed", "vertical_impact_speed",
+                                            "horizontal_speed", "spin", "flight_time",
+                                            "drift_per_bounce"]
+    assert keys[("manipulators", "geometry")][-1] == "landing_offset"
+
+
+def _assert_every_documented_key(doc, keys):
+    scene = doc["scene"]
+    assert set(keys["top"]) <= set(doc)
+    for part in ("design", "geometry", "periodic", "approach"):
+        missing = set(keys[(scene, part)]) - set(doc[part])
+        assert not missing, f"{part} lacks {missing}"
+    if doc["verification"] is not None:
+        assert set(keys["verification"]) <= set(doc["verification"])
+
+
+@pytest.mark.parametrize("problem", ["paper_manipulators.toml", "paper_stairs_friction.toml",
+                                     "manipulators_robust.toml"])
+def test_every_documented_key_is_present(problem):
+    _, doc = optimize_json(problem)
+    _assert_every_documented_key(doc, documented_keys())
+    assert isinstance(doc["verification"]["tolerance_failures"], list)
+
+
+def test_a_ball_that_does_not_bounce_has_every_key_null(tmp_path):
+    """restitution 0 (valid): no flight, so every quantity of it is null, not left out."""
+    text = (PROBLEMS / "paper_stairs_frictionless.toml").read_text()
+    assert "restitution = 0.8" in text
+    code, out, _ = run("optimize", _write(tmp_path, text.replace("restitution = 0.8",
+                                                                  "restitution = 0.0")),
+                       "--format", "json")
+    doc = json.loads(out)
+    assert code == 1
+    _assert_every_documented_key(doc, documented_keys())
+    assert doc["geometry"]["landing_offset"] is None and doc["geometry"]["nose_clearance"] is None
+    assert set(doc["periodic"].values()) == {None}
+
+
+def test_without_a_fixed_point_the_contraction_is_still_the_maps_slope(tmp_path):
+    """beta < alpha: no periodic orbit, but the handover map's slope (m/(m+M))^2 cos^2(a+b) is
+    a property of the design (docs/json-schema.md)."""
+    text = (PROBLEMS / "paper_manipulators.toml").read_text().replace("beta = 0.6 ", "beta = 0.1 ")
+    _, out, _ = run("optimize", _write(tmp_path, text), "--format", "json")
+    doc = json.loads(out)
+    _assert_every_documented_key(doc, documented_keys())
+    assert doc["periodic"]["contraction"] == pytest.approx((1 / 1.1 * math.cos(0.3)) ** 2,
+                                                           rel=1e-12)

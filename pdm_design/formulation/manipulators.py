@@ -57,6 +57,11 @@ from .common import (
 DEFAULTS = {"first_pivot_x": 0.0, "first_pivot_y": 0.0}
 START_CLEARANCE = 1e-3  # (x link length): the object starts at least this far above palm 1
 TOLERANCE_CAP = 10.0  # upper bound of the box half-width variable, in link lengths
+# Margins whose periodic and first_ versions are one row (the speed interval covers both): the
+# larger of their two requirements holds both.
+SHARED_ROWS = (("over_the_top", "first_over_the_top"), ("lift_off", "first_lift_off"))
+# Reported margins the max_min_margin epigraph leaves out (a clearance that is held, not traded).
+OUTSIDE_MIN_MARGIN = ("parked_palms",)
 PARKED_ROWS_CAP = 16  # parked palms checked behind the carrying one, at most (docs/optimizer.md)
 ACOS_EDGE = 1e-15  # acos is taken of at most 1 - this: a finite slope
 

@@ -82,6 +82,14 @@ SPEED2_FLOOR = 1e-20
 NOSE_ENDS = ("leading edge: takes off behind the nose", "trailing edge: comes down beyond the nose")
 # A nose_clearance requirement covers the launch too (its own name, as manipulators' first_ ones).
 LAUNCH_KEYS = ("first_nose_clearance", "nose_clearance")
+# Every reported margin is in the max_min_margin epigraph.
+OUTSIDE_MIN_MARGIN = ()
+# The exact gaps of one flight (physics.stairs.flight_clearances, in its order) and of the launch
+# (launch_clearances), by the phase each guards: the max_min_margin epigraph's nose rows.
+EXACT_FLIGHT = ("takes off: height over the nose", "takes off: gap at take-off",
+                "takes off: gap while rising", "comes down: gap while falling",
+                "comes down: height over the nose")
+EXACT_LAUNCH = ("comes down: gap while falling", "comes down: height over the nose")
 
 
 def build(spec):
@@ -109,7 +117,7 @@ def build(spec):
 
     model = SceneModel(
         kind="stairs", design_symbols=symbols, aux=tuple(aux),
-        conditions=tuple(m.conditions(tau, robust)),
+        conditions=tuple(m.conditions(tau, robust, epigraph)),
         objective_terms={
             "max_offset_tolerance": tau if robust else ca.SX(0.0),
             "max_min_margin": t if epigraph else ca.SX(0.0),
@@ -222,7 +230,12 @@ class _Model:
         x = self.v0 * self.vy1 / self.g - self.L1 + r
         return a * self.v0**2 - self.g * ca.fmax(x, 0.0) ** 2 / 2
 
-    def conditions(self, tau, robust):
+    def conditions(self, tau, robust, epigraph=False):
+        """Every row. epigraph (max_min_margin asked): the smooth nose rows keep the ball off the
+        noses, as always, but the epigraph t is bounded by the exact gaps (the analysis' nose
+        margins, gap / tread) instead: the smooth rows' slack / scale is the lowest point's
+        height where the ball passes over the nose, divided by the tread, which is not the
+        reported margin (0.65 where the exact gap was 0.16 of the tread: the take-off gap)."""
         g, r = self.g, self.scene.ball.radius
         length, speed = self.length, self.speed
         out: list[Condition] = []
@@ -262,7 +275,12 @@ class _Model:
 
         tread = self.tread
         add(None, "launch: comes down beyond the top landing's nose", self.launch_slack(),
-            tread * self.v0**2, unit=length * speed**2, keys=LAUNCH_KEYS)
+            tread * self.v0**2, unit=length * speed**2, keys=LAUNCH_KEYS, epigraph=not epigraph)
+        if epigraph:  # the analysis' first_nose_clearance: one design rise above tread 1
+            gaps = phys.launch_clearances(self.v0, g, r, self.h0 - self.rise,
+                                          self.v0 * self.vy1 / g - self.L1)
+            for phase, gap in zip(EXACT_LAUNCH, gaps, strict=True):
+                add(None, f"launch, exact {phase}", gap, tread, unit=length, keys=LAUNCH_KEYS)
         scale = tread * self.vx**2
         if robust:
             L_long, _ = self.trajectory(tau, -tau)
@@ -280,8 +298,15 @@ class _Model:
                 (", nose nearest", tread - tau - L_long[n]),
                 (", nose furthest", tread + tau - L_short[n]),
             ]
+            # exact gaps: the flights the analysis judges (a simulation of N bounces flies N - 1)
+            exact = epigraph and (stage < self.stages or self.stages == 1)
             for suffix, dist in ends:
                 for where, slack in self.nose_slack(v_short[n], dist):
                     add("nose_clearance", f"flight {stage}{suffix}, {where}", slack, scale,
-                        unit=length * speed**2)
+                        unit=length * speed**2, epigraph=not epigraph)
+                if exact:
+                    gaps = phys.flight_clearances(self.vx, self.eps * v_short[n], g, r, dist)
+                    for phase, gap in zip(EXACT_FLIGHT, gaps, strict=True):
+                        add("nose_clearance", f"flight {stage}{suffix}, exact {phase}", gap,
+                            tread, unit=length)
         return out
