@@ -382,11 +382,22 @@ def _fixed_values(spec) -> dict[str, float]:
     return {k: float(v) for k, v in spec.design.items() if not isinstance(v, Bounds)}
 
 
+# Requirements that add rows when above 0 (the stairs' exact nose rows, formulation/stairs.py).
+ROW_ADDING_REQUIREMENTS = ("first_nose_clearance", "nose_clearance")
+
+
+def requires_rows(spec) -> bool:
+    return any(float(spec.requirements.get(k, 0.0)) > 0.0 for k in ROW_ADDING_REQUIREMENTS)
+
+
 def spec_key(spec) -> str:
-    """A canonical text of everything in a spec that the NLP depends on (the build cache key)."""
+    """A canonical text of everything in a spec that the NLP depends on (the build cache key):
+    the requirements' values are parameters, but some add rows when above 0."""
     design = sorted((k, repr(v)) for k, v in spec.design.items())
     objective = sorted((k, float(v)) for k, v in spec.objective.items())
-    return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages))
+    required = requires_rows(spec)
+    return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages,
+                 required))
 
 
 # objective terms measured in metres (the others are pure numbers)

@@ -58,11 +58,13 @@ from ..scenes import StairsDesign
 from .common import (
     MARGIN,
     MODEL,
+    ROW_ADDING_REQUIREMENTS,
     VALIDITY,
     Condition,
     SceneModel,
     design_inputs,
     objective_scale,
+    requires_rows,
 )
 
 DEFAULTS = {"rise": None, "tread": None, "landing_offset": None}
@@ -81,7 +83,7 @@ SPEED2_FLOOR = 1e-20
 # The flight's two nose rows, by the phase of the flight each guards (solve/words.py reads it).
 NOSE_ENDS = ("leading edge: takes off behind the nose", "trailing edge: comes down beyond the nose")
 # A nose_clearance requirement covers the launch too (its own name, as manipulators' first_ ones).
-LAUNCH_KEYS = ("first_nose_clearance", "nose_clearance")
+LAUNCH_KEYS = ROW_ADDING_REQUIREMENTS
 # Every reported margin is in the max_min_margin epigraph.
 OUTSIDE_MIN_MARGIN = ()
 # The exact gaps of one flight (physics.stairs.flight_clearances, in its order) and of the launch
@@ -97,6 +99,9 @@ def build(spec):
     values, symbols, bounds = design_inputs(spec, StairsDesign.VARIABLES, DEFAULTS)
     robust = float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0
     epigraph = float(spec.objective.get("max_min_margin", 0.0)) > 0.0
+    # the exact nose rows when the reported nose margins must reach something: the epigraph, or
+    # a required nose clearance (the smooth rows measure another quantity, section 2)
+    exact = epigraph or requires_rows(spec)
     tau = ca.SX.sym("tolerance") if robust else 0.0
     t = ca.SX.sym("min_margin") if epigraph else None
     top = tolerance_bound(scene.initial.drop_height, values, bounds)
@@ -117,7 +122,7 @@ def build(spec):
 
     model = SceneModel(
         kind="stairs", design_symbols=symbols, aux=tuple(aux),
-        conditions=tuple(m.conditions(tau, robust, epigraph)),
+        conditions=tuple(m.conditions(tau, robust, exact)),
         objective_terms={
             "max_offset_tolerance": tau if robust else ca.SX(0.0),
             "max_min_margin": t if epigraph else ca.SX(0.0),
@@ -230,12 +235,14 @@ class _Model:
         x = self.v0 * self.vy1 / self.g - self.L1 + r
         return a * self.v0**2 - self.g * ca.fmax(x, 0.0) ** 2 / 2
 
-    def conditions(self, tau, robust, epigraph=False):
-        """Every row. epigraph (max_min_margin asked): the smooth nose rows keep the ball off the
-        noses, as always, but the epigraph t is bounded by the exact gaps (the analysis' nose
-        margins, gap / tread) instead: the smooth rows' slack / scale is the lowest point's
-        height where the ball passes over the nose, divided by the tread, which is not the
-        reported margin (0.65 where the exact gap was 0.16 of the tread: the take-off gap)."""
+    def conditions(self, tau, robust, exact=False):
+        """Every row. exact (max_min_margin asked, or a nose clearance required): the smooth
+        nose rows keep the ball off the noses, as always, but the exact gaps (the analysis' nose
+        margins, gap / tread) hold the requirement and bound the epigraph t: the smooth rows'
+        slack / scale is the lowest point's height where the ball passes over the nose, divided
+        by the tread, which is not the reported margin (0.65 where the exact gap was 0.16 of the
+        tread: the take-off gap). That height is never below the gap, so the exact rows imply
+        the smooth ones."""
         g, r = self.g, self.scene.ball.radius
         length, speed = self.length, self.speed
         out: list[Condition] = []
@@ -275,8 +282,8 @@ class _Model:
 
         tread = self.tread
         add(None, "launch: comes down beyond the top landing's nose", self.launch_slack(),
-            tread * self.v0**2, unit=length * speed**2, keys=LAUNCH_KEYS, epigraph=not epigraph)
-        if epigraph:  # the analysis' first_nose_clearance: one design rise above tread 1
+            tread * self.v0**2, unit=length * speed**2, keys=LAUNCH_KEYS, epigraph=not exact)
+        if exact:  # the analysis' first_nose_clearance: one design rise above tread 1
             gaps = phys.launch_clearances(self.v0, g, r, self.h0 - self.rise,
                                           self.v0 * self.vy1 / g - self.L1)
             for phase, gap in zip(EXACT_LAUNCH, gaps, strict=True):
@@ -299,12 +306,12 @@ class _Model:
                 (", nose furthest", tread + tau - L_short[n]),
             ]
             # exact gaps: the flights the analysis judges (a simulation of N bounces flies N - 1)
-            exact = epigraph and (stage < self.stages or self.stages == 1)
+            judged = exact and (stage < self.stages or self.stages == 1)
             for suffix, dist in ends:
                 for where, slack in self.nose_slack(v_short[n], dist):
                     add("nose_clearance", f"flight {stage}{suffix}, {where}", slack, scale,
-                        unit=length * speed**2, epigraph=not epigraph)
-                if exact:
+                        unit=length * speed**2, epigraph=not exact)
+                if judged:
                     gaps = phys.flight_clearances(self.vx, self.eps * v_short[n], g, r, dist)
                     for phase, gap in zip(EXACT_FLIGHT, gaps, strict=True):
                         add("nose_clearance", f"flight {stage}{suffix}, exact {phase}", gap,
