@@ -32,7 +32,8 @@ def test_met_expectation_passes(tmp_path):
 
 
 def test_margin_expectation_above_achievable_fails_with_reason(tmp_path):
-    # The landing margin of the paper design is 1 - (0.5615 + 0.2) / 0.8 = 0.048 (by hand).
+    # The landing margin of the paper design is 1 - (0.5615 + 0.2) / 0.8 = 0.048 (by hand;
+    # asserted in test_analysis_margins.py).
     code, out, _ = run(_spec_with_expect(tmp_path, "min_margin = 0.5"))
     assert code == 1
     assert out.startswith("FAIL") and "smallest margin landing" in out

@@ -139,9 +139,14 @@ def test_warm_start_reaches_the_same_optimum_in_fewer_iterations():
     cold = optimize(spec, starts=1, linearise=False)
     warm = optimize(spec, starts=1, warm_start=cold, linearise=False)
     assert warm.status is Status.OPTIMAL
-    assert warm.stats.return_statuses[0] == "Solve_Succeeded"
+    # two runs: the warm start's (first, _multistart) and the same cold start again
+    assert cold.stats.starts == 1 and warm.stats.starts == 2
+    assert warm.stats.return_statuses == ("Solve_Succeeded", "Solve_Succeeded")
     assert warm.objective == pytest.approx(cold.objective, abs=1e-8)
-    assert warm.stats.iterations <= cold.stats.iterations
+    # strictly fewer: the reported run is not the cold one, whose iterations repeat exactly
+    assert warm.stats.iterations < cold.stats.iterations
+    # and it is the warm run: the two runs' iterations add up to the total
+    assert warm.stats.total_iterations == warm.stats.iterations + cold.stats.iterations
 
 
 # -- robust tolerance: independent grid --------------------------------------------------------
@@ -341,10 +346,50 @@ def test_a_box_larger_than_the_robust_one_is_not_claimed_sound_by_accident(robus
 
 # -- cvxpy in the linearised safe set ---------------------------------------------------------
 
-def test_cvxpy_box_corners_lie_in_the_linearised_safe_set(robust):
+def safe_set_by_differences(form, x, step=1e-5):
+    """(A, b) of the linearised safe set b + A d >= 0, written afresh: the scenario rows
+    slack_i(x, d) >= 0 (no requirements in manipulators_robust.toml) divided by |scale_i(x, 0)|,
+    differentiated by central differences in every offset (no CasADi Jacobian, no
+    `linear_safe_set`). Rows independent of d (validity rows of the design alone) keep A = 0."""
+    sc = form.scenario
+    n = len(sc.offset_names)
+
+    def rows(d):
+        slack, scale = sc.function(x, d)
+        return np.asarray(slack, dtype=float).ravel(), np.asarray(scale, dtype=float).ravel()
+
+    slack0, scale0 = rows(np.zeros(n))
+    norm = np.where(np.abs(scale0) > 1e-12, np.abs(scale0), 1.0)
+    A = np.empty((len(slack0), n))
+    for j in range(n):
+        e = np.zeros(n)
+        e[j] = step
+        A[:, j] = (rows(e)[0] - rows(-e)[0]) / (2 * step) / norm
+    return A, slack0 / norm
+
+
+@pytest.fixture(scope="module")
+def safe_set(robust):
     spec, result = robust
+    assert not spec.requirements  # every row is slack >= 0: b + A d >= 0 needs no r_i
     form = formulate(spec)
-    A, b, _ = linear_safe_set(form, result.solution.x, form.parameters(spec.requirements))
+    return form, safe_set_by_differences(form, result.solution.x)
+
+
+def test_linearised_safe_set_matches_central_differences(robust, safe_set):
+    spec, result = robust
+    form, (A_fd, b_fd) = safe_set
+    A, b, keep = linear_safe_set(form, result.solution.x, form.parameters(spec.requirements))
+    assert b == pytest.approx(b_fd, abs=1e-12)
+    assert np.abs(A - A_fd).max() <= 1e-6 * max(1.0, np.abs(A_fd).max())
+    assert set(keep) == set(np.flatnonzero(np.abs(A_fd).sum(axis=1) > 1e-9))
+
+
+def test_cvxpy_box_corners_lie_in_the_linearised_safe_set(robust, safe_set):
+    # The safe set by central differences, not the Jacobian that fed cvxpy: an A that came out
+    # too small would let cvxpy report boxes too large, and their corners leave this set.
+    spec, result = robust
+    form, (A, b) = safe_set
     lin = result.linearised
     groups = form.scenario.groups
     half = np.zeros(A.shape[1])
@@ -352,21 +397,29 @@ def test_cvxpy_box_corners_lie_in_the_linearised_safe_set(robust):
         half[list(cols)] = lin.box[name]
     corners = np.array(list(itertools.product((-1.0, 1.0), repeat=A.shape[1]))) * half
     assert np.all(b[:, None] + A @ corners.T >= -1e-6)
+    # ... and it is the largest axis box: 1 % more in either group leaves the set
+    for name, cols in groups.items():
+        bigger = half.copy()
+        bigger[list(cols)] *= 1.01
+        assert np.any(b[:, None] + A @ (corners / half * bigger).T < 0), name
     square = np.array(list(itertools.product((-1.0, 1.0), repeat=A.shape[1]))) * lin.square
     assert np.all(b[:, None] + A @ square.T >= -1e-6)
     # ... and it is the largest: a 1 % larger square leaves the set at some corner.
     assert np.any(b[:, None] + A @ (1.01 * square.T) < 0)
 
 
-def test_cvxpy_ellipsoid_lies_in_the_linearised_safe_set(robust):
+def test_cvxpy_ellipsoid_lies_in_the_linearised_safe_set(robust, safe_set):
     spec, result = robust
-    form = formulate(spec)
-    A, b, _ = linear_safe_set(form, result.solution.x, form.parameters(spec.requirements))
+    form, (A, b) = safe_set
     E = np.array(result.linearised.ellipsoid["matrix"])
     rng = np.random.default_rng(3)
     u = rng.normal(size=(A.shape[1], 2000))
     u /= np.linalg.norm(u, axis=0)
     assert np.all(b[:, None] + A @ (E @ u) >= -1e-5)
+    # ... and it touches the set: the support of E along the binding row, ||E A_i||, reaches b_i
+    moving = np.abs(A).sum(axis=1) > 1e-9
+    reach = np.linalg.norm(A[moving] @ E, axis=1) / b[moving]
+    assert reach.max() == pytest.approx(1.0, abs=1e-3)
 
 
 # -- stairs ---------------------------------------------------------------------------------

@@ -165,6 +165,21 @@ def test_lift_off_capacity_matches_newton(theta, speed):
     assert (speed**2 < held) == normal_positive
 
 
+@pytest.mark.parametrize("theta", [-1.5, -1.2, -0.7, -0.2, 0.0, 0.3, 0.6, 1.0, 1.3, 1.55])
+def test_lift_off_capacity_is_the_speed_where_newtons_normal_force_vanishes(theta):
+    # Newton's normal force is affine in v^2 (centripetal term - v^2 / l along the radius), so
+    # its root in v^2 is f(0) / (f(0) - f(1)), from two evaluations at speeds 0 and 1
+    f0 = _contact_force_by_newton(theta, 0.0)[1]
+    f1 = _contact_force_by_newton(theta, 1.0)[1]
+    root = f0 / (f0 - f1)
+    held = manip.lift_off_capacity(theta, gravity=G, link_length=L)
+    assert held == pytest.approx(root, rel=1e-12)
+    # and the force there is zero, a little slower a push, a little faster a pull
+    assert abs(_contact_force_by_newton(theta, math.sqrt(held))[1]) <= 1e-12 * G
+    assert _contact_force_by_newton(theta, math.sqrt(0.99 * held))[1] > 0
+    assert _contact_force_by_newton(theta, math.sqrt(1.01 * held))[1] < 0
+
+
 @pytest.mark.parametrize("theta, speed", [(0.6, 3.0), (-0.2, 2.0), (0.5, 1.0)])
 def test_friction_demand_matches_newton(theta, speed):
     fx, fy = _contact_force_by_newton(theta, speed)

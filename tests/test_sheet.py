@@ -77,6 +77,25 @@ def test_pivot_tolerance_survives_the_simulator(manip_sheet):
     assert result.outcome.completed
 
 
+def test_pivot_tolerance_is_the_largest_robust_box(manip_sheet):
+    # ... and it is not smaller than it may be: the robust box of the NLP's definition
+    # (docs/optimizer.md), solved afresh in numpy by bisection (tests/test_optimize.py, no
+    # pdm_design code) at the paper's alpha 0.2, beta 0.6, l 2 m, m/M 10 over 6 manipulators.
+    # (Every simulated build of a few times the box still completes here: the robust rows bound
+    # margins, lift-off, tipping, the landing on the palm, not the simulator's outright failures.)
+    from test_optimize import robust_tolerance_grid
+
+    spec = manip_sheet.spec
+    assert spec.verification.stages == 6
+    grid = robust_tolerance_grid(spec.scene, [0.2], [0.6], link_length=2.0, mass_ratio=10.0,
+                                 stages=6, iters=48)
+    expected = float(grid[0, 0])
+    assert expected > 0.0
+    # the rows keep a backoff of 1e-6 of their scale (formulation/common.py)
+    assert manip_sheet.tolerance["dx"] == pytest.approx(expected, rel=1e-4)
+    assert manip_sheet.tolerance["dy"] == pytest.approx(expected, rel=1e-4)
+
+
 def test_stairs_steps_have_the_periodic_rise_and_tread():
     sheet = sheet_for(STAIRS)
     rise = (1 - 0.8**2) * 1.0
@@ -100,6 +119,18 @@ def test_step_tolerance_survives_the_simulator():
                              tread=0.9 * tol["tread"]) for k in range(1, 21))
     result = simulate_spec(sheet.spec, sheet.spec.design_at(), step_errors=errors)
     assert result.outcome.completed
+    # ... and from the other side: the shortest drift (every riser low, every tread long) at
+    # the tolerance completes, and at 1.25 times it the simulator refutes the build (it first
+    # fails between 1.05 and 1.1 times: the box is no more than about 10 % short of the largest)
+    def shortest(k):
+        errors = tuple(StepError(step=n, rise=-k * tol["rise"], tread=k * tol["tread"])
+                       for n in range(1, 21))
+        return simulate_spec(sheet.spec, sheet.spec.design_at(), step_errors=errors)
+
+    assert shortest(1.0).outcome.completed
+    refuted = shortest(1.25)
+    assert not refuted.outcome.completed
+    assert refuted.outcome.failure.kind in ("nose_hit", "double_landing", "skipped_step")
 
 
 def test_sheet_command_writes_markdown_csv_and_drawing(tmp_path):

@@ -413,13 +413,19 @@ def test_energy_per_periodic_stage():
     position, velocity = periodic_start()
     scene, design = make(position=position, velocity=velocity)
     result = simulate_manipulators(scene, design, stages=4)
+    # every stage run: a spurious failure would leave the loop below nothing to check
+    assert result.outcome.completed and result.outcome.failure is None, result.outcome
+    assert result.outcome.stages_passed == len(result.stages) == 4
     m, big_m = 1.0, 1.0 / Q
     _, p = phys.pitch(ALPHA, BETA, L)
+    checked = 0
     for st in result.stages[:-1]:
         v2 = st["landing_vx"] ** 2 + st["landing_vy"] ** 2
         loss = 0.5 * m * v2 - 0.5 * (m + big_m) * st["landing_speed"] ** 2
         palm = 0.5 * big_m * st["release_speed"] ** 2 - big_m * G * p
         assert loss + palm == pytest.approx(m * G * p, rel=1e-9)
+        checked += 1
+    assert checked == 3
 
 
 def test_energy_per_stage_on_the_approach():
@@ -427,14 +433,19 @@ def test_energy_per_stage_on_the_approach():
     the object's energy drop between consecutive handovers (m s_k^2/2 - m s_k+1^2/2 + m g p)."""
     scene, design = make()
     result = simulate_manipulators(scene, design, stages=5)
+    assert result.outcome.completed and result.outcome.failure is None, result.outcome
+    assert result.outcome.stages_passed == len(result.stages) == 5
     m, big_m = 1.0, 1.0 / Q
     _, p = phys.pitch(ALPHA, BETA, L)
+    checked = 0
     for prev, st in zip(result.stages, result.stages[1:-1]):
         s_in, s_out = prev["handover_speed"], st["handover_speed"]
         loss = 0.5 * m * s_in ** 2 - 0.5 * (m + big_m) * st["landing_speed"] ** 2
         palm = 0.5 * big_m * st["release_speed"] ** 2 - big_m * G * p
         drop = 0.5 * m * (s_in ** 2 - s_out ** 2) + m * G * p
         assert loss + palm == pytest.approx(drop, rel=1e-9)
+        checked += 1
+    assert checked == 3
 
 
 def test_handover_map_is_the_iterated_closed_form():
