@@ -275,6 +275,11 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
         result = run_sweep(spec, sweeps, folder, workers=workers, scheduler=scheduler,
                            resume=resume, chain=chain, plots=not no_plots)
     except KeyboardInterrupt:
+        import signal
+
+        # the command is ending with its rows whole: a further Ctrl-C while Python shuts down
+        # must not kill it (exit -2 instead of 1)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         click.echo(f"interrupted: the rows solved so far are in {Path(folder) / 'table.csv'}; "
                    "run the same command with --resume to continue", err=True)
         return EXIT_FAILED

@@ -259,6 +259,94 @@ def test_dask_cluster_on_loopback_gives_the_same_table(tmp_path):
         tmp_path / "local" / "table.csv").read_text()
 
 
+# --------------------------------------------------------------------------- Ctrl-C
+
+def _running_in_group(pgid):
+    """Processes of the process group `pgid` still running (zombies are dead: left out)."""
+    running = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:  # ended meanwhile
+                continue
+            state, _, group = stat.rsplit(")", 1)[1].split()[:3]
+            if int(group) == pgid and state != "Z":
+                running.append(int(entry.name))
+    return running
+
+
+def test_ctrl_c_twice_in_process_stops_the_workers_once_and_restores_the_handler(tmp_path):
+    import multiprocessing
+    import signal
+
+    before = signal.getsignal(signal.SIGINT)
+
+    def press_twice(point, row):  # Ctrl-C twice as the first row is written
+        if not press_twice.pressed:
+            press_twice.pressed = True
+            signal.raise_signal(signal.SIGINT)
+            signal.raise_signal(signal.SIGINT)
+    press_twice.pressed = False
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(MANIP, GRID, tmp_path, workers=2, plots=False, on_row=press_twice)
+    assert signal.getsignal(signal.SIGINT) is before
+    assert multiprocessing.active_children() == []  # the workers were ended, not left to idle
+    rows = rows_of(tmp_path)
+    assert 1 <= len(rows) < 6 and (tmp_path / "table.csv").read_text().endswith("\n")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(sys.platform != "linux", reason="reads /proc; signals a process group")
+@pytest.mark.parametrize("workers, gap", [(2, 0.05), (2, 0.2), (1, 0.2)])
+def test_ctrl_c_twice_ends_the_table_with_exit_1_whole_rows_and_no_worker_left(tmp_path,
+                                                                               workers, gap):
+    # A terminal's Ctrl-C signals the whole process group (`table` and its workers), here twice,
+    # `gap` seconds apart, once rows are being written. With 2 workers the second press used to
+    # land in the pool's shutdown and hang the command for ever; in this process (1 worker) it
+    # lands while Python shuts down, where it used to kill the command by SIGINT (exit -2).
+    import csv
+    import io
+    import os
+    import signal
+    import time
+
+    out = tmp_path / "t"
+    grid = ["mass_ratio=5:20:4", "beta=0.4:0.7:4"]  # 16 points, 4 chains
+    child = subprocess.Popen(
+        [sys.executable, "-m", "pdm_design", "table", str(ROBUST), *(f"--sweep={g}" for g in grid),
+         "--out", str(out), "--workers", str(workers), "--no-plots"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and child.poll() is None:
+            csv_path = out / "table.csv"
+            if csv_path.exists() and csv_path.read_text().count("\n") >= 2:  # a row is in
+                break
+            time.sleep(0.02)
+        assert child.poll() is None, "the sweep ended before it could be interrupted"
+        os.killpg(child.pid, signal.SIGINT)
+        time.sleep(gap)
+        os.killpg(child.pid, signal.SIGINT)
+        _, err = child.communicate(timeout=30)  # a hang guard, not a speed claim
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+            child.communicate()
+    assert child.returncode == 1, err
+    assert "interrupted" in err and "Traceback" not in err, err
+    assert _running_in_group(child.pid) == []  # no worker left behind
+    text = (out / "table.csv").read_text()
+    assert text.endswith("\n")  # no line cut short
+    header, *lines = list(csv.reader(io.StringIO(text)))
+    assert 1 <= len(lines) < 16 and all(len(line) == len(header) for line in lines)
+    rows = rows_of(out)
+    assert not any(row["status"] == "error" for row in rows)
+    result = run_sweep(ROBUST, grid, out, workers=2, plots=False, resume=True)
+    assert (result.reused, result.computed) == (len(rows), 16 - len(rows))  # all rows kept
+
+
 # --------------------------------------------------------------------------- a failed start
 
 def _files(folder):

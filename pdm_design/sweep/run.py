@@ -21,6 +21,11 @@ or the Dask scheduler reached, before anything in the folder changes: a run that
 solving leaves the folder as it was. Only then is the folder started (a fresh table: sweep.json
 and a header-only table.csv, the old table.md and plots removed; on resume: table.csv rewritten
 with its whole, non-error rows).
+
+Ctrl-C (any number of presses, at any moment): the sweep stops within a fraction of a second,
+local workers are terminated mid-point (only finished rows are ever written) and the pool shut
+down, and KeyboardInterrupt is raised with table.csv holding whole rows only; see
+`interrupts`.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future
 from concurrent.futures import wait as wait_futures
@@ -41,6 +47,7 @@ from ..progress import progress_bar
 from ..spec import parse_spec, read_spec_data
 from . import tables
 from .grid import GridPoint, SweepAxis, chains, grid_points, point_data, sweep_axes
+from .interrupts import interrupt_guard
 
 SCHEMA = "pdm-design/table/1"
 CSV_NAME, MARKDOWN_NAME, META_NAME = "table.csv", "table.md", "sweep.json"
@@ -48,6 +55,8 @@ PLOT_NAMES = tuple(f"{n}.{e}" for n in ("optimum", "tolerance") for e in ("png",
 DEFAULT_CHAIN = 4
 WARM_STATUSES = ("optimal", "evaluated", "acceptable")
 DASK_CONNECT_TIMEOUT = 5  # seconds to reach the Dask scheduler before --scheduler is refused
+POLL_SECONDS = 0.1  # how often the main process looks for a Ctrl-C while local workers solve
+TERMINATE_GRACE = 5  # seconds for terminated workers to end before they are killed
 
 
 @dataclass(frozen=True)
@@ -130,30 +139,38 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
 
     todo = [p for p in points if p.key not in done]
     all_chains = chains(points, chain)
-    # the last thing that can fail on the input (--workers, --scheduler): before the folder
-    # is touched, so that a failed start leaves it as it was
-    executor = _executor(workers, scheduler, len(all_chains)) if todo else None
     csv_path = folder / CSV_NAME
-    with _closing(executor):
-        _start_folder(folder, meta, header, kept)
-        with open(csv_path, "a", encoding="utf-8", newline="") as stream, \
-                progress_bar(len(points), f"sweep {Path(source).name}", enabled=show_progress,
-                             completed=reused) as advance:
+    # Ctrl-C from here until the workers are shut down: noted while the pool starts, runs and
+    # stops, raised as KeyboardInterrupt only where the sweep is safe to stop (`interrupts`)
+    with interrupt_guard() as guard:
+        # the last thing that can fail on the input (--workers, --scheduler): before the
+        # folder is touched, so that a failed start leaves it as it was
+        executor = _executor(workers, scheduler, len(all_chains)) if todo else None
+        with _closing(executor):
+            guard.at_once = not isinstance(executor, _ProcessExecutor)
+            guard.check()  # pressed while the workers started: the folder is left as it was
+            _start_folder(folder, meta, header, kept)
+            with open(csv_path, "a", encoding="utf-8", newline="") as stream, \
+                    progress_bar(len(points), f"sweep {Path(source).name}",
+                                 enabled=show_progress, completed=reused) as advance:
 
-            def record(i: int, cells: dict[str, str]) -> None:
-                row = {**dict(zip(sweep_columns, points[i].key)), **cells}
-                stream.write(tables.csv_line([row.get(c, "") for c in header]))
-                stream.flush()
-                done[points[i].key] = row
-                advance(1)
-                if on_row is not None:
-                    on_row(points[i], row)
+                def record(i: int, cells: dict[str, str]) -> None:
+                    row = {**dict(zip(sweep_columns, points[i].key)), **cells}
+                    stream.write(tables.csv_line([row.get(c, "") for c in header]))
+                    stream.flush()
+                    done[points[i].key] = row
+                    advance(1)
+                    if on_row is not None:
+                        on_row(points[i], row)
 
-            def task(i: int, warm: dict | None) -> PointTask:
-                return PointTask(data, labels[i], paths, points[i].values, warm)
+                def task(i: int, warm: dict | None) -> PointTask:
+                    return PointTask(data, labels[i], paths, points[i].values, warm)
 
-            if todo:
-                _execute(executor, all_chains, points, done, free, task, record)
+                if todo:
+                    _execute(executor, all_chains, points, done, free, task, record,
+                             guard.check)
+            guard.at_once = False  # a Ctrl-C from here is only noted: the close runs whole
+        guard.check()  # pressed while the idle workers were shut down: still an interrupt
 
     rows = [done[p.key] for p in points]
     files = _write_outputs(folder, base, source, axes, header, rows, plots)
@@ -251,15 +268,21 @@ def _warm(row: dict[str, str] | None, free: list[str]) -> dict[str, float] | Non
 
 @contextmanager
 def _closing(executor):
+    """Close the executor after the block: at once (workers stopped mid-point) if the block
+    raised (Ctrl-C, a full disk), else once its idle workers have exited."""
     try:
         yield executor
-    finally:
+    except BaseException:
         if executor is not None:
-            executor.close()
+            executor.close(at_once=True)
+        raise
+    if executor is not None:
+        executor.close()
 
 
-def _execute(executor, all_chains, points, done, free, task, record) -> None:
-    """Solve every point not in `done`, chain by chain, warm-starting along each chain."""
+def _execute(executor, all_chains, points, done, free, task, record, stop) -> None:
+    """Solve every point not in `done`, chain by chain, warm-starting along each chain.
+    stop: called after every wait; raises (KeyboardInterrupt) to end the sweep there."""
     position = dict.fromkeys(range(len(all_chains)), 0)  # chain -> index of its next point
     pending: dict[object, tuple[int, int]] = {}
 
@@ -279,6 +302,7 @@ def _execute(executor, all_chains, points, done, free, task, record) -> None:
             submit_next(c)
         while pending:
             finished = executor.wait(list(pending))
+            stop()  # before recording: a point cut short by Ctrl-C is no row
             for future in finished:
                 c, i = pending.pop(future)
                 record(i, future.result())
@@ -326,13 +350,15 @@ class _SerialExecutor:
     def cancel(self, futures):
         pass
 
-    def close(self):
+    def close(self, *, at_once=False):
         pass
 
 
 class _ProcessExecutor:
     """Local worker processes: forked (fast start) when this process runs no other thread,
-    else started from a fork server (never fork a process whose threads may hold locks)."""
+    else started from a fork server (never fork a process whose threads may hold locks).
+    The workers ignore Ctrl-C; `wait` returns at least every POLL_SECONDS, so that the sweep
+    loop sees a Ctrl-C noted by the `interrupts` guard."""
 
     def __init__(self, workers: int):
         import multiprocessing
@@ -349,25 +375,55 @@ class _ProcessExecutor:
             context = multiprocessing.get_context("spawn")
         self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=context,
                                         initializer=_ignore_interrupts)
-        self.pool.submit(int).result()  # start the workers now, before any progress thread
+        try:
+            self.pool.submit(int).result()  # start the workers now, before any progress thread
+        except BaseException:
+            self.close(at_once=True)
+            raise
 
     def submit(self, point_task):
         return self.pool.submit(solve_point, point_task)
 
     def wait(self, futures):
-        return wait_futures(futures, return_when=FIRST_COMPLETED).done
+        return wait_futures(futures, timeout=POLL_SECONDS, return_when=FIRST_COMPLETED).done
 
     def cancel(self, futures):
-        for future in futures:
-            future.cancel()
+        # left to `close` (shutdown with cancel_futures): a future cancelled here but still
+        # held by the pool breaks the pool's manager thread when the workers are terminated
+        # (Python 3.11 sets BrokenProcessPool on it: InvalidStateError)
+        pass
 
-    def close(self):
+    def close(self, *, at_once=False):
+        """Shut the pool down. After the last point its workers are idle and exit when told
+        to; at once (Ctrl-C, an error) they are terminated first, mid-point, as Python 3.14's
+        ProcessPoolExecutor.terminate_workers does: the points they were solving would give no
+        row anyway, and a solve may take long. Either way every worker has exited on return."""
+        if at_once:  # the pool's own list of its workers, as terminate_workers reads it
+            _terminate(list((getattr(self.pool, "_processes", None) or {}).values()))
         self.pool.shutdown(wait=True, cancel_futures=True)
 
 
+def _terminate(processes) -> None:
+    """Terminate worker processes (SIGTERM); kill those still running TERMINATE_GRACE seconds
+    later. Waits on their sentinels, so as not to reap them under the pool's manager thread."""
+    from multiprocessing.connection import wait as wait_ended
+
+    running = {}
+    for process in processes:
+        with suppress(ValueError):  # a process object already closed
+            process.terminate()
+            running[process.sentinel] = process
+    deadline = time.monotonic() + TERMINATE_GRACE
+    while running and (left := deadline - time.monotonic()) > 0:
+        for sentinel in wait_ended(list(running), timeout=left):
+            del running[sentinel]
+    for process in running.values():
+        process.kill()
+
+
 def _ignore_interrupts() -> None:
-    """Workers leave Ctrl-C to the main process, which stops the sweep and shuts them down
-    (each finishes the point it is solving; the rows already written stay)."""
+    """Workers leave Ctrl-C to the main process, which stops the sweep and terminates them
+    (the rows already written stay)."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -401,7 +457,7 @@ class _DaskExecutor:
         if futures:
             self.client.cancel(futures)
 
-    def close(self):
+    def close(self, *, at_once=False):
         self.client.close()
 
 
