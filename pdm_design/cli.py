@@ -171,7 +171,8 @@ def _check_plot_path(plot: str) -> None:
 @main.command()
 @SPEC
 @click.option("--stages", type=click.IntRange(1, 10_000_000), default=None,
-              help="Manipulators in the row, or bounces (default: the spec's verification.stages).")
+              help="Manipulators in the row, or bounces (default: the spec's verification.stages; "
+              "at least the highest K of the spec's offsets or step errors).")
 @click.option("--offset", "offsets", multiple=True, metavar="K:DX,DY",
               help="Offset manipulator K (from 1) by DX, DY metres (y up), in place of the "
               "spec's offset for K; the spec's others stay. Repeatable.")
@@ -301,10 +302,13 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
               help="Folder for sheet.md, sheet.csv, sheet.png and sheet.svg (default: the "
               "source's name followed by -sheet).")
 @click.option("--count", type=click.IntRange(1, 10_000_000), default=None,
-              help="Manipulators or steps listed (default: the spec's verification.stages).")
+              help="Manipulators or steps listed (default: the spec's verification.stages; the "
+              "tolerance covers only the first verification.stages of them).")
 @click.option("--no-tolerance", is_flag=True,
               help="Do not solve for the placement tolerance when the design carries none.")
-@click.option("--no-drawing", is_flag=True, help="Write the Markdown and CSV only.")
+@click.option("--no-drawing", is_flag=True,
+              help="Write the Markdown and CSV only (an earlier sheet.png / sheet.svg in the "
+              "folder is removed).")
 @_guarded
 def sheet(source, out, count, no_tolerance, no_drawing):
     """Build sheet of a design: a spec (solved first) or a saved `optimize --format json`
@@ -338,11 +342,13 @@ def sheet(source, out, count, no_tolerance, no_drawing):
 @main.command()
 @click.argument("targets", nargs=-1, required=True, type=click.Path(path_type=str))
 @click.option("--junit", type=click.Path(dir_okay=False), default=None,
-              help="Also write a JUnit XML report to this file.")
+              help="Also write a JUnit XML report to this file (not one of the specs checked).")
 @_guarded
 def check(targets, junit):
     """CI gate: solve and verify each spec (or every *.toml in a directory) and test its
-    [expect] table. One line per spec; exit 1 if any expectation fails, 2 on bad input."""
+    [expect] table (a feasible design must also pass the simulator's verification, unless the
+    table says verified = false). One line per spec; exit 1 if any expectation fails, 2 on bad
+    input."""
     from pathlib import Path
 
     from .check import check_spec, junit_xml, spec_paths
