@@ -26,10 +26,12 @@ class CheckResult:
 
     def line(self) -> str:
         if self.error:
-            return printable(f"ERROR {self.source}: {self.error}")
-        if self.failures:
-            return printable(f"FAIL  {self.source}: {'; '.join(self.failures)}")
-        return printable(f"PASS  {self.source}")
+            text = f"ERROR {self.source}: {self.error}"
+        elif self.failures:
+            text = f"FAIL  {self.source}: {'; '.join(self.failures)}"
+        else:
+            text = f"PASS  {self.source}"
+        return printable(text)
 
 
 # control characters, lone surrogates (undecodable file names) and the two non-characters:

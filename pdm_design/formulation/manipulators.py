@@ -59,7 +59,9 @@ START_CLEARANCE = 1e-3  # (x link length): the object starts at least this far a
 TOLERANCE_CAP = 10.0  # upper bound of the box half-width variable, in link lengths
 # Margins whose periodic and first_ versions are one row (the speed interval covers both): the
 # larger of their two requirements holds both.
-SHARED_ROWS = (("over_the_top", "first_over_the_top"), ("lift_off", "first_lift_off"))
+OVER_THE_TOP = ("over_the_top", "first_over_the_top")
+LIFT_OFF = ("lift_off", "first_lift_off")
+SHARED_ROWS = (OVER_THE_TOP, LIFT_OFF)
 # Reported margins the max_min_margin epigraph leaves out (a clearance that is held, not traded).
 OUTSIDE_MIN_MARGIN = ("parked_palms",)
 PARKED_ROWS_CAP = 16  # parked palms checked behind the carrying one, at most (docs/optimizer.md)
@@ -303,14 +305,14 @@ class _Model:
             self.H - tau - START_CLEARANCE * l, scale=l, kind=VALIDITY)
 
         # Carry conditions on every palm (the first included: u_lo <= u_1 <= u_hi).
-        add(("over_the_top", "first_over_the_top"), "slowest landing on any palm",
+        add(OVER_THE_TOP, "slowest landing on any palm",
             u_lo**2 - self.top_needed, u_lo**2)
         held = phys.lift_off_capacity(a, gravity=g, link_length=l)
-        add(("lift_off", "first_lift_off"), "at the back stop, fastest landing",
+        add(LIFT_OFF, "at the back stop, fastest landing",
             held - u_hi**2, held)
         v2 = phys.carry_speed_squared(u_hi, a, th_hi, gravity=g, link_length=l)
         held = phys.lift_off_capacity(th_hi, gravity=g, link_length=l)
-        add(("lift_off", "first_lift_off"), "at the handover, fastest carry", held - v2, held)
+        add(LIFT_OFF, "at the handover, fastest carry", held - v2, held)
         add("slip_carry", "at the back stop", mu - phys.friction_demand(a), mu)
         add("slip_carry", "at the largest handover angle", mu - phys.friction_demand(th_hi), mu)
         add("palm_clearance", "next palm below the object until the handover",
