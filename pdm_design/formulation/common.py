@@ -125,6 +125,10 @@ class SceneModel:
     # natural units). IPOPT's dual and complementarity tolerances are absolute in f's units, so
     # f in metres on a centimetre scene stopped it short of the optimum (the stairs set it).
     objective_scale: float = 1.0
+    # Whether optimize solves the multistart points together as one stacked NLP (solve/stacked.py).
+    # Stacking shares IPOPT's per-iteration overhead, so it pays only where that overhead, not the
+    # rows' evaluation, is an iteration's cost, and where the starts need alike iteration counts.
+    stack_starts: bool = True
 
 
 @dataclass(frozen=True)
@@ -159,6 +163,7 @@ class Formulation:
     # row >= 0 where the NLP's row would hold; None when every row is in the NLP
     deferred: object = None
     deferred_conditions: tuple[ConditionInfo, ...] = ()
+    stack_starts: bool = True  # SceneModel.stack_starts
 
     def deferred_broken(self, x, p) -> bool:
         """Whether x breaks a row this NLP leaves out."""
@@ -356,7 +361,7 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
         aux_init=model.aux_init, tolerance_axes=model.tolerance_axes,
         tolerance_index=tol_index, margin_index=m_index, fixed=fixed,
         derived_names=derived_names, norms=norms, scenario=model.scenario,
-        deferred=deferred, deferred_conditions=deferred_infos,
+        deferred=deferred, deferred_conditions=deferred_infos, stack_starts=model.stack_starts,
     )
 
 

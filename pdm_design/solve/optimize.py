@@ -203,12 +203,13 @@ def _multistart(form, options, x_starts, p, warm_solution):
 
 def _solve_starts(form, options, solver, x_starts, p):
     """(one Solve per start, the IPOPT runs made, how many starts shared a stacked run). The
-    starts are solved together in groups (solve/stacked.py); a group whose stacked run does not
-    succeed is solved one by one, and its failed run still counts in the totals."""
+    starts are solved together in groups (solve/stacked.py) where the NLP gains by it
+    (Formulation.stack_starts); a group whose stacked run does not succeed is solved one by one,
+    and its failed run still counts in the totals."""
     runs, calls, shared = [], [], 0
     for group in groups(len(x_starts)):
         starts = x_starts[group.start:group.stop]
-        if len(starts) > 1:
+        if len(starts) > 1 and form.stack_starts:
             stacked = stacked_solver_for(form.key, form.nlp, options, len(starts))
             together = solve_stacked(stacked, starts, p, form.lbx, form.ubx, form.lbg, form.ubg,
                                      first=group.start)
