@@ -77,6 +77,7 @@ def optimize(spec: Spec, *, verify: bool = True,
     simulator's tolerances and, through its base preset, IPOPT's tolerance, the starts and how
     many random builds are run."""
     from .solve import optimize as solve
+    from .solve.words import summarise
 
     accuracy = resolve_accuracy(accuracy or spec.verification.accuracy)
     preset = SOLVE_PRESETS[accuracy.base]
@@ -87,7 +88,7 @@ def optimize(spec: Spec, *, verify: bool = True,
                                       spec.design[name].max)
                             for name in spec.free_variables})
     analysis = analyse(spec.scene, point, spec.verification.stages)
-    violations = tuple(v.text for v in result.violations) + tuple(analysis.problems)
+    violations = tuple(summarise(result.violations)) + tuple(analysis.problems)
     verification = None
     if verify and result.status.is_success:
         samples = round(spec.verification.samples * preset["sample_factor"])

@@ -16,6 +16,7 @@ import pytest
 from scipy.optimize import minimize_scalar
 
 from pdm_design.analysis import analyse
+from pdm_design.api import evaluate
 from pdm_design.formulation import formulate
 from pdm_design.physics.stairs import corner_gaps
 from pdm_design.sim.stairs import simulate_stairs
@@ -169,6 +170,23 @@ def test_the_launch_row_and_margin_share_their_name():
     assert rows and all("top landing" in c.where for c in rows)
     assert all("nose_clearance" in c.keys for c in rows)   # a nose requirement covers it too
     assert "first_nose_clearance" in margins(stairs({"restitution": 0.8, "launch_speed": 2.0}))
+
+
+def test_a_nose_requirement_holds_a_fixed_designs_launch_too():
+    # docs/spec.md: a nose_clearance requirement applies to first_nose_clearance. Landing 0.3 m
+    # from the riser, the launch clears the top landing's nose by less than the periodic flights
+    # clear theirs; a requirement between the two must refuse the design, as the NLP's row does.
+    design = {"restitution": 0.8, "launch_speed": 2.0, "landing_offset": 0.3}
+    free = margins(stairs(design, friction=ROLLING))
+    launch, periodic = free["first_nose_clearance"], free["nose_clearance"]
+    assert 0.0 < launch < periodic
+    need = 0.5 * (launch + periodic)
+    outcome = evaluate(stairs(design, friction=ROLLING, requirements={"nose_clearance": need}))
+    assert outcome.status is Status.INFEASIBLE
+    assert [v for v in outcome.violations if "first_nose_clearance" in v] == [
+        f"margin first_nose_clearance = {launch:.4g} is below the required {need:.4g}"]
+    below = evaluate(stairs(design, friction=ROLLING, requirements={"nose_clearance": launch}))
+    assert below.status is Status.EVALUATED
 
 
 # --- limits: the simulator's contact test is the judge ------------------------------------------

@@ -6,6 +6,7 @@ import threading
 import time
 from dataclasses import replace
 
+from ..analysis.result import required
 from . import manipulator_offsets, manipulators, stairs, stairs_errors
 from .common import Formulation, assemble, spec_key
 
@@ -52,10 +53,7 @@ def held_requirements(kind: str, requirements: dict[str, float],
         if a in need or b in need:
             both = max(float(requirements.get(a, 0.0)), float(requirements.get(b, 0.0)))
             need.update({n: both for n in (a, b) if n in need})
-    if kind == "stairs" and stairs.LAUNCH_KEYS[0] in need:
-        need[stairs.LAUNCH_KEYS[0]] = max(float(requirements.get(k, 0.0))
-                                          for k in stairs.LAUNCH_KEYS)
-    return need
+    return {n: max(value, required(n, requirements)) for n, value in need.items()}
 
 
 def min_margin_term(kind: str, margins: dict[str, float],

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..analysis.result import required
 from ..api import DesignOutcome
 
 _UNITS = {
@@ -61,7 +62,7 @@ def optimize_text(outcome: DesignOutcome) -> str:
     lines += ["", "margins (>= 0 holds; 1 - demand/capacity):"]
     width = max((len(k) for k in analysis.margins), default=0)
     for name, value in analysis.margins.items():
-        need = spec.requirements.get(name, 0.0)
+        need = required(name, spec.requirements)
         flag = "ok" if value >= need else f"VIOLATED (needs >= {need:g})"
         lines.append(f"  {name:<{width}}  {value:+.4f}  {flag}")
     if outcome.tolerance:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..analysis import analyse
+from ..analysis.result import required
 
 CHECK_TOL = 1e-6
 
@@ -29,7 +30,7 @@ def closed_form_check(spec, design: dict[str, float], requirements: dict[str, fl
         return {"passed": False, "failures": [f"design rejected: {exc}"], "analysis": None}
     failures = list(analysis.problems)
     for name, value in analysis.margins.items():
-        need = float(requirements.get(name, 0.0))
+        need = required(name, requirements)
         if value < need - CHECK_TOL:
             failures.append(f"margin {name} = {value:.6g} is below the required {need:.6g}")
     return {"passed": not failures, "failures": failures, "analysis": analysis}

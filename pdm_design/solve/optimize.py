@@ -16,7 +16,7 @@ from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
 from .result import OptimizeResult, Solution, SolverStats
 from .stacked import groups, solve_stacked, stacked_solver_for
 from .tolerance import linearised_tolerance
-from .words import normalised_margin
+from .words import normalised_margin, summarise
 
 FEASIBILITY_TOL = 1e-7
 
@@ -179,7 +179,7 @@ def _robust_margins(form, x, p, slack, scale) -> dict[str, float]:
 def _message(status, violations, at_bounds) -> str:
     message = status.message
     if violations:
-        message += " Cannot be met: " + "; ".join(v.text for v in violations[:5]) + "."
+        message += " Cannot be met: " + "; ".join(summarise(violations)[:5]) + "."
         if at_bounds:
             message += (" At the least-violation design " + ", ".join(at_bounds)
                         + ": widening those bounds may help.")

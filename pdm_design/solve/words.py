@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 CONDITIONS = {
     # manipulators
     "over_the_top": ("the object is carried over the top of the palm's arc",
@@ -87,6 +89,50 @@ def describe(name: str, where: str, required: float, achieved: float, *,
     if equality:
         text = f"{what}{place}: cannot be met, best achievable residual {value:.3g}"
     else:
-        text = (f"{what}{place}: needs margin {required:.3g}, "
-                f"best achievable {achieved:.3g}")
+        text = (f"{what}{place}: needs margin {required:.3g}, reaches "
+                f"{_reached(required, achieved)} at the least-violation design")
     return f"{text}; try: {advice}" if advice else text
+
+
+def _reached(required: float, achieved: float) -> str:
+    """The margin reached, with its shortfall where 3 digits would print the requirement."""
+    if f"{achieved:.3g}" != f"{required:.3g}":
+        return f"{achieved:.3g}"
+    return f"{required:.3g} less {required - achieved:.2g}"
+
+
+# A row repeated along the device: the same condition at flight (landing) 1, 2, ... or palm 2, ...
+_NUMBERED = re.compile(r"\b(flight|landing|palm) (\d+)\b")
+
+
+def summarise(violations) -> list[str]:
+    """The elastic diagnosis' violations (most violated first) in words, one line per condition
+    and place: a row violated at several flights or palms is one line that names them all, with
+    the worst margin among them."""
+    groups: dict[tuple, list] = {}
+    for v in violations:
+        pattern = _NUMBERED.sub(lambda m: f"{m.group(1)} #", v.where)
+        key = (v.name, v.text if v.equality else pattern)
+        groups.setdefault(key, []).append(v)
+    lines = []
+    for (name, pattern), members in groups.items():
+        if len(members) == 1:
+            lines.append(members[0].text)
+            continue
+        kind = _NUMBERED.search(members[0].where).group(1)
+        numbers = sorted({int(_NUMBERED.search(v.where).group(2)) for v in members})
+        where = pattern.replace(f"{kind} #", f"{kind}s {_spans(numbers)}", 1)
+        worst = min(members, key=lambda v: v.achieved - v.required)
+        lines.append(describe(name, where, worst.required, worst.achieved))
+    return lines
+
+
+def _spans(numbers: list[int]) -> str:
+    """[1, 2, 3, 5] -> '1-3, 5'."""
+    spans: list[list[int]] = []
+    for n in numbers:
+        if spans and n == spans[-1][1] + 1:
+            spans[-1][1] = n
+        else:
+            spans.append([n, n])
+    return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in spans)
