@@ -448,7 +448,7 @@ def test_stairs_design_is_optimal_and_its_error_box_is_sound():
         for n in range(N):
             assert L - r >= 0.02 * tread - 1e-9  # riser clearance with the required margin
             next_rise = rise + (er[n + 1] if n + 1 < N else 0.0)
-            gap = nose_clearance(vx, eps * v, G, r, tread + et[n], L)
+            gap = nose_clearance(vx, eps * v, G, r, tread + et[n], L, next_rise)
             assert gap >= -1e-9  # the analysis' own clearance: the ball never touches a nose
             up = eps * v
             down = math.sqrt(up**2 + 2 * G * next_rise)

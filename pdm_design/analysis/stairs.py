@@ -66,13 +66,13 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign,
         # the launch over the top landing (one rise above tread 1), whose nose is v0 t(h0) -
         # landing ahead of it; the optimizer's launch row and the simulator's step 0
         launch = phys.launch_clearances(v0, g, ball.radius, h0 - rise,
-                                        v0 * vy_first / g - landing)
+                                        v0 * vy_first / g - landing, rise)
         margins["first_nose_clearance"] = float(min(launch) / tread)
         nearest_riser = landing
         if landing >= tread:
             problems.append(f"landing_offset {landing:g} m is not on the tread (tread {tread:g} m)")
         if vx > 0.0:
-            clearance = nose_clearance(vx, eps * vy_periodic, g, ball.radius, tread, landing)
+            clearance = nose_clearance(vx, eps * vy_periodic, g, ball.radius, tread, landing, rise)
             if stages and landing < tread:
                 # the flights the ball flies: off its orbit (a rise other than (1 - eps^2) h0)
                 # it settles at another landing point and never flies the periodic flight
@@ -155,7 +155,7 @@ def approach(g, eps, rise, vx, radius, tread, landing, v1, stages, *, explicit=2
         if (miss := lands(n, L)) or n >= stages:
             return Approach(nose, nearest, miss)
         up = eps * v
-        nose = min(nose, nose_clearance(vx, up, g, radius, tread, L))
+        nose = min(nose, nose_clearance(vx, up, g, radius, tread, L, rise))
         v_next = math.sqrt(up * up + 2.0 * g * rise)
         step = vx * (up + v_next) / g - tread
         converged = abs(v_next - v) <= 4 * sys.float_info.epsilon * v
@@ -173,19 +173,21 @@ def approach(g, eps, rise, vx, radius, tread, landing, v1, stages, *, explicit=2
                 return Approach(nose, nearest, miss)
             if stop - 1 >= n:  # flights n .. stop - 1, judged at their two ends
                 up = eps * v
-                nose = min(nose, nose_clearance(vx, up, g, radius, tread, L),
-                           nose_clearance(vx, up, g, radius, tread, L + (stop - 1 - n) * step))
+                nose = min(nose, nose_clearance(vx, up, g, radius, tread, L, rise),
+                           nose_clearance(vx, up, g, radius, tread, L + (stop - 1 - n) * step,
+                                          rise))
             return Approach(nose, nearest, None)
 
 
-def nose_clearance(vx, vy_up, g, radius, tread, landing):
-    """Smallest gap (m) between the ball and the step it leaves, over one periodic flight.
+def nose_clearance(vx, vy_up, g, radius, tread, landing, rise):
+    """Smallest gap (m) between the ball and the step it leaves, over one flight to the tread
+    `rise` below.
 
     The ball leaves the tread `landing` from its back with velocity (vx > 0, vy_up); the nose is
-    tread - landing ahead. The gap is the distance from the ball's centre path to the nose corner
-    less the radius (exact: `physics.stairs.corner_gaps`), and, where the centre passes over the
-    nose, the height of its lowest point above the nose level (negative: it comes down before
-    the nose, or it took off beyond it). The step's rise does not enter: the riser below the
-    nose is never nearer than the corner to a ball that clears the corner.
+    tread - landing ahead. The gap is the distance from the ball's centre path, up to its
+    landing, to the nose corner less the radius (exact: `physics.stairs.corner_gaps`), and, where
+    the centre passes over the nose, the height of its lowest point above the nose level
+    (negative: it comes down before the nose, or it took off beyond it). The riser below the nose
+    is never nearer than the corner to a ball that clears the corner.
     """
-    return float(min(phys.flight_clearances(vx, vy_up, g, radius, tread - landing)))
+    return float(min(phys.flight_clearances(vx, vy_up, g, radius, tread - landing, rise)))

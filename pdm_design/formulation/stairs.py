@@ -288,9 +288,10 @@ class _Model:
         tread = self.tread
         add(None, "launch: comes down beyond the top landing's nose", self.launch_slack(),
             tread * self.v0**2, unit=length * speed**2, keys=LAUNCH_KEYS, epigraph=not exact)
-        if exact:  # the analysis' first_nose_clearance: one design rise above tread 1
+        if exact:  # the analysis' first_nose_clearance: one design rise above tread 1 (to land
+            # a rise tau higher at worst: the longer flight's gap is the smaller)
             gaps = phys.launch_clearances(self.v0, g, r, self.h0 - self.rise,
-                                          self.v0 * self.vy1 / g - self.L1)
+                                          self.v0 * self.vy1 / g - self.L1, self.rise + tau)
             for phase, gap in zip(EXACT_LAUNCH, gaps, strict=True):
                 add(None, f"launch, exact {phase}", gap, tread, unit=length, keys=LAUNCH_KEYS)
         scale = tread * self.vx**2
@@ -317,7 +318,8 @@ class _Model:
                     add("nose_clearance", f"flight {stage}{suffix}, {where}", slack, scale,
                         unit=length * speed**2, epigraph=not exact)
                 if judged:
-                    gaps = phys.flight_clearances(self.vx, self.eps * v_short[n], g, r, dist)
+                    gaps = phys.flight_clearances(self.vx, self.eps * v_short[n], g, r, dist,
+                                                  self.rise + tau)
                     for phase, gap in zip(EXACT_FLIGHT, gaps, strict=True):
                         add("nose_clearance", f"flight {stage}{suffix}, exact {phase}", gap,
                             tread, unit=length)

@@ -14,9 +14,10 @@ point is at rest at every impact, no tangential impulse is needed, and vx stays 
 
 Step-nose clearance (flight_clearances, launch_clearances, from corner_gaps and corner_heights):
 the exact gap between the ball (a disc of radius r) and a nose corner its flight passes, from the
-closed-form nearest point of the centre's parabola (docs/physics.md, "Nose clearance, exactly").
-Written with the ops dispatch like every closed form here, but only the analysis calls them (on
-floats); the NLP's smooth rows cost IPOPT far fewer iterations (docs/optimizer.md, section 2).
+closed-form nearest point of the centre's parabola (docs/physics.md, "Nose clearance, exactly"),
+over the flight up to its landing. Written with the ops dispatch like every closed form here: the
+analysis calls them on floats, and the NLP's exact nose rows on CasADi symbols (only when a spec
+asks for them: they cost IPOPT iterations, docs/optimizer.md, section 2).
 """
 
 from __future__ import annotations
@@ -109,16 +110,19 @@ def periodic_impact_speed(vx, gravity, drop_height):
     return sqrt(vx**2 + 2.0 * gravity * drop_height)
 
 
-def corner_gaps(vx, gravity, apex_height, corner_dx, start_dx, radius):
+def corner_gaps(vx, gravity, apex_height, corner_dx, start_dx, radius, end_dx=None):
     """(start, rising, falling): the ball's gaps (m) to a corner it flies past.
 
-    Frame of the flight's apex: the centre is at (u, H - u^2 / (2 R)) for u >= start_dx, with
-    H = apex_height its height above the corner, R = vx^2 / g the path's radius of curvature at
-    the apex and start_dx <= 0 where the flight starts (0: launched at its apex); the corner is at
-    (corner_dx, 0). Each gap is a distance from the corner to the centre less the radius
-    (negative: they overlap): start, at the start; rising, the smallest over (start_dx, 0) when
-    it is inside, else not below `start`; falling, the smallest over u >= 0. So the smallest of
-    the three is the smallest gap of the whole flight, exactly.
+    Frame of the flight's apex: the centre is at (u, H - u^2 / (2 R)) for start_dx <= u <= end_dx,
+    with H = apex_height its height above the corner, R = vx^2 / g the path's radius of curvature
+    at the apex, start_dx <= 0 where the flight starts (0: launched at its apex) and end_dx >= 0
+    where it lands (None: never); the corner is at (corner_dx, 0). Each gap is a distance from the
+    corner to the centre less the radius (negative: they overlap): start, at the start; rising,
+    the smallest over (start_dx, 0) when it is inside, else not below `start`; falling, the
+    smallest over [0, end_dx]. So the smallest of the three is the smallest gap of the whole
+    flight, exactly. (Past the landing the parabola can come nearer the corner: a ball of radius
+    above the rise lands with its centre above the nose level, 14 mm nearer for radius 0.3 m and
+    rise 0.0975 m.)
 
     The squared distance is a quartic in u; its local minima are the smallest and the largest real
     root of its derivative, the depressed cubic (u/R)^3 + 2 (1 - H/R) (u/R) - 2 corner_dx/R = 0,
@@ -139,8 +143,12 @@ def corner_gaps(vx, gravity, apex_height, corner_dx, start_dx, radius):
 
     p, q = 2.0 * (1.0 - apex_height / R), -2.0 * corner_dx / R
     low, high = -R * _largest_root(p, -q), R * _largest_root(p, q)
+    def falling_at(root):  # the root clipped into [0, end_dx]
+        inside = fmax(root, 0.0)
+        return dist2(inside if end_dx is None else fmin(inside, end_dx))
+
     rising = fmin(rising_at(low), rising_at(high))
-    falling = fmin(dist2(0.0), fmin(dist2(fmax(low, 0.0)), dist2(fmax(high, 0.0))))
+    falling = fmin(dist2(0.0), fmin(falling_at(low), falling_at(high)))
     return (sqrt(dist2(start_dx)) - radius, sqrt(rising) - radius, sqrt(falling) - radius)
 
 
@@ -173,9 +181,10 @@ def _largest_root(p, q):
                  where(x > 1.0, single_m, where(x >= -1.0, three, -single_m)))
 
 
-def flight_clearances(vx, vy_up, gravity, radius, nose_dx):
+def flight_clearances(vx, vy_up, gravity, radius, nose_dx, rise):
     """Clearances (m) of a flight leaving a tread at (vx > 0, vy_up) from the contact point, the
-    tread's nose nose_dx ahead at the same level: (behind, start, rising, falling, beyond) =
+    tread's nose nose_dx ahead at the same level, to land on the tread `rise` below:
+    (behind, start, rising, falling, beyond) =
         behind  lowest point above the nose level where the centre passes over the nose, on the
                 rising side (negative: the take-off is beyond the nose, nose_dx < 0)
         start, rising, falling   gaps to the nose corner (`corner_gaps`): at the take-off, while
@@ -186,16 +195,19 @@ def flight_clearances(vx, vy_up, gravity, radius, nose_dx):
     vy_up^2 / (2 g) above the contact point."""
     apex_dx = vy_up * vx / gravity
     apex_height = radius + vy_up**2 / (2.0 * gravity)
-    gaps = corner_gaps(vx, gravity, apex_height, nose_dx - apex_dx, -apex_dx, radius)
+    land_dx = vx * sqrt(vy_up**2 + 2.0 * gravity * rise) / gravity  # apex to landing
+    gaps = corner_gaps(vx, gravity, apex_height, nose_dx - apex_dx, -apex_dx, radius, land_dx)
     behind, beyond = corner_heights(vx, gravity, apex_height, nose_dx - apex_dx, radius)
     return (behind, *gaps, beyond)
 
 
-def launch_clearances(v0, gravity, radius, height, nose_dx):
+def launch_clearances(v0, gravity, radius, height, nose_dx, rise):
     """Clearances (m) of the launch over the top landing: horizontal at v0 from its apex, the
-    lowest point `height` above the landing, its nose nose_dx ahead (negative: already past it):
-    (falling, beyond) as in `flight_clearances`. `beyond` asks height >= 0 even when the launch is
-    past the nose (exact for a launch above the landing; a launch below it is not modelled)."""
-    _, _, falling = corner_gaps(v0, gravity, height + radius, nose_dx, 0.0, radius)
+    lowest point `height` above the landing, its nose nose_dx ahead (negative: already past it),
+    to land on tread 1 `rise` below it: (falling, beyond) as in `flight_clearances`. `beyond` asks
+    height >= 0 even when the launch is past the nose (exact for a launch above the landing; a
+    launch below it is not modelled)."""
+    land_dx = v0 * sqrt(2.0 * fmax(height + rise, 0.0) / gravity)
+    _, _, falling = corner_gaps(v0, gravity, height + radius, nose_dx, 0.0, radius, land_dx)
     _, beyond = corner_heights(v0, gravity, height + radius, nose_dx, radius)
     return falling, beyond
