@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from pdm_design.analysis import analyse
 from pdm_design.physics import stairs as phys
 from pdm_design.scenes import Ball, StairsDesign, StairsInitial, StairsScene
 from pdm_design.sim.stairs import (
@@ -126,6 +127,22 @@ def test_event_log_uses_state_names_and_never_retriggers():
 
 
 # --- paper example 2: friction and spin -----------------------------------------------------------
+
+def test_backspin_that_sends_the_ball_back_has_no_tread_to_judge():
+    # Rolling after the first impact: vx1 = (m r^2 v0 - J r w0) / (m r^2 + J) (docs/physics.md)
+    # = (0.283 * 0.25 * 1 - 0.035 * 0.5 * 10) / (0.283 * 0.25 + 0.035) < 0: back up the stairs.
+    scene, design = paper2(friction=2.0, spin=10.0, launch_speed=1.0)
+    m, r, inertia = BALL2["mass"], BALL2["radius"], BALL2["inertia"]
+    vx1 = (m * r * r * 1.0 - inertia * r * 10.0) / (m * r * r + inertia)
+    assert vx1 < 0.0
+    analysis = analyse(scene, design, 5)
+    assert analysis.geometry["tread"] is None and analysis.design["landing_offset"] is None
+    assert set(analysis.margins) == {"first_impact_friction"}  # none divided by a tread < 0
+    assert analysis.problems == (f"the ball moves at {vx1:g} m/s along the stairs after the "
+                                 "first impact: it does not go down them",)
+    with pytest.raises(ValueError, match="does not go down them"):
+        stairs_geometry(scene, design)
+
 
 def test_friction_paper_example_rolls_after_the_first_impact_for_1000_bounces():
     scene, design = paper2()

@@ -48,7 +48,10 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign,
 
     geometry: dict[str, float | None] = {"rise": rise, "tread": design.tread}
     periodic: dict[str, float | None] = {"impact_speed": None}
-    if vy_periodic is not None and eps > 0.0:
+    if vx <= 0.0:  # no flight goes down the stairs: no tread, landing or clearance to judge
+        problems.append(f"the ball moves at {vx:g} m/s along the stairs after the first impact: "
+                        "it does not go down them")
+    elif vy_periodic is not None and eps > 0.0:
         flight = float(phys.flight_time(g, vy_periodic**2 / (2.0 * g), eps))
         orbit_tread = vx * flight
         tread = orbit_tread if design.tread is None else design.tread
@@ -71,23 +74,19 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign,
         nearest_riser = landing
         if landing >= tread:
             problems.append(f"landing_offset {landing:g} m is not on the tread (tread {tread:g} m)")
-        if vx > 0.0:
-            clearance = nose_clearance(vx, eps * vy_periodic, g, ball.radius, tread, landing, rise)
-            if stages and landing < tread:
-                # the flights the ball flies: off its orbit (a rise other than (1 - eps^2) h0)
-                # it settles at another landing point and never flies the periodic flight
-                # from landing_offset, so that one is not judged (it failed sound designs)
-                path = approach(g, eps, rise, vx, ball.radius, tread, landing, vy_first, stages)
-                nearest_riser = path.nearest
-                if math.isfinite(path.nose):  # a single bounce flies no flight after it
-                    clearance = path.nose
-                if path.overshoot:
-                    problems.append(path.overshoot)
-            geometry["nose_clearance"] = clearance
-            margins["nose_clearance"] = float(clearance / tread)
-        else:
-            problems.append(f"the ball moves at {vx:g} m/s along the stairs after the first "
-                            "impact: it does not go down them")
+        clearance = nose_clearance(vx, eps * vy_periodic, g, ball.radius, tread, landing, rise)
+        if stages and landing < tread:
+            # the flights the ball flies: off its orbit (a rise other than (1 - eps^2) h0) it
+            # settles at another landing point and never flies the periodic flight from
+            # landing_offset, so that one is not judged (it failed sound designs)
+            path = approach(g, eps, rise, vx, ball.radius, tread, landing, vy_first, stages)
+            nearest_riser = path.nearest
+            if math.isfinite(path.nose):  # a single bounce flies no flight after it
+                clearance = path.nose
+            if path.overshoot:
+                problems.append(path.overshoot)
+        geometry["nose_clearance"] = clearance
+        margins["nose_clearance"] = float(clearance / tread)
         margins["riser_clearance"] = float((nearest_riser - phys.riser_reach(rise, ball.radius))
                                            / tread)
 

@@ -101,6 +101,10 @@ def stairs_geometry(scene: StairsScene, design: StairsDesign, step_errors=()) ->
         vx1 = impact_once(v0, -math.sqrt(2.0 * g * h0), scene.initial.spin, eps, scene.friction,
                       ball.radius, ball.mass, ball.inertia)[0]
         tread = float(phys.periodic_tread(vx1, g, v_star**2 / (2.0 * g), eps))
+        if not vx1 > 0.0:
+            raise SimulationRefused(f"the ball moves at {vx1:g} m/s along the stairs after the "
+                                    "first impact (its spin sends it back): it does not go down "
+                                    "them, so no tread follows from its flight")
         if not tread > 0.0:
             raise SimulationRefused(f"the derived tread is {tread:g} m (restitution {eps:g}, "
                                     f"horizontal speed after the first impact {vx1:g} m/s): "
