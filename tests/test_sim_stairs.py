@@ -128,6 +128,23 @@ def test_event_log_uses_state_names_and_never_retriggers():
 
 # --- paper example 2: friction and spin -----------------------------------------------------------
 
+def test_a_first_impact_that_slides_gives_the_analysis_the_simulators_staircase():
+    # friction 0.02 cannot end the first impact in rolling: Coulomb takes its whole
+    # mu (1 + eps) sqrt(2 g h0) off vx (against the slip vx + r w > 0), and r m / J times that
+    # off the spin. The tread follows from that speed, in the analysis as in the simulator.
+    scene, design = paper2(friction=0.02, spin=0.5, launch_speed=3.0)
+    m, r, inertia = BALL2["mass"], BALL2["radius"], BALL2["inertia"]
+    dv = 0.02 * 1.8 * math.sqrt(2 * G * H0)
+    analysis = analyse(scene, design, 5)
+    assert analysis.periodic["horizontal_speed"] == pytest.approx(3.0 - dv, rel=1e-12)
+    assert analysis.periodic["spin"] == pytest.approx(0.5 - r * m * dv / inertia, rel=1e-12)
+    assert any("cannot stop the ball slipping" in p for p in analysis.problems)
+    built = stairs_geometry(scene, design)
+    assert analysis.geometry["tread"] == pytest.approx(built.tread, rel=1e-12)
+    first = simulate_stairs(scene, design, stages=2).stages[0]
+    assert first["vx"] == pytest.approx(3.0 - dv, rel=1e-12) and first["slipped"]
+
+
 def test_backspin_that_sends_the_ball_back_has_no_tread_to_judge():
     # Rolling after the first impact: vx1 = (m r^2 v0 - J r w0) / (m r^2 + J) (docs/physics.md)
     # = (0.283 * 0.25 * 1 - 0.035 * 0.5 * 10) / (0.283 * 0.25 + 0.035) < 0: back up the stairs.

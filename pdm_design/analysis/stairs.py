@@ -35,6 +35,10 @@ def analyse_stairs(scene: StairsScene, design: StairsDesign,
                 f"rolling without slip needs friction >= {demand:.4g} (the paper's eq. 13 assumes "
                 "it can); the ball leaves sliding and the tread is not periodic"
             )
+            # the staircase the simulator builds follows the first impact's horizontal speed
+            vx, spin = phys.sliding_impact(vx, spin, vy_first, eps, scene.friction,
+                                           radius=ball.radius, mass=ball.mass,
+                                           inertia=ball.inertia)
         else:
             vx, spin = phys.rolling_impact(
                 vx, spin, radius=ball.radius, mass=ball.mass, inertia=ball.inertia

@@ -67,6 +67,19 @@ def rolling_impact(vx, omega, *, radius, mass, inertia):
     return vx_after, -vx_after / radius
 
 
+def sliding_impact(vx, omega, vy_impact, restitution, friction, *, radius, mass, inertia):
+    """Velocities after an impact friction cannot end in rolling: (vx+, omega+).
+
+    The contact slides throughout, so the tangential impulse is Coulomb's whole
+    P = -sign(c) mu m (1 + eps) |vy|, c = vx + r omega, at the contact point (0, -r):
+    m (vx+ - vx) = P, J (omega+ - omega) = r P.
+    """
+    slip = vx + radius * omega
+    impulse = -friction * mass * (1.0 + restitution) * fabs(vy_impact)  # against the slip
+    impulse = impulse if slip >= 0.0 else -impulse
+    return vx + impulse / mass, omega + radius * impulse / inertia
+
+
 def rolling_impulse_ratio(vx, omega, vy_impact, restitution, *, radius, mass, inertia):
     """|tangential impulse| / normal impulse that rolling-without-slip requires at an impact.
 
