@@ -133,6 +133,26 @@ def test_step_tolerance_survives_the_simulator():
     assert refuted.outcome.failure.kind in ("nose_hit", "double_landing", "skipped_step")
 
 
+def test_a_given_tread_off_the_periodic_flight_takes_that_off_its_tolerance(tmp_path):
+    # The paper's stairs with the tread given 2 mm longer than the periodic flight's: every step
+    # is the periodic design's with a tread error of 2 mm, so its box is the periodic design's
+    # with 2 mm less on the tread (the NLP itself refuses a given tread off the orbit).
+    periodic = sheet_for(STAIRS).tolerance
+    orbit = 2.0 * (1 + 0.8) * math.sqrt(2 * 9.81 * 1.0) / 9.81
+    text = STAIRS.read_text().replace(
+        "launch_speed = 2.0 ", f"launch_speed = 2.0\nrise = 0.36\ntread = {orbit + 0.002!r} ")
+    spec = tmp_path / "long_tread.toml"
+    spec.write_text(text)
+    sheet = sheet_for(spec)
+    assert sheet.tolerance["rise"] == pytest.approx(periodic["rise"], rel=1e-6)
+    assert sheet.tolerance["tread"] == pytest.approx(periodic["tread"] - 0.002, rel=1e-6)
+    assert "0.002 m off the periodic flight's" in sheet.tolerance_note
+    # the shortest drift at the sheet's box: every riser low, every tread long
+    errors = tuple(StepError(step=n, rise=-sheet.tolerance["rise"],
+                             tread=sheet.tolerance["tread"]) for n in range(1, 21))
+    assert simulate_spec(sheet.spec, sheet.spec.design_at(), step_errors=errors).outcome.completed
+
+
 def test_sheet_command_writes_markdown_csv_and_drawing(tmp_path):
     code, out, err = run("sheet", MANIP, "--out", tmp_path)
     assert code == 0, err

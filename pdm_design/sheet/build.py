@@ -223,7 +223,8 @@ def _tolerance(spec: Spec, tol: dict | None, wanted: bool) -> tuple[dict | None,
     if spec.kind == "stairs" and spec.verification.stages > MAX_OPTIMISED_BOUNCES:
         return None, (f"tolerance not computed: its NLP has rows for every bounce, and "
                       f"{spec.verification.stages} is more than {MAX_OPTIMISED_BOUNCES}")
-    asked = dataclasses.replace(spec, objective={"max_offset_tolerance": 1.0})
+    asked, drift = _orbit_design(spec)
+    asked = dataclasses.replace(asked, objective={"max_offset_tolerance": 1.0})
     try:
         from ..api import design
 
@@ -238,8 +239,35 @@ def _tolerance(spec: Spec, tol: dict | None, wanted: bool) -> tuple[dict | None,
         return None, f"tolerance not found ({type(exc).__name__}: {exc})"
     if not (found and all(_finite(found.get(a)) for a in axes)):
         return None, "tolerance not found: the design has no robust margin to spare"
-    return ({a: float(found[a]) for a in axes},
-            "largest robust box for this design (objective max_offset_tolerance)")
+    box = {a: float(found[a]) - (drift if a == "tread" else 0.0) for a in axes}
+    if drift == 0.0:
+        return box, "largest robust box for this design (objective max_offset_tolerance)"
+    if box["tread"] <= 0.0:
+        return None, (f"tolerance not found: the tread is {drift:.3g} m off the periodic "
+                      f"flight's, more than the {found['tread']:.3g} m the periodic design "
+                      "allows a step")
+    return box, (f"largest robust box of the periodic design (objective max_offset_tolerance), "
+                 f"its tread's less this tread's {drift:.3g} m off the periodic flight's")
+
+
+def _orbit_design(spec: Spec) -> tuple[Spec, float]:
+    """(the spec with a given stairs tread left to the periodic flight, |tread - that tread|).
+
+    The NLP holds a given tread to the periodic flight's (optimizer.md, section 9), which an
+    optimizer's answer meets only to its tolerance (6e-8 m off found no box). Built with tread
+    T + d, every step is the periodic design's with a tread error d, so the periodic design's
+    box, its tread half-width less |d|, holds for it."""
+    tread = spec.design.get("tread") if spec.kind == "stairs" else None
+    if tread is None:
+        return spec, 0.0
+    from ..analysis import analyse
+
+    periodic = analyse(spec.scene, spec.design_at(), spec.verification.stages).periodic
+    drift = periodic.get("drift_per_bounce")
+    if drift is None:
+        return spec, 0.0
+    design = {name: value for name, value in spec.design.items() if name != "tread"}
+    return dataclasses.replace(spec, design=design), abs(float(drift))
 
 
 def _finite(value) -> bool:
