@@ -120,3 +120,38 @@ def test_an_unasked_tolerance_is_null_not_zero(tmp_path):
     assert doc["objective"]["terms"]["fastest_convergence"] == pytest.approx(eps**2, rel=1e-12)
     assert doc["objective"]["terms"]["min_drop"] == pytest.approx((1 - eps**2) * 1.0, rel=1e-9)
     assert rise == pytest.approx((1 - eps**2) * 1.0, rel=1e-9)
+
+
+def test_every_row_that_holds_two_margins_holds_each_to_the_others_requirement():
+    # The judge of a fixed design (analysis.result.required) and the NLP's rows agree on which
+    # requirements hold which margins: a row takes the largest requirement of its keys, so they
+    # must all hold the margin it is named after; a manipulators row that measures two margins
+    # (SHARED_ROWS) holds each to the other's requirement.
+    from pdm_design.analysis.result import COVERED_BY
+    from pdm_design.formulation import formulate
+    from pdm_design.formulation.manipulators import SHARED_ROWS
+
+    for problem in ("manipulators_robust.toml", "stairs_design.toml"):
+        spec = load_spec(PROBLEMS / problem)
+        for info in formulate(spec, full=True).conditions:
+            assert set(info.keys) - {info.name} <= set(COVERED_BY.get(info.name, ())), info.label
+    for a, b in SHARED_ROWS:
+        assert b in COVERED_BY[a] and a in COVERED_BY[b]
+
+
+def test_a_first_requirement_holds_a_fixed_designs_periodic_twin(tmp_path):
+    # The paper's design with first_lift_off = 0.4: its first landing has 0.4165 to spare, its
+    # periodic landings 0.3739. The NLP's one lift-off row holds both to 0.4, so the fixed design
+    # is refused too, its periodic margin flagged, as it is with alpha and beta pinned free.
+    text = (PROBLEMS / "paper_manipulators.toml").read_text()
+    fixed = tmp_path / "fixed.toml"
+    fixed.write_text(text + "\n[requirements]\nfirst_lift_off = 0.4\n")
+    pinned = tmp_path / "pinned.toml"
+    pinned.write_text(fixed.read_text().replace("alpha = 0.2 ", "alpha = { min = 0.2, max = 0.2 } ")
+                      .replace("beta = 0.6 ", "beta = { min = 0.6, max = 0.6 } "))
+    for path in (fixed, pinned):
+        result = CliRunner().invoke(main, ["optimize", str(path)])
+        assert result.exit_code == 1, result.stdout
+        assert "status: infeasible" in result.stdout
+        (line,) = [x for x in result.stdout.splitlines() if x.startswith("  lift_off ")]
+        assert line.endswith("+0.3739  VIOLATED (needs >= 0.4)")

@@ -4,9 +4,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-# Requirements that hold another margin too (docs/spec.md): a nose_clearance requirement holds the
-# launch over the top landing, first_nose_clearance.
-COVERED_BY = {"first_nose_clearance": ("nose_clearance",)}
+# Requirements that hold another margin too (docs/spec.md, section 7), as the optimizer's rows
+# do: a nose_clearance requirement holds the launch over the top landing, first_nose_clearance;
+# one row measures over_the_top and first_over_the_top (lift_off and first_lift_off likewise,
+# formulation.manipulators.SHARED_ROWS), so either's requirement holds both.
+COVERED_BY = {
+    "first_nose_clearance": ("nose_clearance",),
+    "over_the_top": ("first_over_the_top",), "first_over_the_top": ("over_the_top",),
+    "lift_off": ("first_lift_off",), "first_lift_off": ("lift_off",),
+}
 
 
 def required(name: str, requirements: dict[str, float]) -> float:

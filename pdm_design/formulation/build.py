@@ -41,28 +41,13 @@ def formulate(spec, *, cache: bool = True, full: bool = False) -> Formulation:
     return form
 
 
-def held_requirements(kind: str, requirements: dict[str, float],
-                      names) -> dict[str, float]:
-    """The required margin the NLP's rows hold each reported margin in `names` to: its own, or
-    the larger of two where one row measures two margins or one requirement covers two (the
-    manipulators' over_the_top and lift_off with their first_ twins; a nose_clearance
-    requirement covers the stairs' launch, first_nose_clearance)."""
-    need = {n: float(requirements.get(n, 0.0)) for n in names}
-    pairs = manipulators.SHARED_ROWS if kind == "manipulators" else ()
-    for a, b in pairs:
-        if a in need or b in need:
-            both = max(float(requirements.get(a, 0.0)), float(requirements.get(b, 0.0)))
-            need.update({n: both for n in (a, b) if n in need})
-    return {n: max(value, required(n, requirements)) for n, value in need.items()}
-
-
 def min_margin_term(kind: str, margins: dict[str, float],
                     requirements: dict[str, float]) -> float | None:
     """The max_min_margin objective's value at a design from its reported margins (the
     closed-form analysis'): the smallest of the margins the objective covers, each less the
-    requirement the NLP holds it to (held_requirements; the plain smallest margin when nothing
-    is required). None when the design has none of them."""
+    requirement the NLP holds it to (`analysis.result.required`; the plain smallest margin when
+    nothing is required). None when the design has none of them."""
     module = manipulators if kind == "manipulators" else stairs
     covered = [n for n in margins if n not in module.OUTSIDE_MIN_MARGIN]
-    need = held_requirements(kind, requirements, covered)
+    need = {n: required(n, requirements) for n in covered}
     return min((margins[n] - need[n] for n in covered), default=None)
