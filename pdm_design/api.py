@@ -77,7 +77,7 @@ def optimize(spec: Spec, *, verify: bool = True,
     simulator's tolerances and, through its base preset, IPOPT's tolerance, the starts and how
     many random builds are run."""
     from .solve import optimize as solve
-    from .solve.words import summarise
+    from .solve.words import bounds_hint, summarise
 
     accuracy = resolve_accuracy(accuracy or spec.verification.accuracy)
     preset = SOLVE_PRESETS[accuracy.base]
@@ -88,7 +88,9 @@ def optimize(spec: Spec, *, verify: bool = True,
                                       spec.design[name].max)
                             for name in spec.free_variables})
     analysis = analyse(spec.scene, point, spec.verification.stages)
-    violations = tuple(summarise(result.violations)) + tuple(analysis.problems)
+    advice = bounds_hint(result.at_bounds)
+    violations = (tuple(summarise(result.violations)) + ((advice,) if advice else ())
+                  + tuple(analysis.problems))
     verification = None
     if verify and result.status.is_success:
         samples = round(spec.verification.samples * preset["sample_factor"])

@@ -186,7 +186,9 @@ def _check_plot_path(plot: str) -> None:
 @FORMAT
 @_guarded
 def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
-    """Run the event simulator on SPEC's design (optimised first if it has free variables)."""
+    """Run the event simulator on SPEC's design (optimised first if it has free variables;
+    when no design meets every requirement, its least-violation design is run, with a warning,
+    and the exit code is 1)."""
     from .api import design
     from .errors import PdmError, SpecError
     from .report.simulation import simulation_text
@@ -220,9 +222,14 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
                  _parse_pairs(step_errors, "--step-error", "K:DRISE,DTREAD", row)}
         kwargs["step_errors"] = _with_spec_items(loaded.verification.step_errors, given, "step",
                                                  "verification.step_errors", row, spec)
-    point = loaded.design_at()
+    point, found = loaded.design_at(), None
     if loaded.free_variables:
-        point = loaded.design_at(design(loaded, verify=False).analysis.design)
+        found = design(loaded, verify=False)
+        point = loaded.design_at(found.analysis.design)
+        if not found.status.is_success:  # the run below is of no answer: say so, and exit 1
+            click.echo(f"warning: {spec}: the optimizer found no design that meets every "
+                       f"requirement (status {found.status.value}); simulating its "
+                       "least-violation design", err=True)
     try:
         result = simulate_spec(loaded, point, stages=stages, accuracy=accuracy,
                                record_trajectory=plot is not None, **kwargs)
@@ -239,7 +246,8 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
         click.echo(json.dumps(jsonable(result.to_json()), indent=2))
     else:
         click.echo(simulation_text(loaded, result), nl=False)
-    return EXIT_OK if result.outcome.completed else EXIT_FAILED
+    answered = found is None or found.status.is_success
+    return EXIT_OK if result.outcome.completed and answered else EXIT_FAILED
 
 
 @main.command()

@@ -185,3 +185,15 @@ def test_pgf_is_refused_before_any_work_without_latex(tmp_path, monkeypatch):
     monkeypatch.setattr(shutil, "which", lambda name: None)
     code, _, err = run(PAPER, "--plot", tmp_path / "figure.pgf")
     assert code == 2 and "--plot" in err and not (tmp_path / "figure.pgf").exists()
+
+
+def test_a_spec_with_no_feasible_design_runs_its_least_violation_design_and_exits_1():
+    spec = PROBLEMS / "infeasible_manipulators.toml"
+    code, out, err = run(spec)
+    assert code == 1
+    assert err == (f"warning: {spec}: the optimizer found no design that meets every requirement "
+                   "(status infeasible); simulating its least-violation design\n")
+    assert out.startswith("infeasible_manipulators (manipulators): ")  # the run is still shown
+    # a feasible free design is run quietly
+    code, _, err = run(PROBLEMS / "manipulators_robust.toml")
+    assert code == 0 and err == ""

@@ -38,3 +38,17 @@ def test_other_phases_and_conditions_stay_apart():
 def test_a_shortfall_too_small_for_three_digits_is_still_shown():
     text = describe("nose_clearance", "flight 1", 0.5, 0.5 - 1.8e-5)
     assert "needs margin 0.5, reaches 0.5 less 1.8e-05 at the least-violation design" in text
+
+
+def test_the_report_says_which_bounds_the_least_violation_design_sits_on():
+    # problems/infeasible_manipulators.toml: friction holds a palm tilted by at most atan(0.3),
+    # below the least handover angle beta >= 0.5 allows, so beta sits on that bound.
+    from pathlib import Path
+
+    from pdm_design.api import design
+    from pdm_design.spec import load_spec
+
+    spec = load_spec(Path(__file__).resolve().parents[1] / "problems/infeasible_manipulators.toml")
+    outcome = design(spec, verify=False)
+    assert ("at the least-violation design beta at its lower bound 0.5: widening that bound may "
+            "help") in outcome.violations

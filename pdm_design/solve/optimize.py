@@ -16,7 +16,7 @@ from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
 from .result import OptimizeResult, Solution, SolverStats
 from .stacked import groups, solve_stacked, stacked_solver_for
 from .tolerance import linearised_tolerance
-from .words import normalised_margin, summarise
+from .words import bounds_hint, normalised_margin, summarise
 
 FEASIBILITY_TOL = 1e-7
 
@@ -137,6 +137,7 @@ def optimize(
         tolerance=tolerance, linearised=linearised, margins=margins,
         robust_margins=robust_margins, periodic=periodic, violations=tuple(violations),
         checks=checks, stats=stats, message=_message(status, violations, at_bounds),
+        at_bounds=tuple(at_bounds) if violations else (),
         solution=Solution(form.key, x, chosen.lam_x, chosen.lam_g),
     )
 
@@ -181,8 +182,8 @@ def _message(status, violations, at_bounds) -> str:
     if violations:
         message += " Cannot be met: " + "; ".join(summarise(violations)[:5]) + "."
         if at_bounds:
-            message += (" At the least-violation design " + ", ".join(at_bounds)
-                        + ": widening those bounds may help.")
+            hint = bounds_hint(at_bounds)
+            message += f" {hint[0].upper()}{hint[1:]}."
     return message
 
 

@@ -108,6 +108,7 @@ class OptimizeResult:
     stats: SolverStats
     message: str
     solution: Solution | None = field(default=None, repr=False)
+    at_bounds: tuple[str, ...] = ()  # design variables at a bound of the least-violation design
 
     @property
     def success(self) -> bool:

@@ -136,3 +136,11 @@ def _spans(numbers: list[int]) -> str:
         else:
             spans.append([n, n])
     return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in spans)
+
+
+def bounds_hint(at_bounds) -> str:
+    """The design variables at a bound of the least-violation design, as advice ("" if none)."""
+    if not at_bounds:
+        return ""
+    return (f"at the least-violation design {', '.join(at_bounds)}: widening "
+            f"{'that bound' if len(at_bounds) == 1 else 'those bounds'} may help")
