@@ -124,3 +124,15 @@ def test_over_the_top_and_lift_off(margins, prefix, v):
     assert margins[f"{prefix}lift_off"] == pytest.approx(expected, rel=1e-9)
     if prefix == "":  # docs/physics.md section 3: the correct speed leaves a lift-off margin 0.37
         assert margins["lift_off"] == pytest.approx(0.37, abs=5e-3)
+
+
+def test_a_row_of_one_judges_only_palm_1():
+    # One manipulator: the object lands on palm 1 and is carried to beta; no landing follows.
+    # The periodic orbit's landing margins (over the top, lift-off at the landing, slip and tip
+    # at the impact) belong to palms 2..; palm 1's are the first_ ones, the carry's are shared.
+    spec = load_spec(PROBLEMS / "paper_manipulators.toml")
+    one = analyse(spec.scene, spec.design_at(), 1).margins
+    row = analyse(spec.scene, spec.design_at(), 6).margins
+    later = {"over_the_top", "lift_off", "slip_impact", "tip_impact"}
+    assert later <= set(row) and not later & set(one)
+    assert {k: v for k, v in row.items() if k not in later | {"parked_palms"}} == one

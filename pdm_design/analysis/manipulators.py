@@ -52,8 +52,11 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
         else:  # s*^2 = D / (1 - c) solves the map's algebra, but no object is carried on it
             problems.append(f"alpha + beta = {a + b:g} rad is not below pi/2: a handover drives "
                             "the next palm back onto its stop, so there is no periodic handover")
-        # the margins at s* say how far such a design is from working
-        margins.update(_stage_margins(scene, design, (s * math.cos(b), -s * math.sin(b)), offset))
+        # the margins at s* say how far such a design is from working; a row of one has no
+        # later landing, only palm 1's carry (its speed-dependent margins are the first_ ones)
+        later = _stage_margins(scene, design, (s * math.cos(b), -s * math.sin(b)), offset)
+        margins.update({k: v for k, v in later.items()
+                        if stages != 1 or k not in _SPEED_DEPENDENT})
 
     parked = parked_palms_margin(scene, design, offset, stages or APPROACH_STAGES)
     if parked is not None:
