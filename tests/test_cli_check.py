@@ -159,6 +159,21 @@ def test_a_design_the_simulator_refutes_fails_the_gate(tmp_path):
     assert code == 0 and out.startswith("PASS")
 
 
+def test_a_bouncy_palm_s_disagreement_is_put_down_to_the_plastic_landing(tmp_path):
+    # Restitution 0.3: the run completes its 6 stages, but the object hops before it rests and
+    # the handover speeds leave the closed forms'; the failure names that cause.
+    from pdm_design.api import evaluate
+    from pdm_design.spec import load_spec
+
+    bouncy = tmp_path / "bouncy.toml"
+    bouncy.write_text(PAPER.read_text().replace("restitution = 0.0 ", "restitution = 0.3 "))
+    verification = evaluate(load_spec(bouncy)).verification
+    assert verification["outcome"]["completed"] and not verification["passed"]
+    (failure,) = verification["failures"]
+    assert failure.startswith("simulator and closed form disagree on the handover speeds")
+    assert "assume a plastic landing; the palm's restitution 0.3" in failure
+
+
 def test_junit_report_onto_a_spec_checked_is_refused(tmp_path):
     spec = _spec_with_expect(tmp_path, "feasible = true")
     before = spec.read_text()
