@@ -225,6 +225,22 @@ def test_an_edited_design_json_is_bad_input_naming_its_key(tmp_path, saved_stair
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.filterwarnings("error")  # matplotlib warned of identical limits on a zero box
+def test_a_zero_tolerance_is_listed_as_zero_not_as_none(tmp_path):
+    code, out, _ = run("optimize", PROBLEMS / "manipulators_robust.toml", "--format", "json",
+                       "--no-verify")
+    assert code == 0
+    doc = json.loads(out)
+    doc["tolerance"] = {"dx": 0.0, "dy": 0.0}  # build every pivot exactly
+    path = tmp_path / "design.json"
+    path.write_text(json.dumps(doc))
+    code, _, err = run("sheet", path, "--out", tmp_path / "out")
+    assert code == 0, err
+    lines = (tmp_path / "out" / "sheet.md").read_text().splitlines()
+    pivots = [line for line in lines if line.startswith("| pivot k ")]
+    assert len(pivots) == 2 and all(line.endswith("| m | 0 |") for line in pivots), pivots
+
+
 # ------------------------------------------------------------------- the simulator's verdict
 
 def bouncing_object_spec(tmp_path):

@@ -405,7 +405,7 @@ def sheet_markdown(sheet: BuildSheet, drawing: str | None = None) -> str:
                if sheet.tolerance and sheet.tolerance_covers < sheet.count else "")
     lines += ["| quantity | value | unit | tolerance (+-) |", "|---|---|---|---|"]
     for name, value, unit, tol in sheet.summary:
-        shown = _show(tol) + covered if tol else "-"
+        shown = _show(tol) + covered if tol is not None else "-"  # 0: build it exactly
         lines.append(f"| {name} | {_show(value)} | {unit} | {shown} |")
     header = list(sheet.items[0])
     lines += ["", f"## Every {unit_word}", "",

@@ -124,7 +124,7 @@ def _manipulators(ax, sheet, shown):
         _dimension(ax, (side, y1), (side, y2), f"pitch y = {y1 - y2:.4g} m", offset=0.0)
         ax.plot([x1, side], [y1, y1], color="0.5", lw=0.5, ls=":")
     tol = sheet.tolerance
-    if tol:
+    if tol and max(tol["dx"], tol["dy"]) > 0.0:  # a zero box has nothing to zoom in on
         _tolerance_inset(ax, x1, y1, tol)
     where = _covered(sheet) or "the same at every pivot"
     text = (f"red box (inset; {where}): pivot tolerance "
@@ -217,8 +217,8 @@ def _stairs(ax, sheet, shown):
                 xytext=(5, 6), textcoords="offset points", fontsize=8)
     tread, rise = first["tread_m"], first["rise_m"]
     tol_r, tol_t = first["rise_tolerance_m"], first["tread_tolerance_m"]
-    tr = f" +-{tol_r * 1e3:.3g} mm" if tol_r else ""
-    tt = f" +-{tol_t * 1e3:.3g} mm" if tol_t else ""
+    tr = f" +-{tol_r * 1e3:.3g} mm" if tol_r is not None else ""
+    tt = f" +-{tol_t * 1e3:.3g} mm" if tol_t is not None else ""
     dim = items[1] if len(items) > 1 else first   # dimensions drawn inside the solid
     depth = 0.45 * max(dim["rise_m"], 0.1 * tread)
     _dimension(ax, (dim["back_x_m"], dim["level_m"] - depth),
