@@ -510,7 +510,7 @@ def test_long_runs_keep_a_bounded_record_and_a_summary():
     assert result.stages[-1]["step"] == n
     summary = result.summary
     half = phys.periodic_tread(2.0, G, H0, EPS) / 2
-    assert summary["bounces"] == n and summary["records_kept"] == 100
+    assert summary["bounces"] == n and summary["records_kept"] == len(result.stages)
     assert summary["landing_x_min"] == pytest.approx(half, rel=1e-9)
     assert summary["landing_x_max"] == pytest.approx(half, rel=1e-9)
 

@@ -289,6 +289,14 @@ def test_unknown_key_without_close_match_lists_known_keys():
     assert "mass, width, height" in error.expected
 
 
+@pytest.mark.parametrize("kind, other", [("stairs", "offsets"), ("manipulators", "step_errors")])
+def test_an_unknown_verification_key_lists_every_key_the_kind_takes(kind, other):
+    error = error_of(with_value(base(kind), ("verification", "colour"), "red"))
+    assert error.key == "verification.colour"
+    listed = set(error.expected.split("(")[1].rstrip(")").split(", "))
+    assert {"stages", "samples", "accuracy"} <= listed and other not in listed
+
+
 def test_unknown_scene_kind_suggests_the_close_one():
     error = error_of(with_value(base("manipulators"), ("scene", "kind"), "manipulator"))
     assert error.key == "scene.kind"

@@ -122,7 +122,8 @@ class _Summary:
 
     def to_dict(self, record_limit, last):
         out = {"bounces": self.count, "slipping_impacts": self.slips,
-               "records_kept": min(self.count, record_limit), "record_limit": record_limit}
+               # the first record_limit bounces' records, and the last bounce's
+               "records_kept": min(self.count, record_limit + 1), "record_limit": record_limit}
         if self.count:
             for key in self.KEYS:
                 out[f"{key}_min"] = self.lo[key]

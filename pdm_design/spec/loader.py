@@ -168,7 +168,7 @@ def _verification(table: dict, kind: _Kind) -> Verification:
     table = dict(table)
     setting = table.pop("accuracy", _MISSING)
     _check_fields(table, Verification, "verification", kind.verification_hints,
-                  exclude=(*kind.verification_hints, "accuracy"))
+                  exclude=kind.verification_hints)
     if setting is not _MISSING:
         table["accuracy"] = _accuracy(setting)
     verification = _build(Verification, table, "verification")
