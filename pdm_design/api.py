@@ -98,7 +98,7 @@ def optimize(spec: Spec, *, verify: bool = True,
                                         samples)
     solver = result.stats.to_json() | {"status": result.status.value, "message": result.message}
     objective = {"weights": dict(spec.objective), "value": result.objective,
-                 "terms": _terms(spec, result.objectives, analysis.margins)}
+                 "terms": _terms(spec, result.objectives, analysis.margins, result.tolerance)}
     tolerance = None
     if result.tolerance is not None:
         tolerance = dict(result.tolerance)
@@ -109,15 +109,15 @@ def optimize(spec: Spec, *, verify: bool = True,
                          verification=verification, solver=solver, accuracy=accuracy)
 
 
-def _terms(spec: Spec, nlp_terms: dict, margins: dict) -> dict:
+def _terms(spec: Spec, nlp_terms: dict, margins: dict, tolerance: dict | None) -> dict:
     """Every objective's value at the design: the NLP's for the closed forms of the design
     (min_drop, fastest_convergence) and for the box it found (max_offset_tolerance, None unless
-    asked: finding a design's box is an optimisation of its own); max_min_margin from the
-    analysis' margins (formulation.build.min_margin_term), weighted or not."""
+    asked and found: finding a design's box is an optimisation of its own); max_min_margin from
+    the analysis' margins (formulation.build.min_margin_term), weighted or not."""
     from .formulation.build import min_margin_term
 
     terms = dict(nlp_terms)
-    if not float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0:
+    if tolerance is None:
         terms["max_offset_tolerance"] = None
     terms["max_min_margin"] = min_margin_term(spec.kind, margins, spec.requirements)
     return terms

@@ -74,3 +74,19 @@ def test_a_claimed_box_the_simulator_cannot_build_is_a_failure_in_the_report(mon
     refused = [f for f in outcome.verification["tolerance_failures"]
                if "refuses this build" in f["failure"]]
     assert refused and outcome.verification["passed"] is False and outcome.exit_code == 1
+
+
+def test_a_run_that_never_converged_claims_no_box_score_or_landing(tmp_path):
+    # The first pivot 5 m up: palm 1's top is above the object's start (y = 3.05 m) for every
+    # alpha, so the closed forms have no first landing and IPOPT stops at its first point. The
+    # report gives the reason; no tolerance, objective or landing margin is claimed.
+    text = ROBUST.read_text().replace("[design]\n", "[design]\nfirst_pivot_y = 5.0\n", 1)
+    spec = tmp_path / "below.toml"
+    spec.write_text(text)
+    outcome = design(load_spec(spec), verify=False)
+    assert not outcome.status.is_success
+    assert outcome.tolerance is None and outcome.objective["value"] is None
+    assert outcome.objective["terms"]["max_offset_tolerance"] is None
+    assert "landing" not in outcome.analysis.margins
+    assert any("starts" in v and "below the first palm's top surface" in v
+               for v in outcome.violations)

@@ -32,8 +32,9 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
     # First approach: ballistic flight onto the first palm resting at -alpha.
     first = _first_landing(scene, design, problems)
     offset = first["landing_offset"] if first else 0.0
-    geometry["landing_offset"] = offset
-    margins["landing"] = margin(palm.width / 2, abs(offset) + body.width / 2)
+    geometry["landing_offset"] = offset if first else None
+    if first:  # an object that never lands on palm 1 has no landing to judge
+        margins["landing"] = margin(palm.width / 2, abs(offset) + body.width / 2)
 
     # Periodic orbit: fixed point of the handover-speed map.
     s2 = phys.handover_speed_squared(a, b, q, gravity=g, link_length=l)

@@ -91,13 +91,16 @@ def optimize(
     slack, scale, terms, _ = (np.asarray(v, dtype=float).ravel() for v in form.evaluate(x, p))
     objectives = dict(zip(form.objective_names, terms.tolist()))
     robust = form.tolerance_index is not None
+    # Only an answer IPOPT converged to claims a box, a score or a linearised set; a stopped or
+    # failed run's last point claims nothing (a solver error reported a box of 0 mm).
+    answered = status in (Status.OPTIMAL, Status.ACCEPTABLE)
     tolerance = None
-    if robust and status not in (Status.INFEASIBLE,):
+    if robust and answered:
         tol_value = float(x[form.tolerance_index])
         tolerance = {axis: tol_value for axis in form.tolerance_axes}
     robust_margins = _robust_margins(form, x, p, slack, scale)
     score = None
-    if status is not Status.INFEASIBLE:
+    if answered:
         score = float(sum(w * OBJECTIVE_SENSE[n] * objectives[n] for n, w in form.weights.items()))
 
     closed = check.closed_form_check(spec, design, reqs)
@@ -106,12 +109,12 @@ def optimize(
     periodic = dict(analysis.periodic) if analysis is not None else {}
     checks: dict[str, object] = {"closed_form": {"passed": closed["passed"],
                                                  "failures": closed["failures"]}}
-    if robust and tolerance and check_samples > 0 and status is not Status.INFEASIBLE:
+    if robust and tolerance and check_samples > 0:
         checks["sampled_offsets"] = check.sampled_offsets_check(
             form, x, p, float(x[form.tolerance_index]), samples=check_samples, seed=seed)
 
     linearised = None
-    if linearise and status is not Status.INFEASIBLE and form.scenario is not None:
+    if linearise and answered and form.scenario is not None:
         size = _length_scale(spec, design)  # offsets in units of the device's size: the same
         linearised = linearised_tolerance(form, x, p, cap=10.0 * size, length=size)  # at any scale
 
