@@ -241,6 +241,21 @@ def test_a_zero_tolerance_is_listed_as_zero_not_as_none(tmp_path):
     assert len(pivots) == 2 and all(line.endswith("| m | 0 |") for line in pivots), pivots
 
 
+def test_a_saved_design_whose_spec_changed_since_is_refused(tmp_path):
+    spec = tmp_path / "row.toml"
+    spec.write_text(MANIP.read_text())
+    code, out, _ = run("optimize", spec, "--format", "json", "--no-verify")
+    saved = tmp_path / "row.json"
+    saved.write_text(out)
+    spec.write_text("# a comment changes no value\n" + MANIP.read_text())
+    assert run("sheet", saved, "--out", tmp_path / "a", "--no-drawing")[0] == 0
+    spec.write_text(MANIP.read_text().replace("friction = 0.8", "friction = 0.05"))
+    code, _, err = run("sheet", saved, "--out", tmp_path / "b", "--no-drawing")
+    assert code == 2 and f"{saved}: spec_sha256: expected the digest of" in err
+    assert "the spec changed since this design was saved" in err
+    assert not (tmp_path / "b").exists()
+
+
 # ------------------------------------------------------------------- the simulator's verdict
 
 def bouncing_object_spec(tmp_path):

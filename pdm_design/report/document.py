@@ -36,6 +36,7 @@ def optimize_document(outcome: DesignOutcome) -> dict:
     return jsonable({
         "schema": SCHEMA,
         "spec": spec.source,
+        "spec_sha256": spec.digest or None,
         "name": spec.name,
         "status": outcome.status,
         "status_message": outcome.status.message,

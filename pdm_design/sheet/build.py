@@ -190,6 +190,11 @@ def _from_json(path: Path):
         raise SpecError(source, "spec", "the path of the spec file the design was made from "
                         "(as given, or relative to the JSON file)", f"'{spec_path}' (not found)")
     spec = load_spec(found)
+    saved = doc.get("spec_sha256")  # absent from documents older than it
+    if saved is not None and saved != spec.digest:
+        raise SpecError(source, "spec_sha256", f"the digest of {found} as it is now (the spec "
+                        "changed since this design was saved: run `pdm-design optimize` again)",
+                        repr(saved))
     values = doc.get("design")
     if not isinstance(values, dict):
         raise SpecError(source, "design", "a table of design values", repr(values))

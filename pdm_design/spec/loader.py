@@ -8,6 +8,7 @@ checks the layout around them and turns pydantic's errors into key paths of the 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import math
 import re
@@ -129,6 +130,12 @@ def _read_text(path: Path, source: str) -> str:
 
 # --------------------------------------------------------------------------- the spec's layout
 
+def content_digest(data: dict) -> str:
+    """sha256 of a spec's TOML data: its keys and values, not its layout or comments."""
+    text = json.dumps(data, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
 def parse_spec(data: dict, source: str = "<spec>") -> Spec:
     """Validate a spec already read from TOML (a dict); `source` names it in errors."""
     try:
@@ -161,6 +168,7 @@ def _parse(data: Any, source: str) -> Spec:
         expect=_build(Expectations, expect_table, "expect"),
         name=name,
         description=description,
+        digest=content_digest(data),
     )
 
 

@@ -113,6 +113,9 @@ class Spec:
     expect: Expectations = Expectations()
     name: str = ""
     description: str = ""
+    # sha256 of the spec's content (spec.loader.content_digest): a saved design names the spec
+    # it was made from with it, so a sheet can refuse one whose spec has changed since
+    digest: str = field(default="", compare=False)
 
     @property
     def kind(self) -> str:

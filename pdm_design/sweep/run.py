@@ -30,7 +30,6 @@ down, and KeyboardInterrupt is raised with table.csv holding whole rows only; se
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import time
@@ -45,6 +44,7 @@ from ..errors import SpecError
 from ..io import write_atomic
 from ..progress import progress_bar
 from ..spec import parse_spec, read_spec_data
+from ..spec.loader import content_digest
 from . import tables
 from .grid import GridPoint, SweepAxis, chains, grid_points, point_data, sweep_axes
 from .interrupts import interrupt_guard
@@ -129,7 +129,7 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
     sweep_columns = tuple(a.column for a in axes)
     header = tables.columns(base.kind, sweep_columns)
     folder = Path(out)
-    meta = {"schema": SCHEMA, "spec": source, "spec_sha256": _digest(data),
+    meta = {"schema": SCHEMA, "spec": source, "spec_sha256": content_digest(data),
             "sweeps": [a.to_json() for a in axes], "chain": chain, "columns": list(header)}
     kept = _read_folder(folder, meta, header, resume)  # reads only
     done = dict(kept or {})
@@ -181,11 +181,6 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
 def _label(source: str, axes, point: GridPoint) -> str:
     where = ", ".join(f"{a.column} = {v:g}" for a, v in zip(axes, point.values))
     return f"{source} (sweep point {where})"
-
-
-def _digest(data: dict) -> str:
-    text = json.dumps(data, sort_keys=True, default=str)
-    return hashlib.sha256(text.encode()).hexdigest()
 
 
 # --------------------------------------------------------------------------- the folder
