@@ -90,3 +90,26 @@ def test_a_run_that_never_converged_claims_no_box_score_or_landing(tmp_path):
     assert "landing" not in outcome.analysis.margins
     assert any("starts" in v and "below the first palm's top surface" in v
                for v in outcome.violations)
+
+
+@pytest.mark.parametrize("requirements, words", [
+    ({"lift_of": 0.5}, "'lift_of' is not a margin of a manipulators spec"),
+    ({"landing": 5}, "landing = 5, expected a number in [-1, 1]"),
+    ({"landing": float("nan")}, "landing = nan, expected a number in [-1, 1]"),
+])
+def test_requirements_given_to_the_solver_are_checked_like_a_specs(requirements, words):
+    # a misspelt requirement held nothing: the answer came back optimal, lift_off unchanged
+    with pytest.raises(ValueError, match=words.replace("[", r"\[").replace("]", r"\]")):
+        pdm_design.solve.optimize(load_spec(ROBUST), requirements=requirements)
+
+
+@pytest.mark.parametrize("errors", [
+    [{"step": 0, "rise": 0.01}], [{"step": 2, "rize": 0.01}], [{"step": 2.5}],
+    [{"step": 2, "rise": 0.001}, {"step": 2, "tread": 0.001}],
+])
+def test_step_errors_given_as_data_are_checked_like_a_specs(errors):
+    from pdm_design.verify import simulate_spec
+
+    spec = load_spec(ROBUST.parent / "paper_stairs_frictionless.toml")
+    with pytest.raises((ValueError, TypeError)):
+        simulate_spec(spec, spec.design_at(), step_errors=errors)

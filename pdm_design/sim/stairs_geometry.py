@@ -115,8 +115,9 @@ def stairs_geometry(scene: StairsScene, design: StairsDesign, step_errors=()) ->
     tread_errors: dict[int, float] = {}
     for e in step_errors:
         step, d_rise, d_tread = _step_error_fields(e)
-        rise_errors[step] = rise_errors.get(step, 0.0) + d_rise
-        tread_errors[step] = tread_errors.get(step, 0.0) + d_tread
+        if step in rise_errors:
+            raise ValueError(f"step errors: step {step} is listed twice")
+        rise_errors[step], tread_errors[step] = d_rise, d_tread
     for step, d in tread_errors.items():
         if not tread + d > 0.0:
             raise SimulationRefused(f"step {step}: tread error {d:g} m leaves no tread "
@@ -134,8 +135,10 @@ def stairs_geometry(scene: StairsScene, design: StairsDesign, step_errors=()) ->
 
 
 def _step_error_fields(e):
-    if isinstance(e, dict):
-        return int(e["step"]), float(e.get("rise", 0.0)), float(e.get("tread", 0.0))
+    if isinstance(e, dict):  # as a spec's [verification] table takes it: checked alike
+        from ..spec.model import StepError
+
+        e = StepError(**e)
     step = int(e.step)
     if step < 1:
         raise SimulationRefused(f"step errors are numbered from 1, not {step}")

@@ -54,6 +54,8 @@ def optimize(
     ws = warm_start.solution if warm_start is not None else None
     if ws is not None and ws.key == form.key + FULL:
         form = formulate(spec, full=True)  # the warm start solved the NLP with every row
+    if requirements is not None:
+        _check_requirements(spec, requirements)
     reqs = dict(spec.requirements if requirements is None else requirements)
     p = form.parameters(reqs, backoff=BACKOFF_FACTOR * max(tol, bound_relax_factor))
     options = SolverOptions(max_iter=max_iter, tol=tol, bound_relax_factor=bound_relax_factor)
@@ -227,6 +229,20 @@ def _solve_starts(form, options, solver, x_starts, p):
         runs += alone
         calls += alone
     return runs, calls, shared
+
+
+def _check_requirements(spec, requirements: dict) -> None:
+    """The checks a spec's [requirements] table gets (docs/spec.md, section 7): a misspelt name
+    would otherwise hold nothing, silently."""
+    from ..spec.model import MANIPULATOR_MARGINS, STAIRS_MARGINS
+
+    known = MANIPULATOR_MARGINS if spec.kind == "manipulators" else STAIRS_MARGINS
+    for name, value in requirements.items():
+        if name not in known:
+            raise ValueError(f"requirements: {name!r} is not a margin of a {spec.kind} spec "
+                             f"(one of {', '.join(known)})")
+        if isinstance(value, bool) or not -1.0 <= float(value) <= 1.0:  # NaN fails too
+            raise ValueError(f"requirements: {name} = {value!r}, expected a number in [-1, 1]")
 
 
 def _is_cached(spec, full=False) -> bool:
