@@ -36,6 +36,11 @@ def _guarded(command):
             sys.exit(EXIT_FAILED)
         except (click.exceptions.Exit, click.ClickException, SystemExit, KeyboardInterrupt):
             raise
+        except BrokenPipeError:  # the reader of stdout stopped (`| head`): not an internal error
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # (and at exit)
+            click.echo("error: stdout was closed before all the output was written (its reader "
+                       "stopped early)", err=True)
+            sys.exit(EXIT_FAILED)
         except Exception as error:
             if os.environ.get("PDM_DESIGN_DEBUG"):
                 raise

@@ -1,6 +1,8 @@
 """`pdm-design check`: the CI gate on specs' expectations."""
 
 import re
+import subprocess
+import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -192,3 +194,15 @@ def test_control_characters_in_a_key_stay_on_one_line_and_in_valid_xml(tmp_path)
     assert '"we\\u0001ird\\nkey"' in out  # the key as TOML would write it
     message = ET.parse(report).getroot().find("testcase/error").get("message")
     assert '"we\\u0001ird\\nkey"' in message
+
+
+def test_a_reader_that_stops_early_is_not_an_internal_error():
+    problems = Path(__file__).resolve().parents[1] / "problems"
+    proc = subprocess.Popen([sys.executable, "-m", "pdm_design", "check", str(problems)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    first = proc.stdout.readline()
+    proc.stdout.close()  # as `| head -1` does
+    err = proc.stderr.read()
+    assert proc.wait(timeout=120) == 1 and first.startswith("PASS")
+    assert err == "error: stdout was closed before all the output was written (its reader " \
+                  "stopped early)\n"
