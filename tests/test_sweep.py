@@ -3,6 +3,7 @@ writing, resume after an interruption, local workers and a Dask cluster on the l
 interface giving the same table."""
 
 import math
+import shlex
 import subprocess
 import sys
 import tomllib
@@ -227,6 +228,46 @@ def test_resume_from_the_command_line_solves_only_the_missing_rows(tmp_path):
     assert code == 0, err
     assert "1 solved now, 5 kept from before" in out
     assert (cut / "table.md").read_text() == (whole / "table.md").read_text()
+
+
+def test_resume_solves_again_a_row_edited_to_a_status_or_a_point_it_does_not_have(tmp_path):
+    whole, edited = tmp_path / "whole", tmp_path / "edited"
+    run_sweep(MANIP, GRID, whole, workers=1, plots=False)
+    run_sweep(MANIP, GRID, edited, workers=1, plots=False)
+    lines = (edited / "table.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    status = header.index("status")
+    cells = lines[1].split(",")
+    cells[status] = "garbage"               # a status no run writes
+    off_grid = lines[2].split(",")
+    off_grid[0] = "notanumber"              # a sweep value the grid does not have
+    (edited / "table.csv").write_text("\n".join([lines[0], ",".join(cells), ",".join(off_grid),
+                                                  *lines[3:]]) + "\n")
+    result = run_sweep(MANIP, GRID, edited, workers=1, plots=False, resume=True)
+    assert (result.computed, result.reused) == (2, 4)
+    assert (edited / "table.csv").read_text() == (whole / "table.csv").read_text()
+
+
+def test_the_regenerate_line_rebuilds_the_same_table(tmp_path):
+    spec = tmp_path / "a spec.toml"  # a path the shell would split
+    spec.write_text(MANIP.read_text())
+    first = tmp_path / "first"
+    run_sweep(spec, ["mass_ratio=4:16:3"], first, workers=1, plots=False, chain=2)
+    (line,) = [x for x in (first / "table.md").read_text().splitlines()
+               if x.startswith("Regenerate: ")]
+    words = shlex.split(line.removeprefix("Regenerate: `").removesuffix("`."))
+    assert words[:2] == ["pdm-design", "table"] and "--chain" in words
+    again = tmp_path / "again"
+    code, _, err = run(*words[1:], "--out", again, "--no-plots", "--workers", "1")
+    assert code == 0, err
+    assert (again / "table.csv").read_text() == (first / "table.csv").read_text()
+
+
+def test_resume_refuses_a_table_without_its_sweep_json(tmp_path):
+    run_sweep(MANIP, ["mass_ratio=4:16:3"], tmp_path, workers=1, plots=False)
+    (tmp_path / "sweep.json").unlink()
+    with pytest.raises(SpecError, match="no readable sweep.json"):
+        run_sweep(MANIP, ["mass_ratio=4:16:3"], tmp_path, workers=1, plots=False, resume=True)
 
 
 def test_resume_refuses_a_folder_made_by_other_sweeps(tmp_path):

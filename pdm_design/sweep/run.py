@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
 import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future
@@ -45,6 +46,7 @@ from ..io import write_atomic
 from ..progress import progress_bar
 from ..spec import parse_spec, read_spec_data
 from ..spec.loader import content_digest
+from ..status import Status
 from . import tables
 from .grid import GridPoint, SweepAxis, chains, grid_points, point_data, sweep_axes
 from .interrupts import interrupt_guard
@@ -132,7 +134,8 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
     meta = {"schema": SCHEMA, "spec": source, "spec_sha256": content_digest(data),
             "sweeps": [a.to_json() for a in axes], "chain": chain, "columns": list(header)}
     kept = _read_folder(folder, meta, header, resume)  # reads only
-    done = dict(kept or {})
+    keys = {p.key for p in points}  # a row edited off the grid is not one of its points
+    done = {key: row for key, row in (kept or {}).items() if key in keys}
     reused = len(done)
     free = [n for n, v in (data.get("design") or {}).items()
             if isinstance(v, dict) and ("design", n) not in paths]
@@ -173,7 +176,7 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
         guard.check()  # pressed while the idle workers were shut down: still an interrupt
 
     rows = [done[p.key] for p in points]
-    files = _write_outputs(folder, base, source, axes, header, rows, plots)
+    files = _write_outputs(folder, base, source, axes, header, rows, plots, chain)
     return SweepResult(folder, axes, header, rows, computed=len(todo), reused=reused,
                        files=files)
 
@@ -198,8 +201,10 @@ def _read_folder(folder: Path, meta: dict, header, resume: bool) -> dict | None:
         old = json.loads(meta_path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         old = None
-    if not isinstance(old, dict) or any(old.get(k) != meta[k] for k in
-                                        ("spec_sha256", "sweeps", "chain", "columns")):
+    if not isinstance(old, dict):
+        raise SpecError("command line", "--resume", f"a table in {folder} with its {META_NAME}",
+                        f"no readable {META_NAME} (run without --resume to start it again)")
+    if any(old.get(k) != meta[k] for k in ("spec_sha256", "sweeps", "chain", "columns")):
         raise SpecError("command line", "--resume", f"a table in {folder} made from the "
                         "same spec, sweeps and chain length", "one made from others (run "
                         "without --resume to start it again)")
@@ -209,8 +214,9 @@ def _read_folder(folder: Path, meta: dict, header, resume: bool) -> dict | None:
                         "columns", "other columns")
     width = len(meta["sweeps"])
     kept: dict[tuple[str, ...], dict[str, str]] = {}
+    solved = {status.value for status in Status}  # an error or an edited status: solve again
     for row in rows:
-        if row.get("status") != tables.ERROR:
+        if row.get("status") in solved:
             kept[tuple(row[c] for c in header[:width])] = row
     return kept
 
@@ -229,16 +235,20 @@ def _start_folder(folder: Path, meta: dict, header, kept: dict | None) -> None:
         (folder / name).unlink(missing_ok=True)  # stale outputs of an earlier run
 
 
-def _write_outputs(folder, spec, source, axes, header, rows, plots) -> tuple[Path, ...]:
+def _write_outputs(folder, spec, source, axes, header, rows, plots,
+                   chain) -> tuple[Path, ...]:
     sweep_columns = tuple(a.column for a in axes)
     write_atomic(folder / CSV_NAME, tables.csv_text(header, rows))
     described = [f"Spec: `{source}` ({spec.kind})."]
     for a in axes:
         described.append(f"Swept: `{a.column}` from {a.values[0]:g} to {a.values[-1]:g} "
                          f"({len(a.values)} values).")
-    described.append(f"Regenerate: `pdm-design table {source} "
-                     + " ".join(f"--sweep {a.name}={a.values[0]:g}:{a.values[-1]:g}:"
-                                f"{len(a.values)}" for a in axes) + "`.")
+    words = ["pdm-design", "table", source]
+    for a in axes:
+        words += ["--sweep", f"{a.name}={a.values[0]:g}:{a.values[-1]:g}:{len(a.values)}"]
+    if chain != DEFAULT_CHAIN:  # the warm starts, and so a non-unique optimum, follow it
+        words += ["--chain", str(chain)]
+    described.append(f"Regenerate: `{shlex.join(words)}`.")
     title = f"Design table: {spec.name or Path(source).stem}"
     text = tables.markdown(spec.kind, title, described, sweep_columns, rows)
     files = [folder / CSV_NAME, folder / MARKDOWN_NAME]
