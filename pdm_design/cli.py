@@ -291,9 +291,12 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
     except KeyboardInterrupt:
         import signal
 
-        # the command is ending with its rows whole: a further Ctrl-C while Python shuts down
-        # must not kill it (exit -2 instead of 1)
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        from .sweep.interrupts import STOP_SIGNALS
+
+        # the command is ending with its rows whole: a further Ctrl-C (or SIGTERM) while Python
+        # shuts down must not kill it (exit -2 instead of 1)
+        for signum in STOP_SIGNALS:
+            signal.signal(signum, signal.SIG_IGN)
         click.echo(f"interrupted: the rows solved so far are in {Path(folder) / 'table.csv'}; "
                    "run the same command with --resume to continue", err=True)
         return EXIT_FAILED

@@ -388,6 +388,41 @@ def test_ctrl_c_twice_ends_the_table_with_exit_1_whole_rows_and_no_worker_left(t
     assert (result.reused, result.computed) == (len(rows), 16 - len(rows))  # all rows kept
 
 
+@pytest.mark.slow
+@pytest.mark.skipif(sys.platform != "linux", reason="reads /proc; signals a process")
+def test_sigterm_to_the_table_ends_its_workers_and_keeps_its_rows(tmp_path):
+    # A CI job's timeout or `kill` sends SIGTERM to the main process only: it used to end at
+    # once and leave its two workers running, re-parented to init.
+    import os
+    import signal
+    import time
+
+    out = tmp_path / "t"
+    grid = ["mass_ratio=5:20:4", "beta=0.4:0.7:4"]
+    child = subprocess.Popen(
+        [sys.executable, "-m", "pdm_design", "table", str(ROBUST), *(f"--sweep={g}" for g in grid),
+         "--out", str(out), "--workers", "2", "--no-plots"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and child.poll() is None:
+            csv_path = out / "table.csv"
+            if csv_path.exists() and csv_path.read_text().count("\n") >= 2:  # a row is in
+                break
+            time.sleep(0.02)
+        assert child.poll() is None, "the sweep ended before it could be stopped"
+        os.kill(child.pid, signal.SIGTERM)
+        _, err = child.communicate(timeout=30)  # a hang guard, not a speed claim
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+            child.communicate()
+    assert child.returncode == 1 and "interrupted" in err, err
+    assert _running_in_group(child.pid) == []  # no worker left behind
+    rows = rows_of(out)
+    assert 1 <= len(rows) < 16 and not any(row["status"] == "error" for row in rows)
+
+
 # --------------------------------------------------------------------------- a failed start
 
 def _files(folder):

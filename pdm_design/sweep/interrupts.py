@@ -49,23 +49,31 @@ class InterruptGuard:
             raise KeyboardInterrupt
 
 
+# Ctrl-C, and the SIGTERM a CI job's timeout or `kill` sends: without a handler SIGTERM ended
+# the main process at once and left its local workers running, re-parented to init.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
 @contextmanager
 def interrupt_guard() -> Iterator[InterruptGuard]:
-    """Install an `InterruptGuard` as the SIGINT handler for the block; the previous handler
-    is back when the block ends. Nothing is installed where Ctrl-C is ignored (SIGINT set to
-    SIG_IGN, e.g. a background job), handled outside Python, or cannot reach this code (not the
-    main thread): there the guard only ever answers `check` with nothing."""
+    """Install an `InterruptGuard` as the SIGINT and SIGTERM handler for the block; the
+    previous handlers are back when the block ends. Nothing is installed for a signal that is
+    ignored (SIG_IGN, e.g. Ctrl-C for a background job) or handled outside Python, nor where no
+    handler can reach this code (not the main thread): there the guard only ever answers `check`
+    with nothing."""
     guard = InterruptGuard()
-    previous = signal.getsignal(signal.SIGINT)
-    installed = False
-    if previous not in (signal.SIG_IGN, None):
+    installed = {}
+    for signum in STOP_SIGNALS:
+        previous = signal.getsignal(signum)
+        if previous in (signal.SIG_IGN, None):
+            continue
         try:
-            signal.signal(signal.SIGINT, guard.handle)
-            installed = True
+            signal.signal(signum, guard.handle)
+            installed[signum] = previous
         except ValueError:  # not the main thread of the main interpreter
-            pass
+            break
     try:
         yield guard
     finally:
-        if installed:
-            signal.signal(signal.SIGINT, previous)
+        for signum, previous in installed.items():
+            signal.signal(signum, previous)

@@ -428,10 +428,12 @@ def _terminate(processes) -> None:
 
 def _ignore_interrupts() -> None:
     """Workers leave Ctrl-C to the main process, which stops the sweep and terminates them
-    (the rows already written stay)."""
+    (the rows already written stay); SIGTERM, which that termination sends, ends a worker as
+    by default (a forked worker inherits the main process' guard)."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 class _DaskExecutor:
