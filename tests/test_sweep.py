@@ -452,6 +452,46 @@ def test_unreachable_scheduler_leaves_the_folder_as_it_was_with_one_error_line(t
     assert _files(out) == before
 
 
+def _listening(answer: bytes | None):
+    """A loopback server that accepts connections and answers `answer` to what it reads, or
+    nothing (None): not a Dask scheduler. Returns its port."""
+    import socket
+    import threading
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+    held = []
+
+    def serve():
+        while True:
+            conn, _ = server.accept()
+            held.append(conn)
+            if answer is not None:
+                conn.recv(4096)
+                conn.sendall(answer)
+
+    threading.Thread(target=serve, daemon=True).start()
+    return server.getsockname()[1]
+
+
+@pytest.mark.parametrize("answer", [
+    b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n",  # e.g. a dashboard's port
+    pytest.param(None, marks=pytest.mark.slow),  # accepts, never answers: Dask waited minutes
+])
+def test_a_port_with_no_dask_scheduler_is_bad_input_within_the_timeout(tmp_path, answer):
+    pytest.importorskip("distributed")
+    address = f"tcp://127.0.0.1:{_listening(answer)}"
+    done = subprocess.run(
+        [sys.executable, "-m", "pdm_design", "table", str(MANIP), "--sweep", "alpha=0.1:0.3:3",
+         "--out", str(tmp_path / "t"), "--scheduler", address],
+        capture_output=True, text=True, timeout=60)  # a hang guard, not a speed claim
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("error: command line: --scheduler: ") and address in done.stderr
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
+    assert not (tmp_path / "t").exists()
+
+
 def test_bad_workers_on_resume_leaves_the_folder_as_it_was(tmp_path):
     # resume rewrites table.csv without its cut-short last line: not before the run can start
     with pytest.raises(KeyboardInterrupt):

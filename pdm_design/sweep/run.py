@@ -33,6 +33,7 @@ from __future__ import annotations
 import json
 import os
 import shlex
+import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future
@@ -471,21 +472,38 @@ class _DaskExecutor:
 def _dask_client(distributed, address: str):
     """A Dask client connected to the scheduler at `address`, within DASK_CONNECT_TIMEOUT
     seconds (Dask retries a refused connection until then); SpecError naming --scheduler if
-    the address is malformed or nothing answers there. A client whose start failed is closed
-    here, at once: left to the garbage collector, it would be closed at interpreter exit,
-    after its IO loop had stopped, wait twice the timeout and print a traceback."""
+    the address is malformed or no scheduler answers there. A client whose start failed is
+    closed here, at once: left to the garbage collector, it would be closed at interpreter exit,
+    after its IO loop had stopped, wait twice the timeout and print a traceback.
+
+    The start runs in a thread the caller waits for at most a little longer than the timeout:
+    a port that accepts a connection and never answers held Dask's own start for minutes, and
+    one that answered HTTP made it read a frame length of exabytes (MemoryError)."""
     client = distributed.Client.__new__(distributed.Client)  # a reference, should __init__ fail
-    try:
-        client.__init__(address, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
-    except BaseException as error:
+    failed: list[BaseException] = []
+
+    def start():
+        try:
+            client.__init__(address, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
+        except BaseException as error:  # handed to the caller below
+            failed.append(error)
+
+    starting = threading.Thread(target=start, name="dask-connect", daemon=True)
+    starting.start()
+    starting.join(DASK_CONNECT_TIMEOUT + 2.0)
+    if starting.is_alive():  # left to its daemon thread: nothing else of this run waits on it
+        failed.append(TimeoutError(f"no scheduler answered in {DASK_CONNECT_TIMEOUT} s"))
+    elif failed:
         _dispose(client)
-        # ValueError/TypeError: a malformed address or an unknown or unconfigured protocol
-        # (tls without certificates, ucx not installed); OSError: nothing answered in time
-        if not isinstance(error, (OSError, TimeoutError, ValueError, TypeError, ImportError)):
-            raise
+    if failed:
+        error = failed[0]
+        if isinstance(error, KeyboardInterrupt):
+            raise error
+        why = ("an answer that is not a Dask scheduler's" if isinstance(error, MemoryError)
+               else error)  # Dask read a frame length from it
         raise SpecError("command line", "--scheduler", "the address of a running Dask "
                         "scheduler (e.g. tcp://127.0.0.1:8786) that answers within "
-                        f"{DASK_CONNECT_TIMEOUT} s", f"'{address}' ({error})") from None
+                        f"{DASK_CONNECT_TIMEOUT} s", f"'{address}' ({why})") from None
     return client
 
 
