@@ -107,12 +107,18 @@ def unmet_expectations(outcome: DesignOutcome) -> list[str]:
                    "[expect] verified = false accepts that")
     if expect.min_objective is not None:
         value = (outcome.objective or {}).get("value")
-        if value is None or value < expect.min_objective:
+        if value is None:
+            out.append(f"expected an objective of at least {expect.min_objective:g}, got none "
+                       f"({_why_none(outcome, 'objective')})")
+        elif value < expect.min_objective:
             out.append(f"objective {_show(value)} is below the expected minimum "
                        f"{expect.min_objective:g}")
     if expect.min_tolerance is not None:
         smallest = _smallest_side(outcome.tolerance)
-        if smallest is None or smallest < expect.min_tolerance:
+        if smallest is None:
+            out.append(f"expected a tolerance of at least {expect.min_tolerance:g} m, got none "
+                       f"({_why_none(outcome, 'tolerance')})")
+        elif smallest < expect.min_tolerance:
             out.append(f"tolerance {_show(smallest)} m is below the expected minimum "
                        f"{expect.min_tolerance:g} m")
     if expect.min_margin is not None:
@@ -122,6 +128,15 @@ def unmet_expectations(outcome: DesignOutcome) -> list[str]:
             out.append(f"smallest margin {name} = {_show(margins.get(name))} is below the "
                        f"expected minimum {expect.min_margin:g}")
     return out
+
+
+def _why_none(outcome, what: str) -> str:
+    """Why a design has no objective value or tolerance, in words."""
+    if not outcome.spec.free_variables:
+        return f"a fixed design is evaluated, not optimised: it has no {what}"
+    if what == "tolerance" and not outcome.spec.objective.get("max_offset_tolerance"):
+        return "the spec does not ask for max_offset_tolerance"
+    return f"status {outcome.status.value}"
 
 
 def _smallest_side(tolerance: dict | None) -> float | None:

@@ -206,3 +206,13 @@ def test_a_reader_that_stops_early_is_not_an_internal_error():
     assert proc.wait(timeout=120) == 1 and first.startswith("PASS")
     assert err == "error: stdout was closed before all the output was written (its reader " \
                   "stopped early)\n"
+
+
+@pytest.mark.parametrize("expect, what", [("min_objective = 0.0", "an objective of at least 0"),
+                                          ("min_tolerance = 0.0", "a tolerance of at least 0 m")])
+def test_a_fixed_design_has_no_objective_or_tolerance_to_meet_a_minimum(tmp_path, expect, what):
+    code, out, _ = run(_spec_with_expect(tmp_path, expect))
+    noun = what.split(" of ")[0].split()[-1]
+    assert code == 1
+    assert out.rstrip().endswith(f"expected {what}, got none (a fixed design is evaluated, not "
+                                 f"optimised: it has no {noun})")

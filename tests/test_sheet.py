@@ -366,3 +366,11 @@ def test_stale_drawing_removal_leaves_folders_and_link_targets(tmp_path):
     assert code == 0, err
     assert (out / "sheet.png" / "kept.txt").read_text() == "kept"
     assert not (out / "sheet.svg").is_symlink() and elsewhere.read_text() == "<svg/>"
+
+
+def test_a_design_that_does_not_work_gets_no_tolerance_search(tmp_path):
+    spec = tmp_path / "slip.toml"
+    spec.write_text(MANIP.read_text().replace("friction = 0.8", "friction = 0.3"))
+    sheet = sheet_for(spec)
+    assert sheet.tolerance is None
+    assert sheet.tolerance_note == "tolerance not computed: the design's status is infeasible"

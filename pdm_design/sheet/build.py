@@ -110,7 +110,10 @@ def sheet_for(path: str | Path, *, count: int | None = None,
     fixed = fixed_spec(spec, values, source=str(path))
     if verification is None and _is_success(status):  # saved with --no-verify: simulate it now
         verification = _verify_now(fixed)
-    tol, note = _tolerance(fixed, tol, tolerance)
+    if _is_success(status) or tol:
+        tol, note = _tolerance(fixed, tol, tolerance)
+    else:  # a box around a design that does not work is no build tolerance
+        tol, note = None, f"tolerance not computed: the design's status is {status}"
     count = spec.verification.stages if count is None else count
     try:
         return make_sheet(fixed, status, tol, note, count, source=str(path),
