@@ -135,9 +135,10 @@ def build(spec):
         tolerance_axes=("rise", "tread"),
         objective_scale=objective_scale(spec.objective, top or scene.initial.drop_height),
         # One start at a time: stairs_design's 8 starts need 9-19 iterations alone, 28 stacked, so
-        # stacking saved nothing (27.2 ms against 27.7 ms); with the exact nose rows (about 1 ms an
-        # iteration to evaluate) they need 10-73, and it lost (472 ms against 295 ms), before the
-        # stacked solver's creation (results/bench_optimize.md).
+        # stacking saved nothing (26.9 ms against 26.7 ms); with the exact nose rows (about 1 ms an
+        # iteration to evaluate) they need 10-82, and the stacked run hit its cap of 100 after
+        # 611 ms against 303 ms one at a time, before the stacked solver's creation
+        # (results/bench_optimize.md).
         stack_starts=False,
     )
     return model, bounds, m
