@@ -27,6 +27,14 @@ class DesignOutcome:
     accuracy: Accuracy | None = None
 
     @property
+    def status_message(self) -> str:
+        """The status in words; a fixed design has no bounds to widen."""
+        if self.status is Status.INFEASIBLE and not self.spec.free_variables:
+            return ("The fixed design does not meet every requirement: relax the requirements "
+                    "listed as violated, or change the design or the scene.")
+        return self.status.message
+
+    @property
     def exit_code(self) -> int:
         verified = self.verification is None or self.verification.get("passed", False)
         return 0 if self.status.is_success and verified else 1

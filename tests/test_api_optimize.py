@@ -113,3 +113,10 @@ def test_step_errors_given_as_data_are_checked_like_a_specs(errors):
     spec = load_spec(ROBUST.parent / "paper_stairs_frictionless.toml")
     with pytest.raises((ValueError, TypeError)):
         simulate_spec(spec, spec.design_at(), step_errors=errors)
+
+
+@pytest.mark.parametrize("options", [{"starts": 0}, {"starts": -1}, {"starts": 2.5},
+                                     {"tol": 0.0}, {"max_iter": 0}])
+def test_solver_options_out_of_range_are_refused_in_words(options):
+    with pytest.raises(ValueError, match="expected"):
+        pdm_design.solve.optimize(load_spec(ROBUST), **options)

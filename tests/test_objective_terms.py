@@ -153,5 +153,7 @@ def test_a_first_requirement_holds_a_fixed_designs_periodic_twin(tmp_path):
         result = CliRunner().invoke(main, ["optimize", str(path)])
         assert result.exit_code == 1, result.stdout
         assert "status: infeasible" in result.stdout
+        # a fixed design has no bounds to widen; a pinned free one has
+        assert ("widen the bounds" in result.stdout) == (path == pinned)
         (line,) = [x for x in result.stdout.splitlines() if x.startswith("  lift_off ")]
         assert line.endswith("+0.3739  VIOLATED (needs >= 0.4)")

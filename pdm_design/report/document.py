@@ -39,7 +39,7 @@ def optimize_document(outcome: DesignOutcome) -> dict:
         "spec_sha256": spec.digest or None,
         "name": spec.name,
         "status": outcome.status,
-        "status_message": outcome.status.message,
+        "status_message": outcome.status_message,
         "scene": kind,
         "design": _complete(analysis.design, DESIGN[kind]),
         "free_variables": list(spec.free_variables),

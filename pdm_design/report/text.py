@@ -53,7 +53,7 @@ def optimize_text(outcome: DesignOutcome) -> str:
     spec, analysis = outcome.spec, outcome.analysis
     free = set(spec.free_variables)
     lines = [f"{spec.name or spec.source} ({spec.kind})",
-             f"status: {outcome.status.value} - {outcome.status.message}", "", "design:"]
+             f"status: {outcome.status.value} - {outcome.status_message}", "", "design:"]
     design = {k: v for k, v in analysis.design.items() if v is not None}
     lines += [row + ("   (optimised)" if name in free else "")
               for name, row in zip(design, _rows(design))]

@@ -56,6 +56,11 @@ def optimize(
         form = formulate(spec, full=True)  # the warm start solved the NLP with every row
     if requirements is not None:
         _check_requirements(spec, requirements)
+    if isinstance(starts, bool) or not isinstance(starts, int) or starts < 1:
+        raise ValueError(f"starts = {starts!r}, expected an integer >= 1")
+    if not (tol > 0.0 and max_iter >= 1):  # IPOPT refuses them with its whole option text
+        raise ValueError(f"tol = {tol!r}, max_iter = {max_iter!r}: expected tol > 0 and "
+                         "max_iter >= 1")
     reqs = dict(spec.requirements if requirements is None else requirements)
     p = form.parameters(reqs, backoff=BACKOFF_FACTOR * max(tol, bound_relax_factor))
     options = SolverOptions(max_iter=max_iter, tol=tol, bound_relax_factor=bound_relax_factor)

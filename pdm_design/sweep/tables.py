@@ -99,7 +99,7 @@ def error_cells(error: BaseException) -> dict[str, str]:
 
 def _reason(outcome) -> str:
     if not outcome.status.is_success:
-        why = "; ".join(outcome.violations) if outcome.violations else outcome.status.message
+        why = "; ".join(outcome.violations) if outcome.violations else outcome.status_message
         return why
     verification = outcome.verification
     if verification is not None and not verification.get("passed", False):
