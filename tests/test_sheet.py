@@ -146,7 +146,7 @@ def test_a_given_tread_off_the_periodic_flight_takes_that_off_its_tolerance(tmp_
     sheet = sheet_for(spec)
     assert sheet.tolerance["rise"] == pytest.approx(periodic["rise"], rel=1e-6)
     assert sheet.tolerance["tread"] == pytest.approx(periodic["tread"] - 0.002, rel=1e-6)
-    assert "0.002 m off the periodic flight's" in sheet.tolerance_note
+    assert "0.002 m offset from the periodic flight's" in sheet.tolerance_note
     # the shortest drift at the sheet's box: every riser low, every tread long
     errors = tuple(StepError(step=n, rise=-sheet.tolerance["rise"],
                              tread=sheet.tolerance["tread"]) for n in range(1, 21))

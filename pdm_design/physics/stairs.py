@@ -75,8 +75,8 @@ def sliding_impact(vx, omega, vy_impact, restitution, friction, *, radius, mass,
     m (vx+ - vx) = P, J (omega+ - omega) = r P.
     """
     slip = vx + radius * omega
-    impulse = -friction * mass * (1.0 + restitution) * fabs(vy_impact)  # against the slip
-    impulse = impulse if slip >= 0.0 else -impulse
+    against = where(slip >= 0.0, -1.0, 1.0)  # the impulse opposes the slip
+    impulse = against * friction * mass * (1.0 + restitution) * fabs(vy_impact)
     return vx + impulse / mass, omega + radius * impulse / inertia
 
 

@@ -255,7 +255,8 @@ def _tolerance(spec: Spec, tol: dict | None, wanted: bool) -> tuple[dict | None,
                       f"flight's, more than the {found['tread']:.3g} m the periodic design "
                       "allows a step")
     return box, (f"largest robust box of the periodic design (objective max_offset_tolerance), "
-                 f"its tread's less this tread's {drift:.3g} m off the periodic flight's")
+                 f"its tread half-width less this tread's {drift:.3g} m offset from the periodic "
+                 "flight's")
 
 
 def _orbit_design(spec: Spec) -> tuple[Spec, float]:
