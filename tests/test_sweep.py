@@ -338,6 +338,34 @@ def test_ctrl_c_twice_in_process_stops_the_workers_once_and_restores_the_handler
     assert 1 <= len(rows) < 6 and (tmp_path / "table.csv").read_text().endswith("\n")
 
 
+def _table_stopped_by(out, grid, workers, stop):
+    """Run `table` in a child process (its own process group) until a row is written, then call
+    stop(child); returns (the child, its stderr) once it has ended."""
+    import os
+    import signal
+    import time
+
+    child = subprocess.Popen(
+        [sys.executable, "-m", "pdm_design", "table", str(ROBUST), *(f"--sweep={g}" for g in grid),
+         "--out", str(out), "--workers", str(workers), "--no-plots"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and child.poll() is None:
+            csv_path = out / "table.csv"
+            if csv_path.exists() and csv_path.read_text().count("\n") >= 2:  # a row is in
+                break
+            time.sleep(0.02)
+        assert child.poll() is None, "the sweep ended before it could be stopped"
+        stop(child)
+        _, err = child.communicate(timeout=30)  # a hang guard, not a speed claim
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+            child.communicate()
+    return child, err
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(sys.platform != "linux", reason="reads /proc; signals a process group")
 @pytest.mark.parametrize("workers, gap", [(2, 0.05), (2, 0.2), (1, 0.2)])
@@ -353,28 +381,14 @@ def test_ctrl_c_twice_ends_the_table_with_exit_1_whole_rows_and_no_worker_left(t
     import signal
     import time
 
-    out = tmp_path / "t"
-    grid = ["mass_ratio=5:20:4", "beta=0.4:0.7:4"]  # 16 points, 4 chains
-    child = subprocess.Popen(
-        [sys.executable, "-m", "pdm_design", "table", str(ROBUST), *(f"--sweep={g}" for g in grid),
-         "--out", str(out), "--workers", str(workers), "--no-plots"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
-    try:
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline and child.poll() is None:
-            csv_path = out / "table.csv"
-            if csv_path.exists() and csv_path.read_text().count("\n") >= 2:  # a row is in
-                break
-            time.sleep(0.02)
-        assert child.poll() is None, "the sweep ended before it could be interrupted"
+    def press_twice(child):
         os.killpg(child.pid, signal.SIGINT)
         time.sleep(gap)
         os.killpg(child.pid, signal.SIGINT)
-        _, err = child.communicate(timeout=30)  # a hang guard, not a speed claim
-    finally:
-        if child.poll() is None:
-            os.killpg(child.pid, signal.SIGKILL)
-            child.communicate()
+
+    out = tmp_path / "t"
+    grid = ["mass_ratio=5:20:4", "beta=0.4:0.7:4"]  # 16 points, 4 chains
+    child, err = _table_stopped_by(out, grid, workers, press_twice)
     assert child.returncode == 1, err
     assert "interrupted" in err and "Traceback" not in err, err
     assert _running_in_group(child.pid) == []  # no worker left behind
@@ -395,28 +409,10 @@ def test_sigterm_to_the_table_ends_its_workers_and_keeps_its_rows(tmp_path):
     # once and leave its two workers running, re-parented to init.
     import os
     import signal
-    import time
 
     out = tmp_path / "t"
     grid = ["mass_ratio=5:20:4", "beta=0.4:0.7:4"]
-    child = subprocess.Popen(
-        [sys.executable, "-m", "pdm_design", "table", str(ROBUST), *(f"--sweep={g}" for g in grid),
-         "--out", str(out), "--workers", "2", "--no-plots"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
-    try:
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline and child.poll() is None:
-            csv_path = out / "table.csv"
-            if csv_path.exists() and csv_path.read_text().count("\n") >= 2:  # a row is in
-                break
-            time.sleep(0.02)
-        assert child.poll() is None, "the sweep ended before it could be stopped"
-        os.kill(child.pid, signal.SIGTERM)
-        _, err = child.communicate(timeout=30)  # a hang guard, not a speed claim
-    finally:
-        if child.poll() is None:
-            os.killpg(child.pid, signal.SIGKILL)
-            child.communicate()
+    child, err = _table_stopped_by(out, grid, 2, lambda c: os.kill(c.pid, signal.SIGTERM))
     assert child.returncode == 1 and "interrupted" in err, err
     assert _running_in_group(child.pid) == []  # no worker left behind
     rows = rows_of(out)
