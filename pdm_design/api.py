@@ -138,7 +138,7 @@ def _verify_with_box(spec, point, analysis, tolerance, accuracy, samples) -> dic
     nominal = verify_nominal(spec, point, analysis, accuracy=accuracy)
     if not tolerance:
         return nominal
-    from .verify_tolerance import verify_tolerance
+    from .verify.tolerance import verify_tolerance
 
     box = verify_tolerance(spec, point, tolerance, samples=samples, accuracy=accuracy)
     failures = nominal["failures"] + [

@@ -45,7 +45,7 @@ from pdm_design.scenes import (
     StairsInitial,
     StairsScene,
 )
-from pdm_design.sim import manip_phases as ph
+from pdm_design.sim.manipulators import phases as ph
 from pdm_design.sim.core import SimulationRefused
 from pdm_design.sim.manipulators import FAILURE_KINDS, handover_map, simulate_manipulators
 from pdm_design.sim.numerics import BRENT_RTOL, brentq, carlson_rf

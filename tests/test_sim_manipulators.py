@@ -18,7 +18,7 @@ from scipy.special import ellipkinc
 
 from pdm_design.physics import manipulators as phys
 from pdm_design.scenes import Body, ManipulatorsDesign, ManipulatorsInitial, ManipulatorsScene, Palm
-from pdm_design.sim import manip_phases as ph
+from pdm_design.sim.manipulators import phases as ph
 from pdm_design.sim.manipulators import (
     EVENT_KINDS,
     FAILURE_KINDS,
@@ -122,7 +122,7 @@ def delassus(theta, m, inv_m):
 
 def keller_by_steps(vx, vy, w, theta, m, inv_m, mu, eps, steps=20000):
     """Darboux-Keller impact by small steps in the normal impulse P (a second method for
-    manip_phases.impact): Coulomb friction at each step, compression until g_n = 0, then
+    phases.impact): Coulomb friction at each step, compression until g_n = 0, then
     restitution until the normal impulse has given back eps^2 of its compression work."""
     wm = delassus(theta, m, inv_m)
     s, c = math.sin(theta), math.cos(theta)
@@ -676,7 +676,7 @@ def test_plot_writes_a_png(tmp_path):
     offs = [offset(2, 0.1, -0.2)]
     result = simulate_manipulators(scene, design, stages=4, offsets=offs, record_trajectory=True)
     assert len(result.trajectory["time"]) == len(result.trajectory["x"]) > 100
-    from pdm_design.sim.manipulators_plot import plot_manipulators
+    from pdm_design.sim.manipulators.plot import plot_manipulators
 
     out = plot_manipulators(result, scene, design, tmp_path / "run.png", offsets=offs)
     assert Path(out).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -632,7 +632,7 @@ def test_vectorised_failures_agree_with_sampling_and_the_event_simulator(frictio
 # --- plots ----------------------------------------------------------------------------------------
 
 def test_plot_writes_a_png(tmp_path):
-    from pdm_design.sim.stairs_plot import plot_stairs_run
+    from pdm_design.sim.stairs.plot import plot_stairs_run
 
     result = simulate_stairs(*paper2(), stages=5, record_trajectory=True)
     assert len(result.trajectory["time"]) > 100

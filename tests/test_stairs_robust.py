@@ -33,7 +33,7 @@ from pdm_design.solve import optimize
 from pdm_design.spec import load_spec, parse_spec
 from pdm_design.spec.model import StepError
 from pdm_design.status import Status
-from pdm_design.verify_tolerance import verify_tolerance
+from pdm_design.verify.tolerance import verify_tolerance
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 

@@ -10,7 +10,7 @@ swing time of a pendulum, so both are here:
 * `carlson_rf`: Carlson's symmetric elliptic integral R_F(x, y, z) by the duplication theorem
   (B. C. Carlson, "Numerical computation of real or complex elliptic integrals", Numer.
   Algorithms 10, 1995, algorithm for R_F, truncation error < 3e-16 relative). The swing time of
-  the palm, l dth / v(th), integrates in closed form to R_F (manip_phases.swing_time).
+  the palm, l dth / v(th), integrates in closed form to R_F (phases.swing_time).
 """
 
 from __future__ import annotations

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..physics import manipulators as phys
-from .core import SimulationRefused
+from ...physics import manipulators as phys
+from ..core import SimulationRefused
 
 
 @dataclass(frozen=True)

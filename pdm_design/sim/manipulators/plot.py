@@ -3,8 +3,8 @@ and its path in the x-y plane with the mechanisms (pivots, links, palms) drawn a
 
 from __future__ import annotations
 
-from ..io import atomic_path
-from .manip_geometry import build_row, palm_outline
+from ...io import atomic_path
+from .geometry import build_row, palm_outline
 
 SNAPSHOT_KINDS = ("landing", "handover", "complete")
 

@@ -51,7 +51,7 @@ Vectorised closed forms for many samples at once: `impact_map` (one impact) and
 `bounce_sequence` (many samples, many bounces on a uniform staircase, with failure detection).
 
 Modules: this one holds the event-located run; `stairs_geometry` the staircase as built,
-`stairs_flight` the closed-form next contact of a flight, `stairs_maps` the impact maps and the
+`flight` the closed-form next contact of a flight, `maps` the impact maps and the
 vectorised bounces. Their public names are importable from here.
 """
 
@@ -60,13 +60,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from ..accuracy import Accuracy
-from ..accuracy import accuracy as accuracy_preset
-from ..scenes import StairsDesign, StairsScene
-from .core import Event, Outcome, SimulationRefused, SimulationResult, check_scales
-from .stairs_flight import Contact, next_contact, step_under
-from .stairs_geometry import StairsGeometry, stairs_geometry
-from .stairs_maps import (
+from ...accuracy import Accuracy
+from ...accuracy import accuracy as accuracy_preset
+from ...scenes import StairsDesign, StairsScene
+from ..core import Event, Outcome, SimulationRefused, SimulationResult, check_scales
+from .flight import Contact, next_contact, step_under
+from .geometry import StairsGeometry, stairs_geometry
+from .maps import (
     BOUNCE_FAILURES,
     BounceSequence,
     Impact,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..io import atomic_path
+from ...io import atomic_path
 
 
 def plot_stairs_run(result, path, *, title: str | None = None, dpi: int = 120) -> Path:

@@ -11,10 +11,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from ..physics import stairs as phys
-from ..scenes import StairsDesign, StairsScene
-from .core import SimulationRefused
-from .stairs_maps import impact_once
+from ...physics import stairs as phys
+from ...scenes import StairsDesign, StairsScene
+from ..core import SimulationRefused
+from .maps import impact_once
 
 
 @dataclass(frozen=True)
@@ -136,7 +136,7 @@ def stairs_geometry(scene: StairsScene, design: StairsDesign, step_errors=()) ->
 
 def _step_error_fields(e):
     if isinstance(e, dict):  # as a spec's [verification] table takes it: checked alike
-        from ..spec.model import StepError
+        from ...spec.model import StepError
 
         e = StepError(**e)
     step = int(e.step)

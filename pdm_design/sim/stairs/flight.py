@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .stairs_geometry import StairsGeometry
+from .geometry import StairsGeometry
 
 _MAX_STEPS_PER_FLIGHT = 100_000
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .numerics import carlson_rf
+from ..numerics import carlson_rf
 
 # ---------------------------------------------------------------- impacts
 

@@ -1,7 +1,7 @@
 """One run of the manipulators event simulator: bookkeeping, flights, impacts and stuck carries.
 
-The numerically integrated phases (sliding carry, bouncing) are in manip_ode.py; the pure phase
-functions in manip_phases.py; the geometry in manip_geometry.py. Each phase method returns the
+The numerically integrated phases (sliding carry, bouncing) are in ode.py; the pure phase
+functions in phases.py; the geometry in geometry.py. Each phase method returns the
 next phase as a callable, or None when the run has ended (the driver loops until then).
 """
 
@@ -12,11 +12,11 @@ import math
 
 import numpy as np
 
-from . import manip_phases as ph
-from .core import Event, Outcome, SimulationResult
-from .manip_geometry import Arc, Ballistic, build_row, first_contact
-from .manip_ode import OdePhases
-from .numerics import brentq
+from . import phases as ph
+from ..core import Event, Outcome, SimulationResult
+from .geometry import Arc, Ballistic, build_row, first_contact
+from .ode import OdePhases
+from ..numerics import brentq
 
 FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object is given up
 ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact
@@ -388,9 +388,9 @@ class Run(OdePhases):
     # ------------------------------------------------------------ stuck carry (closed form)
     def _stuck(self, t0, k, theta0, v0, s):
         """Object stuck on palm k from (theta0, speed v0): every guard is a function of theta
-        whose crossing is closed form (manip_phases.stuck_crossings), contacts are closed-form
-        roots of the arc (manip_geometry), and the time of an angle is the closed-form
-        integral of l dth / v(th) (manip_phases.swing_time)."""
+        whose crossing is closed form (phases.stuck_crossings), contacts are closed-form
+        roots of the arc (geometry), and the time of an angle is the closed-form
+        integral of l dth / v(th) (phases.swing_time)."""
         g, l, tol = self.g, self.l, self.acc.event_tol
         if v0 <= 0.0:
             return self._fail(t0, "stall", k + 1, self._on_palm(k, theta0, v0 / l, s),

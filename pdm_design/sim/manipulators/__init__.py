@@ -21,10 +21,10 @@ import math
 
 import numpy as np
 
-from ..accuracy import accuracy as resolve_accuracy
-from ..physics import manipulators as phys
-from .core import SimulationResult, check_scales
-from .manip_run import Run
+from ...accuracy import accuracy as resolve_accuracy
+from ...physics import manipulators as phys
+from ..core import SimulationResult, check_scales
+from .run import Run
 
 EVENT_KINDS = {
     "landing": "the object lands on a resting palm from a flight",

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import math
 
-from .accuracy import accuracy as accuracy_preset
-from .analysis import Analysis
-from .physics import manipulators as phys
-from .sim.core import SimulationRefused
-from .spec.model import Spec
+from ..accuracy import accuracy as accuracy_preset
+from ..analysis import Analysis
+from ..physics import manipulators as phys
+from ..sim.core import SimulationRefused
+from ..spec.model import Spec
 
 
 def simulate_spec(spec: Spec, design, *, stages=None, offsets=None, step_errors=None,
@@ -23,12 +23,12 @@ def simulate_spec(spec: Spec, design, *, stages=None, offsets=None, step_errors=
     stages = verification.stages if stages is None else stages
     accuracy = accuracy_preset(accuracy or verification.accuracy)
     if spec.kind == "stairs":
-        from .sim.stairs import simulate_stairs
+        from ..sim.stairs import simulate_stairs
 
         errors = verification.step_errors if step_errors is None else step_errors
         return simulate_stairs(spec.scene, design, stages=stages, accuracy=accuracy,
                                step_errors=errors, record_trajectory=record_trajectory)
-    from .sim.manipulators import simulate_manipulators
+    from ..sim.manipulators import simulate_manipulators
 
     offsets = verification.offsets if offsets is None else offsets
     return simulate_manipulators(spec.scene, design, stages=stages, offsets=offsets,

@@ -1,10 +1,10 @@
 """The numerically integrated phases of a manipulators run: the sliding carry and, with
-restitution > 0, the object bouncing above its moving palm. Mixed into manip_run.Run.
+restitution > 0, the object bouncing above its moving palm. Mixed into run.Run.
 
 Guards are of two sorts. Physics guards (normal force, slip velocity, support, stops, ...) are
 written positive while the phase holds and end it when they fall through zero (terminal
 events, located by solve_ivp to the integration tolerance). Contact with another palm uses the
-four face lines of its contact box (manip_geometry.face_guards): crossing a face line is a
+four face lines of its contact box (geometry.face_guards): crossing a face line is a
 contact only within the face's extent, so these events do not stop the integration; the
 earliest valid one, if it precedes the terminal event, ends the phase.
 """
@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 
-from . import manip_phases as ph
-from .manip_geometry import face_guards
+from . import phases as ph
+from .geometry import face_guards
 
 SLIP_START_ATOLS = 100.0  # initial slip speed of a slip from relative rest, in units of atol
 
@@ -60,7 +60,7 @@ class OdePhases:
 
     # ------------------------------------------------------------ sliding carry
     def _sliding(self, t0, k, theta0, omega0, s0, sd0):
-        """Object sliding on palm k, state (th, th', s, s'): manip_phases.slide_accelerations."""
+        """Object sliding on palm k, state (th, th', s, s'): phases.slide_accelerations."""
         base = ph.SlideParams(self.m, self.M, self.mu, self.g, self.l, 1.0)
         sgn = math.copysign(1.0, sd0) if sd0 != 0.0 else ph.slide_direction(theta0, omega0, base)
         p = ph.SlideParams(self.m, self.M, self.mu, self.g, self.l, sgn)

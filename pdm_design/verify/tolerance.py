@@ -17,10 +17,10 @@ import itertools
 
 import numpy as np
 
-from .progress import progress_bar
-from .sim.core import SimulationRefused
-from .spec.model import ManipulatorOffset, Spec, StepError
-from .verify import simulate_spec
+from ..progress import progress_bar
+from ..sim.core import SimulationRefused
+from ..spec.model import ManipulatorOffset, Spec, StepError
+from . import simulate_spec
 
 SIGNS = tuple(itertools.product((1.0, -1.0), repeat=2))
 
