@@ -51,10 +51,21 @@ class SwingSegment:
         cos_root = (self.v0 ** 2 + 2.0 * gravity * link_length * math.cos(self.th0)) / (
             3.0 * gravity * link_length)
         angles = [0.0, 0.5 * math.pi, -0.5 * math.pi]
-        if -1.0 <= cos_root <= 1.0:
-            root = math.acos(cos_root)
+        root = math.acos(cos_root) if -1.0 <= cos_root <= 1.0 else None
+        if root is not None:
             angles += [root, -root]
         self.breaks = sorted(self.sign * th for th in angles)
+        self.clear = self._clear_until(root) if not back else -math.inf
+
+    def _clear_until(self, root):
+        """End of the separation: the object leaves the top face with no relative velocity
+        across it (gap = gap' = 0) and lambda >= 0, so gap'' = lambda cos th >= 0 keeps it on
+        or above the face until lambda cos th turns negative - at the lambda root before the
+        top (lambda falls there), else at pi/2. Near the start the gap grows like the cube of
+        the time, below the rounding of the heights for a while; it is not searched there."""
+        if self.th0 < 0.0 and root is not None:
+            return -root
+        return 0.5 * math.pi
 
     # -------------------------------------------------------- the swing and the relative path
     def theta(self, u):
@@ -77,7 +88,7 @@ class SwingSegment:
         th, d = self.theta(u), self.elapsed(u)
         x = self.x0 + self.vx * d - (self.px + self.l * math.sin(th))
         y = self.y0 + self.vy * d - 0.5 * self.g * d * d - (self.py + self.l * math.cos(th))
-        return x, y
+        return x, (max(y, 0.0) if u < self.clear else y)  # (no rounding below the face there)
 
     def rates(self, u):
         """Time derivatives of the relative point at u."""
@@ -102,6 +113,8 @@ class SwingSegment:
         def df(u):
             return self.rates(u)[axis]
 
+        if axis == 1:  # no crossing of the face lines while the object separates
+            a = max(a, min(self.clear, b))
         cuts = [a] + [u for u in self.breaks if a < u < b] + [b]
         found = []
         for p, q in zip(cuts, cuts[1:]):
