@@ -29,7 +29,7 @@ from ..core import SimulationResult, check_scales
 from .run import Run
 
 EVENT_KINDS = {
-    "landing": "the object lands on a resting palm from a flight",
+    "landing": "the object lands on a palm from a flight (at rest, or swinging after a lift-off)",
     "handover": "the object, carried by palm k, meets the next palm and lands on it",
     "slip": "the carried object starts to slide on its palm (or reverses its sliding)",
     "stick": "the sliding object comes to rest on its palm and is carried stuck",

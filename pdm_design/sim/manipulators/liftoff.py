@@ -27,7 +27,7 @@ from . import phases as ph
 from .geometry import Ballistic, Box, first_contact, first_entry
 from ..numerics import brentq
 
-ROOT_XTOL = 1e-300  # Brent to its relative tolerance (4 eps): the roots are exact to rounding
+ROOT_XTOL = 1e-15  # rad: Brent to about the rounding of the angles (and 4 eps relative)
 
 
 class SwingSegment:
