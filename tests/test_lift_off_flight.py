@@ -193,6 +193,10 @@ def test_lift_off_at_the_landing_comes_back_down_on_the_moving_palm(ratio):
     assert landing.before["omega"] == pytest.approx(w_c, abs=1e-9)
     assert landing.before["x"] == pytest.approx(x_c, abs=1e-9)
     assert landing.after["offset"] == pytest.approx(x_c - L * math.sin(th_c), abs=1e-9)
+    # a plastic sticking impact on the moving palm keeps m V.t + M w (the links take the radial
+    # part): u' = (q V.t + w) / (1 + q), V the object's velocity just before, t = t(th_c)
+    v_t = vx * math.cos(th_c) - (vy - G * t_c) * math.sin(th_c)
+    assert landing.after["omega"] * L == pytest.approx((Q * v_t + L * w_c) / (1 + Q), abs=1e-9)
     # palm 1 did not reach a stop: no palm event for it was kept in the log before the landing
     assert not [e for e in result.events
                 if e.kind in ("front_stop", "back_stop") and e.stage == 1 and e.time < lift.time
