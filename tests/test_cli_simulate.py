@@ -39,12 +39,22 @@ def test_offset_from_the_command_line_moves_the_handover():
 
 
 def test_large_offset_fails_with_a_named_event_and_exit_1():
-    code, out, _ = run(PAPER, "--offset", "2:0,-0.4", "--format", "json")
+    # manipulator 2 raised 0.4 m: its palm stands in the object's way before palm 1 is reached
+    code, out, _ = run(PAPER, "--offset", "2:0,0.4", "--format", "json")
     doc = json.loads(out)
     assert code == 1
     assert not doc["outcome"]["completed"]
-    assert doc["outcome"]["failure"]["event"] in {"lift_off", "blocked", "stall", "slid_off",
-                                                  "tip", "fell_clear", "stranded"}
+    assert doc["outcome"]["failure"]["event"] in {"blocked", "stall", "slid_off", "tip",
+                                                  "fell_clear", "missed", "stranded"}
+
+
+def test_a_lift_off_is_an_event_the_run_goes_on_from():
+    # eq. 43: the object lifts off palm 1, flies over the low palm 2 onto palm 3 and completes
+    code, out, _ = run(PAPER, "--offset", "2:0,-0.4", "--format", "json")
+    doc = json.loads(out)
+    assert code == 0 and doc["outcome"]["completed"]
+    lift = [e for e in doc["events"] if e["kind"] == "lift_off"]
+    assert len(lift) == 1 and lift[0]["stage"] == 1 and not lift[0]["failure"]
 
 
 def test_plot_is_written(tmp_path):

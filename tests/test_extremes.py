@@ -308,11 +308,15 @@ def test_degenerate_corners_end_in_the_named_failure(case):
     result = simulate_manipulators(scene, design, stages=4)
     no_nan(result)
     failure = result.outcome.failure
-    assert failure is not None and failure.kind == kind, failure
-    assert failure.kind in FAILURE_KINDS and failure.detail
+    # a lift-off is not a failure: the object flies on, and the run ends in a named failure
+    # later (or completes); the first of them is the one these corners predict
+    first = next(e for e in result.events if e.failure or e.kind == "lift_off")
+    assert first.kind == kind, first
+    assert failure is None or (failure.kind in FAILURE_KINDS and failure.detail)
     u = q / (1 + q) * s_star * math.cos(alpha + beta)
     if kind == "lift_off":
-        assert failure.before["theta"] == pytest.approx(lift_off_angle(alpha, u), abs=1e-9)
+        assert first.before["theta"] == pytest.approx(lift_off_angle(alpha, u), abs=1e-9)
+        assert result.outcome.completed or failure is not None
     elif u > 0:  # the closed form agrees that the carry cannot pass the top
         assert u * u < 2 * G * (1 - math.cos(alpha))
 
@@ -456,11 +460,13 @@ def test_a_stage_is_the_closed_form_stage_map_or_a_named_failure(alpha, span, q,
     if abs(px) >= (1 - 1e-9) * w_over_h * py or math.tan(beta) >= (1 - 1e-9) * w_over_h:
         predicted.add("tip")
     first = result.stages[0] if result.stages else {}
+    # a lift-off is an event the run goes on from: the first failure or lift-off is judged
+    stop = next((e for e in result.events if e.failure or e.kind == "lift_off"), None)
     if math.isnan(expected):  # cannot pass the top: a stall, unless something comes first
-        assert result.outcome.failure.kind in predicted | {"stall"}, result.outcome.failure
+        assert stop.kind in predicted | {"stall"}, stop
     elif predicted:
-        assert result.outcome.failure is not None
-        assert result.outcome.failure.kind in predicted | {"stall"}, result.outcome.failure
+        assert stop is not None
+        assert stop.kind in predicted | {"stall"}, stop
     else:
         assert first.get("handover_speed") is not None, result.outcome.failure
         assert first["handover_speed"] == pytest.approx(expected, rel=1e-11)

@@ -309,12 +309,13 @@ def test_lift_off_where_v_squared_reaches_g_l_cos_theta(preset):
     theta = math.acos((u * u + 2 * G * L * math.cos(ALPHA)) / (3 * G * L))
     assert theta < 1.0
     assert u * u + 2 * G * L * (math.cos(ALPHA) - math.cos(1.0)) > G * L * math.cos(1.0)
-    failure = result.outcome.failure
-    assert failure.kind == "lift_off" and failure.stage == 1
-    assert failure.before["theta"] == pytest.approx(theta, abs=TOL[preset])
+    # a lift-off is an event, not a failure: the object flies on (tests/test_lift_off_flight.py)
+    lift = next(e for e in result.events if e.kind == "lift_off" or e.failure)
+    assert lift.kind == "lift_off" and lift.stage == 1 and not lift.failure
+    assert lift.before["theta"] == pytest.approx(theta, abs=TOL[preset])
     t_land, _, _, _ = first_landing()
-    assert failure.time == pytest.approx(t_land + elliptic_swing_time(-ALPHA, theta, -ALPHA, u),
-                                         abs=TOL[preset])
+    assert lift.time == pytest.approx(t_land + elliptic_swing_time(-ALPHA, theta, -ALPHA, u),
+                                      abs=TOL[preset])
 
 
 def test_slip_where_tan_theta_reaches_mu():
@@ -617,17 +618,22 @@ def test_paper_run_second_manipulator_offset_continues_back_to_the_fixed_point()
     assert errors[4] / errors[3] == pytest.approx(c, rel=0.05)
 
 
-def test_paper_run_large_offset_fails_with_a_named_failure():
+def test_paper_run_large_offset_lifts_off_and_flies_over_the_low_palm():
     scene, design = paper()
     result = simulate_manipulators(scene, design, stages=6, offsets=[offset(2, 0.0, -0.4)])
-    failure = result.outcome.failure
-    assert not result.outcome.completed and failure is not None
-    assert failure.kind in FAILURE_KINDS
     # palm 2 is 0.4 m low: palm 1 must carry to acos(cos b - 0.2) = 0.895 rad, but the object
     # slips at atan(mu) = 0.675 and the palm's push vanishes (v^2 > g l cos th near 0.78) first
-    assert failure.kind == "lift_off" and failure.stage == 1
-    assert result.outcome.stages_passed == 0
-    assert math.atan(MU) < failure.before["theta"] < math.acos(math.cos(BETA) - 0.2)
+    kinds = [e.kind for e in result.events if e.kind not in ("front_stop", "back_stop")]
+    assert kinds[:3] == ["landing", "slip", "lift_off"]
+    lift = result.events[kinds.index("lift_off")]
+    assert lift.stage == 1 and not lift.failure
+    assert math.atan(MU) < lift.before["theta"] < math.acos(math.cos(BETA) - 0.2)
+    # palm 2, 0.4 m > pitch_y = 0.31 m low, sits below palm 3's top: the object flies over it
+    # and lands on palm 3, which carries it on to the end of the row (the paper's "stopped
+    # moving among manipulators" rests on sizes it does not give: docs/manipulators_model.md)
+    landing = next(e for e in result.events if e.time > lift.time and e.kind == "landing")
+    assert landing.after["palm"] == 3
+    assert result.outcome.completed and result.outcome.stages_passed == 6
 
 
 # ---------------------------------------------------------------- vocabulary, extremes, plots

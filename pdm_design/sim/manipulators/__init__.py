@@ -6,7 +6,9 @@ Phases (docs/manipulators_model.md has the model and its derivations):
   stuck    carry with the object stuck on palm k: closed form in the palm angle th, every guard
            a function of th located by root finding, time by quadrature of l dth / v(th);
   sliding  carry with the object sliding on palm k: solve_ivp with terminal events;
-  bouncing (restitution > 0 only) object in flight above its moving palm: solve_ivp.
+  bouncing (restitution > 0 only) object in flight above its moving palm: solve_ivp;
+  lift-off the object flies on while its empty palm swings alone; where it meets that palm is
+           located exactly (closed-form swing time, Brent on bracketed roots): liftoff.py.
 
 The run is *complete* when the object, carried by the last manipulator of the row, reaches that
 manipulator's handover angle beta (so it has been handed over by every other manipulator and
@@ -27,7 +29,7 @@ from ..core import SimulationResult, check_scales
 from .run import Run
 
 EVENT_KINDS = {
-    "landing": "the object lands on a resting palm from a flight",
+    "landing": "the object lands on a palm from a flight (at rest, or swinging after a lift-off)",
     "handover": "the object, carried by palm k, meets the next palm and lands on it",
     "slip": "the carried object starts to slide on its palm (or reverses its sliding)",
     "stick": "the sliding object comes to rest on its palm and is carried stuck",
@@ -36,11 +38,13 @@ EVENT_KINDS = {
     "front_stop": "an empty palm reaches its front stop and is stopped",
     "back_stop": "an empty palm swings back onto its back stop",
     "complete": "the last manipulator carried the object to its handover angle",
+    "lift_off": "the palm's normal force vanished (v^2 >= g l cos th): the object flies on and "
+                "the empty palm swings alone",
 }
 FAILURE_KINDS = {
     "blocked": "the object hits the side or underside of a palm (outside the model)",
     "fell_clear": "the object fell past the row",
-    "lift_off": "the palm's normal force vanished: the object lifts off (v^2 >= g l cos th)",
+    "missed": "the object lifted off and fell past the row without landing on a palm",
     "tip": "the contact force leaves the object's supported base: it tips (outside the model)",
     "stall": "the carry stops before the top: the palm swings back to its back stop",
     "slid_off": "the object's centre slid off the end of its palm",

@@ -131,8 +131,10 @@ class OdePhases:
             return self._complete(te, k, theta, omega, s, sd)
         if kind == "stranded":
             return self._stop_with_object(te, k, omega, s, sd)
+        if kind == "lift_off":  # the object flies on (liftoff.py)
+            return self._lift_off(te, k, theta, omega, s, sd,
+                                  f"the normal force vanishes while sliding, th = {theta:.6g} rad")
         details = {
-            "lift_off": f"the normal force vanishes while sliding, th = {theta:.6g} rad",
             "tip": f"sliding friction puts the contact force at {xb:+.4g} m from the centre, "
                    f"outside the support (offset {s:+.4g} m)",
             "slid_off": f"the object's centre passed the end of palm {k + 1}",

@@ -15,6 +15,7 @@ import numpy as np
 from . import phases as ph
 from ..core import Event, Outcome, SimulationResult
 from .geometry import Arc, Ballistic, build_row, first_contact
+from .liftoff import LiftOffPhases
 from .ode import OdePhases
 from ..numerics import brentq
 
@@ -24,7 +25,7 @@ PHASE_TIME = 200.0  # longest integrated phase, in units of sqrt(l / g)
 EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chattering)
 
 
-class Run(OdePhases):
+class Run(OdePhases, LiftOffPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record):
@@ -176,8 +177,9 @@ class Run(OdePhases):
         self._rec_flight(path, t0, t_hit)
         xe, ye, vxe, vye = path.at(t_hit)
         state = {"x": xe, "y": ye, "vx": vxe, "vy": vye}
-        if entry is None:
-            return self._fail(t_hit, "fell_clear", stage, state,
+        if entry is None:  # (after a lift-off with no landing since: the object missed)
+            kind = "missed" if self.events and self.events[-1].kind == "lift_off" else "fell_clear"
+            return self._fail(t_hit, kind, stage, state,
                               f"fell {FALL_DEPTH:g} link lengths below the lowest pivot")
         j = entry.palm
         if entry.kind != "top":
@@ -448,8 +450,10 @@ class Run(OdePhases):
             self._log(te, "slip", k + 1, state, state,
                       f"|tan th| = {abs(math.tan(theta_e)):.6g} reaches mu = {self.mu:g}")
             return lambda: self._sliding(te, k, theta_e, omega_e, s, 0.0)
+        if kind == "lift_off":  # the object flies on (liftoff.py)
+            return self._lift_off(te, k, theta_e, omega_e, s, 0.0,
+                                  f"v^2 = g l cos th at th = {theta_e:.6g} rad")
         details = {
-            "lift_off": f"v^2 = g l cos th at th = {theta_e:.6g} rad",
             "tip": f"the contact force crosses the base at "
                    f"{ph.stuck_force_point(theta_e, self.h):+.4g} m, outside the support "
                    f"[{lo:+.4g}, {hi:+.4g}] m, th = {theta_e:.6g} rad",
