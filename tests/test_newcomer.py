@@ -212,3 +212,141 @@ def test_the_report_says_what_limits_the_tolerance():
     code, out, _ = run("optimize", ROBUST, "--no-verify")
     line = next(x for x in out.splitlines() if x.startswith("  limited by: "))
     assert line.startswith("  limited by: lift_off (at the handover, fastest carry) ")
+
+
+# ------------------------------------------------------------------ 2. pdm-design init
+
+def test_init_manipulators_lands_on_palm_1s_centre_and_optimizes_as_written(tmp_path):
+    spec = tmp_path / "row.toml"
+    code, out, _ = run("init", "manipulators", "--out", spec)
+    assert code == 0 and str(spec) in out
+    data = tomllib.loads(spec.read_text())
+    (x0, y0), (vx, vy) = data["initial"]["position"], data["initial"]["velocity"]
+    g, l, a = data["scene"]["gravity"], data["design"]["link_length"], data["design"]["alpha"]
+    # palm 1 (pivot at the origin) rests at -alpha: its top surface centred at
+    # (-l sin a, l cos a); the horizontal launch falls y0 - l cos a onto it
+    assert vy == 0.0
+    t = math.sqrt(2.0 * (y0 - l * math.cos(a)) / g)
+    assert x0 + vx * t == pytest.approx(-l * math.sin(a), abs=1e-8)
+    code, out, _ = run("optimize", spec, "--format", "json")
+    doc = json.loads(out)
+    assert code == 0 and doc["status"] == "optimal" and doc["verification"]["passed"]
+    landing = doc["approach"]["landing_point"]
+    assert landing[0] == pytest.approx(-l * math.sin(a), abs=1e-8)
+    assert landing[1] == pytest.approx(l * math.cos(a), abs=1e-12)
+
+
+def test_init_stairs_lands_mid_tread_and_optimizes_as_written(tmp_path):
+    spec = tmp_path / "stairs.toml"
+    assert run("init", "stairs", "--out", spec)[0] == 0
+    data = tomllib.loads(spec.read_text())
+    code, out, _ = run("optimize", spec, "--format", "json")
+    doc = json.loads(out)
+    assert code == 0 and doc["status"] == "optimal" and doc["verification"]["passed"]
+    # the periodic bounce falls h0 from its apex e^2 h0 to the next tread (rise (1 - e^2) h0):
+    # it lasts (1 + e) sqrt(2 h0 / g), and the tread is the distance flown in it
+    g, h0 = data["scene"]["gravity"], data["initial"]["drop_height"]
+    e, v0 = data["design"]["restitution"], doc["design"]["launch_speed"]
+    tread = v0 * (1.0 + e) * math.sqrt(2.0 * h0 / g)
+    code, out, _ = run("simulate", spec, "--format", "json", "--stages", 3)
+    assert code == 0
+    for stage in json.loads(out)["stages"]:
+        assert stage["landing_x"] == pytest.approx(tread / 2, rel=1e-9)
+
+
+def test_init_to_stdout_and_not_over_a_file(tmp_path):
+    code, out, _ = run("init", "stairs")
+    assert code == 0 and tomllib.loads(out)["scene"]["kind"] == "stairs"
+    spec = tmp_path / "mine.toml"
+    spec.write_text("# my edits\n")
+    code, out, err = run("init", "manipulators", "--out", spec)
+    assert code == 2 and err.startswith("error: command line: --out: expected the name of a "
+                                        "file that does not exist yet")
+    assert spec.read_text() == "# my edits\n"
+
+
+# ------------------------------------------------------------------ 6. the linearised coordinates
+
+def test_the_linearised_coordinates_name_the_pivots_the_sheet_lists(tmp_path):
+    # a row of 10: the sheet lists pivots 1 to 10; pivot 11 is not part of it, only the height
+    # of what receives the object from manipulator 10 (its handover angle) is
+    from pdm_design.sheet import sheet_for
+
+    data = tomllib.loads(ROBUST.read_text())
+    data["verification"]["stages"] = 10
+    spec = write(tmp_path, data)
+    code, out, _ = run("optimize", spec, "--format", "json", "--no-verify")
+    names = json.loads(out)["tolerance"]["linearised"]["coordinates"]
+    listed = [item["manipulator"] for item in sheet_for(spec).items]
+    assert listed == list(range(1, 11))
+    assert names == [f"dx{k}" for k in listed] + [f"dy{k}" for k in listed] + ["dy_receiver"]
+
+
+# ------------------------------------------------------------------ 7. simulate --plot
+
+def test_simulate_says_where_it_wrote_the_figures(tmp_path):
+    plot = tmp_path / "run.png"
+    code, out, _ = run("simulate", PROBLEMS / "paper_stairs_frictionless.toml", "--plot", plot)
+    assert code == 0 and plot.is_file() and out.endswith(f"figures written to {plot}\n")
+    code, out, err = run("simulate", PROBLEMS / "paper_stairs_frictionless.toml", "--plot",
+                         plot, "--format", "json")
+    assert code == 0 and json.loads(out) and f"figures written to {plot}" in err
+
+
+# ------------------------------------------------------------------ 8. a tip in words
+
+def _first_failure(**kw):
+    from test_sim_manipulators import make
+
+    from pdm_design.sim.manipulators import simulate_manipulators
+
+    scene, design = make(**kw)
+    return simulate_manipulators(scene, design, stages=2).outcome.failure
+
+
+def test_a_tip_in_the_carry_reaches_the_supported_edge_without_contradiction():
+    # the carry tips where the force point (h/2) tan th behind the centre reaches the rear
+    # edge of a w-wide base: -w/2, printed the same on both sides
+    failure = _first_failure(width=0.4, height=0.7)
+    assert failure.kind == "tip"
+    assert failure.detail.startswith("the contact force reaches the rear edge of the supported "
+                                     "base (-0.2 m from the base's centre; support [-0.2, +0.2] m)")
+    assert "outside" not in failure.detail
+
+
+def test_a_tip_at_the_landing_says_by_how_much_the_impulse_misses_the_support():
+    from test_sim_manipulators import first_landing, momentum_speed
+    from test_sim_manipulators import ALPHA
+
+    failure = _first_failure(width=0.2, height=2.0)
+    _, _, vx, vy = first_landing()
+    u = momentum_speed(vx, vy)
+    px, py = u * math.cos(ALPHA) - vx, u * math.sin(ALPHA) - vy
+    point = -(2.0 / 2) * px / py  # where the impulse line meets the base, + ahead
+    assert point > 0.1
+    assert failure.detail.startswith(f"the impulse passes the front edge of the supported base "
+                                     f"by {point - 0.1:.3g} m ({point:+.6g} m from")
+
+
+# ------------------------------------------------------------------ 9. command-line errors
+
+@pytest.mark.parametrize("command", ["optimize", "simulate", "sheet"])
+def test_a_directory_given_as_a_spec_is_an_error_in_the_tools_words(tmp_path, command):
+    code, out, err = run(command, tmp_path)
+    assert code == 2 and out == ""
+    assert err == f"error: {tmp_path}: expected a spec file, found a directory\n"
+
+
+@pytest.mark.parametrize("args, words", [
+    (["optimize", ROBUST, "--accuracy", "rtol=0"],
+     "--accuracy: rtol: expected a number >= 2.22e-14 (100 machine epsilons) and < 1, found 0"),
+    (["simulate", ROBUST, "--stages", "0"],
+     "--stages: expected an integer from 1 to 10000000, found '0'"),
+    (["simulate", ROBUST, "--offset", "3:x"], "--offset: expected K:DX,DY"),
+    (["optimize", ROBUST, "--format", "xml"], "--format: 'xml' is not one of 'text', 'json'"),
+    (["optimize", ROBUST, "--bogus"], "No such option '--bogus' (see `"),
+])
+def test_option_errors_all_come_in_the_tools_format(args, words):
+    code, out, err = run(*args)
+    assert code == 2 and out == ""
+    assert err.startswith(f"error: command line: {words}") and "Usage:" not in err
