@@ -242,12 +242,12 @@ def _check_plot_path(plot: str) -> None:
 
     if not shutil.which(matplotlib.rcParams["pgf.texsystem"]):  # pgf typesets with LaTeX
         formats.pop("pgf", None)
-    if Path(plot).is_dir():
-        raise SpecError("command line", "--plot", "a file name", f"{plot!r}, a directory")
     if Path(plot).suffix[1:].lower() not in formats:
         raise SpecError("command line", "--plot", "a file name ending in .png, .svg, .pdf or "
                         f"another format matplotlib writes ({', '.join(sorted(formats))})",
                         repr(plot))
+    if Path(plot).is_dir():
+        raise SpecError("command line", "--plot", "a file name", f"{plot!r}, a directory")
 
 
 @main.command()
