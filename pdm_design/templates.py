@@ -58,12 +58,12 @@ front_stop = 1.5707963  # rad: where a palm that handed its object over is stopp
 # link_length or the speed, move the start with them (the object must start above palm 1).
 [initial]
 position = [{x0:.9g}, {y0:.9g}]  # m, the centre of the object's base
-velocity = [{SPEED:g}, 0.0]           # m/s
+velocity = [{SPEED!r}, 0.0]         # m/s
 
 [design]                # a number is fixed; {{ min, max, initial }} is free for the optimizer
-alpha = {ALPHA:g}             # rad, back-stop angle (free, it would move palm 1 and the landing)
+alpha = {ALPHA!r}             # rad, back-stop angle: fixed, since freeing it moves palm 1
 beta = {{ min = 0.3, max = 1.0, initial = 0.6 }}   # rad, handover angle (beta > alpha)
-link_length = {LINK:g}        # m
+link_length = {LINK!r}      # m
 mass_ratio = {{ min = 2.0, max = 20.0, initial = 10.0 }}  # object mass / palm mass
 
 [objective]             # the largest offset every pivot may be built off by, in x and y
@@ -101,6 +101,8 @@ drop_height = 1.0       # m, the ball's lowest point above tread 1 at the (horiz
 [design]                # a number is fixed; { min, max, initial } is free for the optimizer
 restitution = 0.8       # the ball keeps this fraction of its vertical speed at each bounce
 launch_speed = { min = 0.5, max = 3.0, initial = 2.0 }   # m/s
+# (a faster launch makes longer treads with more room for errors: the optimum sits at the
+# largest speed you allow, and the report says so: "at a bound: launch_speed (max 3 m/s)")
 # rise and tread left out: the periodic bounce's, (1 - restitution^2) drop_height and the
 # distance of one bounce. landing_offset left out: every landing is mid-tread (free it, as
 # { min = 0, max = 3 }, to let the optimizer choose where on the tread the ball lands).
