@@ -90,6 +90,18 @@ def test_some_designs_fit_the_start_but_none_works_is_infeasible_naming_start_an
     assert doc["solver"]["iterations"] > 0
 
 
+def test_the_report_leads_with_the_start_and_labels_the_least_violation_design(tmp_path):
+    spec = write(tmp_path, robust_data(first_pivot_y=1.3))
+    code, out, _ = run("optimize", spec, "--no-verify")
+    lines = out.splitlines()
+    assert code == 1 and lines[1].startswith("status: infeasible - The object starts at y = "
+                                             "3.05 m, below palm 1's top surface")
+    assert any(x.startswith("  alpha ") and x.endswith("(least violation)") for x in lines)
+    assert "(optimised)" not in out
+    why = lines[lines.index("why it does not work:") + 1]
+    assert why.startswith("  - the object starts ") and "below the first palm" in why
+
+
 def test_a_start_above_only_part_of_the_bounds_is_found_there(tmp_path):
     # link 3.2 m, alpha in [0, 0.6] guessed at 0.1: palm 1's top (3.2 cos alpha) is above the
     # start at 3.05 m for alpha < acos(3.05 / 3.2) = 0.309, the guess included; the optimum
