@@ -32,7 +32,23 @@ class DesignOutcome:
         if self.status is Status.INFEASIBLE and not self.spec.free_variables:
             return ("The fixed design does not meet every requirement: relax the requirements "
                     "listed as violated, or change the design or the scene.")
+        if self.status is Status.INFEASIBLE and self.spec.kind == "manipulators":
+            from .spec.start import start_words
+
+            words = start_words(self.spec.scene.initial.position[1], self.spec.design,
+                                self.analysis.design)
+            if words:
+                return words
         return self.status.message
+
+    @property
+    def at_bounds(self) -> dict[str, str]:
+        """The free design variables at a bound of theirs ("min" or "max"), by name: within
+        spec.model.AT_BOUND of their range (docs/json-schema.md)."""
+        values = self.analysis.design
+        return {name: side for name in self.spec.free_variables
+                if values.get(name) is not None
+                and (side := self.spec.design[name].side(values[name]))}
 
     @property
     def exit_code(self) -> int:
@@ -97,8 +113,8 @@ def optimize(spec: Spec, *, verify: bool = True,
                             for name in spec.free_variables})
     analysis = analyse(spec.scene, point, spec.verification.stages)
     advice = bounds_hint(result.at_bounds)
-    violations = (tuple(summarise(result.violations)) + ((advice,) if advice else ())
-                  + tuple(analysis.problems))
+    violations = (tuple(analysis.problems) + tuple(summarise(result.violations))
+                  + ((advice,) if advice else ()))
     verification = None
     if verify and result.status.is_success:
         samples = round(spec.verification.samples * preset["sample_factor"])
@@ -112,6 +128,10 @@ def optimize(spec: Spec, *, verify: bool = True,
         tolerance = dict(result.tolerance)
         if result.linearised is not None:
             tolerance["linearised"] = result.linearised.to_json()
+        if result.solution is not None:
+            from .solve.binding import limited_by
+
+            tolerance["limited_by"] = limited_by(spec, result.solution)
     return DesignOutcome(spec=spec, status=result.status, analysis=analysis,
                          violations=violations, objective=objective, tolerance=tolerance,
                          verification=verification, solver=solver, accuracy=accuracy)

@@ -54,10 +54,58 @@ def _guarded(command):
 
 FORMAT = click.option("--format", "fmt", type=click.Choice(["text", "json"]), default="text",
                       show_default=True, help="Readable report, or one JSON document on stdout.")
-SPEC = click.argument("spec", type=click.Path(dir_okay=False, path_type=str))
+# A plain string: the spec loader says what is wrong with it (a directory, no such file) in the
+# tool's words.
+SPEC = click.argument("spec", type=str)
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Count(click.ParamType):
+    """An integer from `low` to `high`, refused in the tool's words (click.IntRange's are
+    click's)."""
+
+    name = "integer"
+
+    def __init__(self, low: int, high: int):
+        self.low, self.high = low, high
+
+    def convert(self, value, param, ctx):
+        try:
+            number = int(value, 10) if isinstance(value, str) else value
+        except ValueError:
+            number = None
+        if isinstance(number, bool) or not isinstance(number, int) \
+                or not self.low <= number <= self.high:
+            self.fail(f"expected an integer from {self.low} to {self.high}, found {value!r}",
+                      param, ctx)
+        return number
+
+
+class _Main(click.Group):
+    """The command group. A bad option value or a usage mistake is reported as every other bad
+    input is: `error: command line: OPTION: what was expected`, exit 2 (not click's usage
+    text)."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except click.UsageError as error:
+            click.echo(f"error: command line: {_usage_words(error)}", err=True)
+            sys.exit(EXIT_BAD_INPUT)
+
+
+def _usage_words(error: click.UsageError) -> str:
+    """`OPTION: what was expected` for a bad value; click's sentence and where to look for a
+    missing argument or an unknown option or command."""
+    param = getattr(error, "param", None)
+    if isinstance(error, click.BadParameter) and not isinstance(error, click.MissingParameter) \
+            and param is not None:
+        name = param.opts[0] if isinstance(param, click.Option) else param.human_readable_name
+        return f"{name}: {error.message}"
+    command = error.ctx.command_path if error.ctx is not None else "pdm-design"
+    return f"{error.format_message().rstrip('.')} (see `{command} --help`)"
+
+
+@click.group(cls=_Main, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="pdm-design")
 def main():
     """Design passive dynamic object manipulation systems (stairs, passive manipulator rows)."""
@@ -85,6 +133,33 @@ ACCURACY = click.option(
     help="Simulator tolerances: fast, default or precise, or KEY=VALUE pairs (keys rtol, atol, "
     "event_tol, agreement; base: the preset giving the rest and the optimizer's settings, "
     "default 'default'), e.g. rtol=1e-10,agreement=1e-8. Default: the spec's.")
+
+
+@main.command()
+@click.argument("kind", type=click.Choice(["manipulators", "stairs"]))
+@click.option("--out", default=None, metavar="FILE",
+              help="Write the spec to FILE (not over an existing file) instead of stdout.")
+@_guarded
+def init(kind, out):
+    """A commented spec to start from: KIND manipulators (the object's start lands on palm 1's
+    centre) or stairs (every landing mid-tread). It optimizes as written."""
+    from .templates import template
+
+    text = template(kind)
+    if out is None:
+        click.echo(text, nl=False)
+        return EXIT_OK
+    from pathlib import Path
+
+    from .errors import SpecError
+    from .io import write_atomic
+
+    if Path(out).exists() or not out:
+        raise SpecError("command line", "--out", "the name of a file that does not exist yet "
+                        "(init does not overwrite)", repr(out))
+    write_atomic(out, text)
+    click.echo(f"wrote {out}: a {kind} spec; next: pdm-design optimize {out}")
+    return EXIT_OK
 
 
 @main.command()
@@ -171,11 +246,13 @@ def _check_plot_path(plot: str) -> None:
         raise SpecError("command line", "--plot", "a file name ending in .png, .svg, .pdf or "
                         f"another format matplotlib writes ({', '.join(sorted(formats))})",
                         repr(plot))
+    if Path(plot).is_dir():
+        raise SpecError("command line", "--plot", "a file name", f"{plot!r}, a directory")
 
 
 @main.command()
 @SPEC
-@click.option("--stages", type=click.IntRange(1, 10_000_000), default=None,
+@click.option("--stages", type=_Count(1, 10_000_000), default=None,
               help="Manipulators in the row, or bounces (default: the spec's verification.stages; "
               "at least the highest K of the spec's offsets or step errors).")
 @click.option("--offset", "offsets", multiple=True, metavar="K:DX,DY",
@@ -184,7 +261,7 @@ def _check_plot_path(plot: str) -> None:
 @click.option("--step-error", "step_errors", multiple=True, metavar="K:DRISE,DTREAD",
               help="Add DRISE, DTREAD metres to step K's rise and tread, in place of the spec's "
               "error for K; the spec's others stay. Repeatable.")
-@click.option("--plot", type=click.Path(dir_okay=False), default=None,
+@click.option("--plot", type=str, default=None,
               help="Write figures like the paper's to this file; its extension picks the "
               "format (png, svg, pdf, ...).")
 @ACCURACY
@@ -251,6 +328,8 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
         click.echo(json.dumps(jsonable(result.to_json()), indent=2))
     else:
         click.echo(simulation_text(loaded, result), nl=False)
+    if plot is not None:  # stdout stays one JSON document with --format json
+        click.echo(f"figures written to {plot}", err=fmt == "json")
     answered = found is None or found.status.is_success
     return EXIT_OK if result.outcome.completed and answered else EXIT_FAILED
 
@@ -267,12 +346,12 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
               "followed by -table).")
 @click.option("--resume", is_flag=True,
               help="Keep the rows an interrupted run left in --out and solve only the rest.")
-@click.option("--workers", type=click.IntRange(1, 4096), default=None,
+@click.option("--workers", type=_Count(1, 4096), default=None,
               help="Local worker processes (default: the machine's cores; 1: in this process).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Run on an existing Dask distributed cluster (scheduler address, e.g. "
               "tcp://10.0.0.5:8786) instead of local workers.")
-@click.option("--chain", type=click.IntRange(1, 1_000_000), default=4, show_default=True,
+@click.option("--chain", type=_Count(1, 1_000_000), default=4, show_default=True,
               help="Grid points solved in sequence, each warm-started from the one before.")
 @click.option("--no-plots", is_flag=True, help="Write the tables only.")
 @_guarded
@@ -312,12 +391,11 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
 
 
 @main.command()
-@click.argument("source", metavar="SPEC_OR_JSON",
-                type=click.Path(dir_okay=False, path_type=str))
+@click.argument("source", metavar="SPEC_OR_JSON", type=str)
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
               help="Folder for sheet.md, sheet.csv, sheet.png and sheet.svg (default: the "
               "source's name followed by -sheet).")
-@click.option("--count", type=click.IntRange(1, 10_000_000), default=None,
+@click.option("--count", type=_Count(1, 10_000_000), default=None,
               help="Manipulators or steps listed (default: the spec's verification.stages; the "
               "tolerance covers only the first verification.stages of them).")
 @click.option("--no-tolerance", is_flag=True,

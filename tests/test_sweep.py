@@ -177,7 +177,7 @@ def test_warm_start_passes_each_design_along_its_chain(tmp_path, monkeypatch):
         return {"status": "optimal", "alpha": repr(alpha), "beta": "0.5"}
 
     monkeypatch.setattr(sweep_run, "solve_point", fake_solve)
-    run_sweep(ROBUST, ["link_length=1:4:4"], tmp_path, workers=1, chain=2, plots=False)
+    run_sweep(ROBUST, ["mass_ratio=1:4:4"], tmp_path, workers=1, chain=2, plots=False)
     assert warm_seen[(1.0,)] is None and warm_seen[(3.0,)] is None  # chain heads
     assert warm_seen[(2.0,)] == {"alpha": 1.1, "beta": 0.5}
     assert warm_seen[(4.0,)] == {"alpha": 3.1, "beta": 0.5}

@@ -56,6 +56,7 @@ from .common import (
 
 DEFAULTS = {"first_pivot_x": 0.0, "first_pivot_y": 0.0}
 START_CLEARANCE = 1e-3  # (x link length): the object starts at least this far above palm 1
+FALL_FLOOR = 1e-9  # (x g l): the fall speed squared never below this (far below the clearance's)
 TOLERANCE_CAP = 10.0  # upper bound of the box half-width variable, in link lengths
 # Margins whose periodic and first_ versions are one row (the speed interval covers both): the
 # larger of their two requirements holds both.
@@ -178,8 +179,11 @@ class _Model:
 
     # -- pieces --------------------------------------------------------------------------------
     def fall_speed(self, dy):
-        """Vertical speed Q at the first landing when palm 1 is raised by dy."""
-        return ca.sqrt(self.vy0**2 + 2.0 * self.g * (self.H - dy))
+        """Vertical speed Q at the first landing when palm 1 is raised by dy. Where the object
+        would start below palm 1 (the start_height row is broken there) it is a small number,
+        not NaN: a start there ended IPOPT at once (solver_error) instead of moving on."""
+        square = self.vy0**2 + 2.0 * self.g * (self.H - dy)
+        return ca.sqrt(ca.fmax(square, FALL_FLOOR * self.g * self.l))
 
     def flight_time(self, dy):
         return (self.vy0 + self.fall_speed(dy)) / self.g
@@ -301,7 +305,7 @@ class _Model:
         add(("forward_landing",), "handover moves the next palm forward",
             phys.landing_speed(ca.cos(th_hi), -ca.sin(th_hi), a, self.q), scale=self.k,
             kind=VALIDITY)
-        add(("start_height",), "the object starts above palm 1",
+        add(("start_height",), "",
             self.H - tau - START_CLEARANCE * l, scale=l, kind=VALIDITY)
 
         # Carry conditions on every palm (the first included: u_lo <= u_1 <= u_hi).

@@ -43,6 +43,7 @@ def optimize_document(outcome: DesignOutcome) -> dict:
         "scene": kind,
         "design": _complete(analysis.design, DESIGN[kind]),
         "free_variables": list(spec.free_variables),
+        "at_bounds": outcome.at_bounds,
         "geometry": _complete(analysis.geometry, GEOMETRY[kind]),
         "periodic": _complete(analysis.periodic, PERIODIC[kind]),
         "margins": analysis.margins,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from ..analysis.result import required
 from ..api import DesignOutcome
+from ..status import Status
 
 _UNITS = {
     "alpha": "rad", "beta": "rad", "link_length": "m", "mass_ratio": "", "first_pivot_x": "m",
@@ -30,7 +31,7 @@ def _rows(values: dict) -> list[str]:
 
 
 def _tolerance_rows(tolerance: dict) -> list[str]:
-    box = {k: v for k, v in tolerance.items() if k != "linearised"}
+    box = {k: v for k, v in tolerance.items() if k not in ("linearised", "limited_by")}
     lines = [f"  {axis:<6} +-{value * 1e3:.2f} mm (robust NLP)" for axis, value in box.items()]
     linear = tolerance.get("linearised")
     if linear:
@@ -49,14 +50,37 @@ def _tolerance_rows(tolerance: dict) -> list[str]:
     return lines
 
 
+def _free_label(status: Status) -> str:
+    """What a free variable's value is: an optimum, the least-violation design, or the point
+    the solver stopped at."""
+    if status is Status.INFEASIBLE:
+        return "least violation"
+    if status in (Status.OPTIMAL, Status.ACCEPTABLE, Status.UNVERIFIED):
+        return "optimised"
+    return "where the solver stopped"
+
+
+def _limited_by(entries: list[dict]) -> str:
+    parts = [f"{e['condition']}" + (f" ({e['where']})" if e["where"] else "")
+             + (f" {100 * e['share']:.0f} %" if e["share"] is not None else "")
+             for e in entries]
+    return "  limited by: " + "; ".join(parts)
+
+
 def optimize_text(outcome: DesignOutcome) -> str:
     spec, analysis = outcome.spec, outcome.analysis
     free = set(spec.free_variables)
     lines = [f"{spec.name or spec.source} ({spec.kind})",
              f"status: {outcome.status.value} - {outcome.status_message}", "", "design:"]
     design = {k: v for k, v in analysis.design.items() if v is not None}
-    lines += [row + ("   (optimised)" if name in free else "")
+    label = _free_label(outcome.status)
+    lines += [row + (f"   ({label})" if name in free else "")
               for name, row in zip(design, _rows(design))]
+    if outcome.at_bounds:
+        lines.append("  at a bound: " + ", ".join(
+            f"{name} ({side} {spec.design[name].min if side == 'min' else spec.design[name].max:g}"
+            f"{(' ' + _UNITS[name]) if _UNITS.get(name) else ''})"
+            for name, side in outcome.at_bounds.items()))
     lines += ["", "geometry:", *_rows(analysis.geometry)]
     lines += ["", "periodic orbit:", *_rows(analysis.periodic)]
     lines += ["", "margins (>= 0 holds; 1 - demand/capacity):"]
@@ -68,6 +92,8 @@ def optimize_text(outcome: DesignOutcome) -> str:
     if outcome.tolerance:
         lines += ["", "tolerance (half-widths of the box every pivot or step may be off by):"]
         lines += _tolerance_rows(outcome.tolerance)
+        if outcome.tolerance.get("limited_by"):
+            lines.append(_limited_by(outcome.tolerance["limited_by"]))
     if outcome.verification is not None:
         v = outcome.verification
         accuracy = f" (accuracy {outcome.accuracy.describe()})" if outcome.accuracy else ""

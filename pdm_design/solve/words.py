@@ -34,7 +34,10 @@ CONDITIONS = {
     "parked_palms": ("the carried object clears the palms parked at their front stops behind it",
                      "a later front stop, narrower palms, or a longer pitch (larger alpha + beta)"),
     "forward_landing": ("the landing pushes the palm forward", "smaller alpha + beta"),
-    "start_height": ("the object starts above the first palm", "lower the first manipulator"),
+    "start_height": ("the object starts above palm 1's top surface (at first_pivot_y + "
+                     "link_length cos alpha)",
+                     "raise the start (initial.position) or lower the first pivot "
+                     "(first_pivot_y); a larger alpha or a shorter link lowers palm 1 too"),
     # stairs
     "riser_clearance": ("the ball lands clear of the riser behind it",
                         "land further forward on the tread (a larger landing_offset)"),
@@ -117,7 +120,8 @@ def summarise(violations) -> list[str]:
     lines = []
     for (name, pattern), members in groups.items():
         if len(members) == 1:
-            lines.append(members[0].text)
+            if members[0].text not in lines:  # a row held by two keys is one line
+                lines.append(members[0].text)
             continue
         kind = _NUMBERED.search(members[0].where).group(1)
         numbers = sorted({int(_NUMBERED.search(v.where).group(2)) for v in members})

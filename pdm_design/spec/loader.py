@@ -38,6 +38,7 @@ from .model import (
     Verification,
     Weight,
 )
+from .start import unreachable_start
 
 MAX_FILE_BYTES = 8 * 2**20
 """Larger files are refused unread: no spec needs megabytes."""
@@ -156,6 +157,10 @@ def _parse(data: Any, source: str) -> Spec:
     design = _design(_table(data, "design", required=True), kind.design)
     verification = _verification(_table(data, "verification"), kind)
     _check_stages(verification, kind, design)
+    if scene.kind == "manipulators":  # a start below palm 1 whatever the design (spec/start.py)
+        problem = unreachable_start(scene.initial.position[1], design)
+        if problem:
+            raise _Invalid(*problem)
     expect_table = _table(data, "expect")
     _check_fields(expect_table, Expectations, "expect")
     return Spec(

@@ -55,6 +55,25 @@ class Bounds:
     def guess(self) -> float:
         return self.initial if self.initial is not None else 0.5 * (self.min + self.max)
 
+    def side(self, value: float) -> str | None:
+        """"min" or "max" when `value` is at that bound (see at_bound), else None."""
+        return at_bound(value, self.min, self.max)
+
+
+# A free variable within this fraction of its range (max - min) of a bound is reported at it.
+AT_BOUND = 1e-6
+
+
+def at_bound(value: float, low: float, high: float) -> str | None:
+    """"min" or "max" when value lies within AT_BOUND (high - low) of that bound; None inside,
+    and for a pinned range (low = high: not free, so at no bound)."""
+    span = high - low
+    if not span > 0.0:
+        return None
+    if value - low <= AT_BOUND * span:
+        return "min"
+    return "max" if high - value <= AT_BOUND * span else None
+
 
 @checked(frozen=True, config=CONFIG)
 class ManipulatorOffset:

@@ -65,6 +65,19 @@ class Row:
         return max(-0.5 * w, -0.5 * W - offset), min(0.5 * w, 0.5 * W - offset)
 
 
+def support_words(point: float, support: tuple[float, float]) -> str:
+    """Where a force line meets the object's base, against the part of the base a palm
+    supports (from its centre, + ahead), in words that rounding cannot make contradict
+    themselves: the edge it reaches (a located event lies on it, to the event tolerance) or
+    passes, and by how much."""
+    low, high = support
+    edge, beyond = ("front", point - high) if point - high > low - point else ("rear", low - point)
+    place = f"{point:+.6g} m from the base's centre; support [{low:+.6g}, {high:+.6g}] m"
+    if beyond <= 1e-9 * max(high - low, abs(point)):
+        return f"reaches the {edge} edge of the supported base ({place})"
+    return f"passes the {edge} edge of the supported base by {beyond:.3g} m ({place})"
+
+
 def build_row(scene, design, stages: int, offsets=()) -> Row:
     """Pivots of `stages` manipulators: pivot_k = pivot_1 + (k-1) (pitch_x, -pitch_y) + offset_k.
 

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from . import phases as ph
-from .geometry import face_guards
+from .geometry import face_guards, support_words
 
 SLIP_START_ATOLS = 100.0  # initial slip speed of a slip from relative rest, in units of atol
 
@@ -135,8 +135,9 @@ class OdePhases:
             return self._lift_off(te, k, theta, omega, s, sd,
                                   f"the normal force vanishes while sliding, th = {theta:.6g} rad")
         details = {
-            "tip": f"sliding friction puts the contact force at {xb:+.4g} m from the centre, "
-                   f"outside the support (offset {s:+.4g} m)",
+            "tip": f"with sliding friction the contact force "
+                   f"{support_words(xb, self.row.support(s))}, the object {s:+.4g} m from the "
+                   "palm's centre",
             "slid_off": f"the object's centre passed the end of palm {k + 1}",
             "stall": f"the palm stops at th = {theta:.6g} rad and swings back",
         }

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import phases as ph
 from ..core import Event, Outcome, SimulationResult
-from .geometry import Arc, Ballistic, build_row, first_contact
+from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
 from ..numerics import brentq
@@ -245,8 +245,7 @@ class Run(OdePhases, LiftOffPhases):
         xb = ph.impact_force_point(imp.pt, imp.pn, self.h) if imp.pn > 0.0 else 0.0
         if not lo <= xb <= hi:
             return self._fail(t, "tip", j + 1, after,
-                              f"the impulse crosses the base at {xb:+.4g} m, outside the "
-                              f"support [{lo:+.4g}, {hi:+.4g}] m")
+                              f"the impulse {support_words(xb, (lo, hi))}")
         if bounce:
             self._log(t, "bounce", j + 1, before, after, f"separating at {gn:.4g} m/s")
             if held:
@@ -454,9 +453,9 @@ class Run(OdePhases, LiftOffPhases):
             return self._lift_off(te, k, theta_e, omega_e, s, 0.0,
                                   f"v^2 = g l cos th at th = {theta_e:.6g} rad")
         details = {
-            "tip": f"the contact force crosses the base at "
-                   f"{ph.stuck_force_point(theta_e, self.h):+.4g} m, outside the support "
-                   f"[{lo:+.4g}, {hi:+.4g}] m, th = {theta_e:.6g} rad",
+            "tip": f"the contact force "
+                   f"{support_words(ph.stuck_force_point(theta_e, self.h), (lo, hi))}, "
+                   f"th = {theta_e:.6g} rad",
             "stall": f"the palm stops at th = {theta_e:.6g} rad before the top and swings back",
             "blocked": f"the carried object hits the side of palm "
                        f"{entry.palm + 1 if entry else '?'}",

@@ -1,0 +1,364 @@
+"""What a newcomer tripped on: a start below palm 1, bounds that bind silently, which condition
+limits the tolerance, and the messages of the command line.
+
+Expected numbers come from closed forms written out here (palm 1's top at first_pivot_y + l cos
+alpha, dimensional analysis) or from a second solve (a relaxed requirement or bound).
+"""
+
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from pdm_design.api import design
+from pdm_design.cli import main
+from pdm_design.solve import optimize
+from pdm_design.spec import parse_spec
+from test_fuzz_cli import dumps
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+ROBUST = PROBLEMS / "manipulators_robust.toml"
+
+
+def run(*args):
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    return result.exit_code, result.stdout, result.stderr
+
+
+def robust_data(**design):
+    data = tomllib.loads(ROBUST.read_text())
+    data["design"].update(design)
+    return data
+
+
+def write(tmp_path, data, name="spec.toml"):
+    path = tmp_path / name
+    path.write_text(dumps(data))
+    return path
+
+
+# ------------------------------------------------------------------ 1. a start below palm 1
+
+def test_a_start_below_palm_1_for_every_design_is_bad_input_naming_the_palm_height(tmp_path):
+    # first pivot 5 m up: palm 1's top is at 5 + 2 cos(alpha) >= 5 + 2 cos(0.6) over alpha's
+    # bounds [0, 0.6], above the start at y = 3.05 m whatever is chosen
+    spec = write(tmp_path, robust_data(first_pivot_y=5.0))
+    code, out, err = run("optimize", spec)
+    lowest = 5.0 + 2.0 * math.cos(0.6)
+    assert code == 2 and out == ""
+    assert err.startswith(f"error: {spec}: initial.position[1]: expected a start above palm 1's "
+                          "top surface")
+    assert f"{lowest:.6g} m" in err and "alpha = 0.6" in err
+    assert f"found 3.05 m, {lowest - 3.05:.4g} m below it" in err
+    assert "solver_error" not in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("command", ["optimize", "simulate", "sheet", "check"])
+def test_a_link_of_a_million_metres_under_the_papers_start_is_refused_in_words(tmp_path,
+                                                                                command):
+    # docs/spec.md allows link_length = 1e6; with the paper's start (y = 3.05 m) palm 1 stands
+    # 1e6 cos(0.2) m above it: the run was a solver_error (the fall speed a square root of a
+    # negative number at every start), now a refusal naming the start and the palm
+    data = tomllib.loads((PROBLEMS / "paper_manipulators.toml").read_text())
+    data["design"]["link_length"] = 1e6
+    spec = write(tmp_path, data)
+    args = [command, spec] + (["--out", tmp_path / "sheet"] if command == "sheet" else [])
+    code, out, err = run(*args)
+    assert code == 2
+    text = out + err
+    assert "initial.position[1]" in text and f"{1e6 * math.cos(0.2):.6g} m for this design" in text
+
+
+def test_some_designs_fit_the_start_but_none_works_is_infeasible_naming_start_and_palm(tmp_path):
+    # first pivot 1.3 m up: palm 1's top, 1.3 + 2 cos(alpha), is below the start (3.05 m) for
+    # alpha > acos(0.875) = 0.505 only, where no design works. Every start of the multistart
+    # was below palm 1 and IPOPT stopped at once: solver_error, 0 iterations.
+    spec = write(tmp_path, robust_data(first_pivot_y=1.3))
+    code, out, err = run("optimize", spec, "--format", "json", "--no-verify")
+    doc = json.loads(out)
+    assert code == 1 and doc["status"] == "infeasible"
+    top = 1.3 + 2.0 * math.cos(doc["design"]["alpha"])
+    message = doc["status_message"]
+    assert message.startswith(f"The object starts at y = 3.05 m, below palm 1's top surface at "
+                              f"y = {top:.6g} m")
+    assert f"as low as y = {1.3 + 2.0 * math.cos(0.6):.6g} m" in message
+    assert doc["violations"][0] == f"the object starts {top - 3.05:.4g} m below the first " \
+                                   "palm's top surface"
+    assert doc["solver"]["iterations"] > 0
+
+
+def test_the_report_leads_with_the_start_and_labels_the_least_violation_design(tmp_path):
+    spec = write(tmp_path, robust_data(first_pivot_y=1.3))
+    code, out, _ = run("optimize", spec, "--no-verify")
+    lines = out.splitlines()
+    assert code == 1 and lines[1].startswith("status: infeasible - The object starts at y = "
+                                             "3.05 m, below palm 1's top surface")
+    assert any(x.startswith("  alpha ") and x.endswith("(least violation)") for x in lines)
+    assert "(optimised)" not in out
+    why = lines[lines.index("why it does not work:") + 1]
+    assert why.startswith("  - the object starts ") and "below the first palm" in why
+
+
+def test_a_start_above_only_part_of_the_bounds_is_found_there(tmp_path):
+    # link 3.2 m, alpha in [0, 0.6] guessed at 0.1: palm 1's top (3.2 cos alpha) is above the
+    # start at 3.05 m for alpha < acos(3.05 / 3.2) = 0.309, the guess included; the optimum
+    # lies where the palm is below the start
+    data = robust_data(link_length=3.2, alpha={"min": 0.0, "max": 0.6, "initial": 0.1})
+    result = optimize(parse_spec(data), check_samples=0, linearise=False)
+    assert result.status.value == "optimal"
+    assert 3.2 * math.cos(result.design["alpha"]) < 3.05
+
+
+def _robust_at(scale: float):
+    """problems/manipulators_robust.toml at lengths x scale, speeds x sqrt(scale) (the same
+    device in units of its link), the first pivot moved down to keep heights within 1e6 m."""
+    data = tomllib.loads(ROBUST.read_text())
+    for table, keys in ((data["scene"]["body"], ("width", "height")),
+                        (data["scene"]["palm"], ("width", "thickness"))):
+        for key in keys:
+            table[key] *= scale
+    x0, y0 = (v * scale for v in data["initial"]["position"])
+    shift = 1e6 if y0 > 1e6 else 0.0
+    data["initial"]["position"] = [x0, y0 - shift]
+    data["initial"]["velocity"] = [v * math.sqrt(scale) for v in data["initial"]["velocity"]]
+    data["design"]["link_length"] *= scale
+    data["design"]["first_pivot_y"] = -shift
+    return parse_spec(data)
+
+
+@pytest.fixture(scope="module")
+def robust_result():
+    return optimize(_robust_at(1.0), check_samples=0, linearise=False)
+
+
+@pytest.mark.parametrize("scale", [2e-5, 5e5])  # links of 40 microns and of 1e6 m
+def test_the_documented_extremes_of_size_solve_to_the_same_design(robust_result, scale):
+    # docs/spec.md: lengths from 1e-6 m (the palm thickness, 0.05 x scale) to 1e6 m (the link)
+    result = optimize(_robust_at(scale), check_samples=0, linearise=False)
+    assert result.status.value == "optimal", result.stats.return_statuses
+    assert result.tolerance["dx"] / scale == pytest.approx(robust_result.tolerance["dx"],
+                                                           rel=1e-5)
+    assert result.design["alpha"] == pytest.approx(robust_result.design["alpha"], abs=1e-5)
+
+
+# ------------------------------------------------------------------ 3. variables at a bound
+
+def test_at_bound_is_within_a_millionth_of_the_range():
+    from pdm_design.spec.model import at_bound
+
+    assert at_bound(3.0 - 0.9e-6 * 2.5, 0.5, 3.0) == "max"
+    assert at_bound(3.0 - 1.1e-6 * 2.5, 0.5, 3.0) is None
+    assert at_bound(0.5 + 0.9e-6 * 2.5, 0.5, 3.0) == "min"
+    assert at_bound(1.0, 1.0, 1.0) is None  # pinned: not free, at no bound
+
+
+@pytest.fixture(scope="module")
+def stairs_doc():
+    code, out, _ = run("optimize", PROBLEMS / "stairs_design.toml", "--format", "json",
+                       "--no-verify")
+    assert code == 0
+    return json.loads(out)
+
+
+def test_a_launch_speed_held_by_its_bound_is_flagged(stairs_doc):
+    # A second solve with the bound raised from 3 to 3.5 m/s finds a larger tolerance: the
+    # bound binds, and the document says so.
+    assert stairs_doc["design"]["launch_speed"] == 3.0
+    assert stairs_doc["at_bounds"] == {"launch_speed": "max"}
+    data = tomllib.loads((PROBLEMS / "stairs_design.toml").read_text())
+    data["design"]["launch_speed"]["max"] = 3.5
+    wider = optimize(parse_spec(data), check_samples=0, linearise=False)
+    assert wider.tolerance["rise"] > 1.01 * stairs_doc["tolerance"]["rise"]
+
+
+def test_the_report_has_a_line_for_variables_at_a_bound():
+    code, out, _ = run("optimize", PROBLEMS / "stairs_design.toml", "--no-verify")
+    assert code == 0 and "  at a bound: launch_speed (max 3 m/s)\n" in out
+    code, out, _ = run("optimize", ROBUST, "--no-verify")  # alpha and beta inside their bounds
+    assert code == 0 and "at a bound" not in out
+
+
+# ------------------------------------------------------------------ 4. what limits the tolerance
+
+def test_the_stairs_tolerance_names_the_nose_and_the_launch_speed_bound(stairs_doc):
+    limited = stairs_doc["tolerance"]["limited_by"]
+    assert [e["condition"] for e in limited] == ["nose_clearance", "nose_clearance", "bound"]
+    assert all("flight 20" in e["where"] for e in limited[:2])
+    assert sum(e["share"] for e in limited[:2]) == pytest.approx(1.0, abs=1e-3)
+    assert limited[2] == {"condition": "bound", "where": "launch_speed at its max 3",
+                          "share": None}
+
+
+def _tolerance(spec, **requirements):
+    result = optimize(spec, requirements={**spec.requirements, **requirements},
+                      check_samples=0, linearise=False)
+    assert result.status.value == "optimal"
+    return result.tolerance["dx" if spec.kind == "manipulators" else "rise"]
+
+
+@pytest.mark.parametrize("name", ["manipulators_robust.toml", "stairs_design.toml"])
+def test_the_condition_named_first_limits_the_tolerance_and_a_slack_one_does_not(name):
+    # A second solve: asking 0.01 more margin of the condition named first shrinks the
+    # tolerance; asking it of a condition not named (slack at the optimum) changes nothing.
+    from pdm_design.spec import load_spec
+
+    spec = load_spec(PROBLEMS / name)
+    outcome = design(spec, verify=False)
+    limited = outcome.tolerance["limited_by"]
+    first = limited[0]["condition"]
+    named = {e["condition"] for e in limited}
+    slack = min((m for m, v in outcome.analysis.margins.items()
+                 if m not in named and v > 0.1 + spec.requirements.get(m, 0.0)),
+                key=lambda m: outcome.analysis.margins[m])
+    base = _tolerance(spec)
+    need = spec.requirements.get(first, 0.0) + 0.01
+    assert _tolerance(spec, **{first: need}) < (1 - 1e-3) * base
+    need = spec.requirements.get(slack, 0.0) + 0.01
+    assert _tolerance(spec, **{slack: need}) == pytest.approx(base, rel=1e-6)
+
+
+def test_the_report_says_what_limits_the_tolerance():
+    code, out, _ = run("optimize", ROBUST, "--no-verify")
+    line = next(x for x in out.splitlines() if x.startswith("  limited by: "))
+    assert line.startswith("  limited by: lift_off (at the handover, fastest carry) ")
+
+
+# ------------------------------------------------------------------ 2. pdm-design init
+
+def test_init_manipulators_lands_on_palm_1s_centre_and_optimizes_as_written(tmp_path):
+    spec = tmp_path / "row.toml"
+    code, out, _ = run("init", "manipulators", "--out", spec)
+    assert code == 0 and str(spec) in out
+    data = tomllib.loads(spec.read_text())
+    (x0, y0), (vx, vy) = data["initial"]["position"], data["initial"]["velocity"]
+    g, l, a = data["scene"]["gravity"], data["design"]["link_length"], data["design"]["alpha"]
+    # palm 1 (pivot at the origin) rests at -alpha: its top surface centred at
+    # (-l sin a, l cos a); the horizontal launch falls y0 - l cos a onto it
+    assert vy == 0.0
+    t = math.sqrt(2.0 * (y0 - l * math.cos(a)) / g)
+    assert x0 + vx * t == pytest.approx(-l * math.sin(a), abs=1e-8)
+    code, out, _ = run("optimize", spec, "--format", "json")
+    doc = json.loads(out)
+    assert code == 0 and doc["status"] == "optimal" and doc["verification"]["passed"]
+    landing = doc["approach"]["landing_point"]
+    assert landing[0] == pytest.approx(-l * math.sin(a), abs=1e-8)
+    assert landing[1] == pytest.approx(l * math.cos(a), abs=1e-12)
+
+
+def test_init_stairs_lands_mid_tread_and_optimizes_as_written(tmp_path):
+    spec = tmp_path / "stairs.toml"
+    assert run("init", "stairs", "--out", spec)[0] == 0
+    data = tomllib.loads(spec.read_text())
+    code, out, _ = run("optimize", spec, "--format", "json")
+    doc = json.loads(out)
+    assert code == 0 and doc["status"] == "optimal" and doc["verification"]["passed"]
+    # the periodic bounce falls h0 from its apex e^2 h0 to the next tread (rise (1 - e^2) h0):
+    # it lasts (1 + e) sqrt(2 h0 / g), and the tread is the distance flown in it
+    g, h0 = data["scene"]["gravity"], data["initial"]["drop_height"]
+    e, v0 = data["design"]["restitution"], doc["design"]["launch_speed"]
+    tread = v0 * (1.0 + e) * math.sqrt(2.0 * h0 / g)
+    code, out, _ = run("simulate", spec, "--format", "json", "--stages", 3)
+    assert code == 0
+    for stage in json.loads(out)["stages"]:
+        assert stage["landing_x"] == pytest.approx(tread / 2, rel=1e-9)
+
+
+def test_init_to_stdout_and_not_over_a_file(tmp_path):
+    code, out, _ = run("init", "stairs")
+    assert code == 0 and tomllib.loads(out)["scene"]["kind"] == "stairs"
+    spec = tmp_path / "mine.toml"
+    spec.write_text("# my edits\n")
+    code, out, err = run("init", "manipulators", "--out", spec)
+    assert code == 2 and err.startswith("error: command line: --out: expected the name of a "
+                                        "file that does not exist yet")
+    assert spec.read_text() == "# my edits\n"
+
+
+# ------------------------------------------------------------------ 6. the linearised coordinates
+
+def test_the_linearised_coordinates_name_the_pivots_the_sheet_lists(tmp_path):
+    # a row of 10: the sheet lists pivots 1 to 10; pivot 11 is not part of it, only the height
+    # of what receives the object from manipulator 10 (its handover angle) is
+    from pdm_design.sheet import sheet_for
+
+    data = tomllib.loads(ROBUST.read_text())
+    data["verification"]["stages"] = 10
+    spec = write(tmp_path, data)
+    code, out, _ = run("optimize", spec, "--format", "json", "--no-verify")
+    names = json.loads(out)["tolerance"]["linearised"]["coordinates"]
+    listed = [item["manipulator"] for item in sheet_for(spec).items]
+    assert listed == list(range(1, 11))
+    assert names == [f"dx{k}" for k in listed] + [f"dy{k}" for k in listed] + ["dy_receiver"]
+
+
+# ------------------------------------------------------------------ 7. simulate --plot
+
+def test_simulate_says_where_it_wrote_the_figures(tmp_path):
+    plot = tmp_path / "run.png"
+    code, out, _ = run("simulate", PROBLEMS / "paper_stairs_frictionless.toml", "--plot", plot)
+    assert code == 0 and plot.is_file() and out.endswith(f"figures written to {plot}\n")
+    code, out, err = run("simulate", PROBLEMS / "paper_stairs_frictionless.toml", "--plot",
+                         plot, "--format", "json")
+    assert code == 0 and json.loads(out) and f"figures written to {plot}" in err
+
+
+# ------------------------------------------------------------------ 8. a tip in words
+
+def _first_failure(**kw):
+    from test_sim_manipulators import make
+
+    from pdm_design.sim.manipulators import simulate_manipulators
+
+    scene, design = make(**kw)
+    return simulate_manipulators(scene, design, stages=2).outcome.failure
+
+
+def test_a_tip_in_the_carry_reaches_the_supported_edge_without_contradiction():
+    # the carry tips where the force point (h/2) tan th behind the centre reaches the rear
+    # edge of a w-wide base: -w/2, printed the same on both sides
+    failure = _first_failure(width=0.4, height=0.7)
+    assert failure.kind == "tip"
+    assert failure.detail.startswith("the contact force reaches the rear edge of the supported "
+                                     "base (-0.2 m from the base's centre; support [-0.2, +0.2] m)")
+    assert "outside" not in failure.detail
+
+
+def test_a_tip_at_the_landing_says_by_how_much_the_impulse_misses_the_support():
+    from test_sim_manipulators import first_landing, momentum_speed
+    from test_sim_manipulators import ALPHA
+
+    failure = _first_failure(width=0.2, height=2.0)
+    _, _, vx, vy = first_landing()
+    u = momentum_speed(vx, vy)
+    px, py = u * math.cos(ALPHA) - vx, u * math.sin(ALPHA) - vy
+    point = -(2.0 / 2) * px / py  # where the impulse line meets the base, + ahead
+    assert point > 0.1
+    assert failure.detail.startswith(f"the impulse passes the front edge of the supported base "
+                                     f"by {point - 0.1:.3g} m ({point:+.6g} m from")
+
+
+# ------------------------------------------------------------------ 9. command-line errors
+
+@pytest.mark.parametrize("command", ["optimize", "simulate", "sheet"])
+def test_a_directory_given_as_a_spec_is_an_error_in_the_tools_words(tmp_path, command):
+    code, out, err = run(command, tmp_path)
+    assert code == 2 and out == ""
+    assert err == f"error: {tmp_path}: expected a spec file, found a directory\n"
+
+
+@pytest.mark.parametrize("args, words", [
+    (["optimize", ROBUST, "--accuracy", "rtol=0"],
+     "--accuracy: rtol: expected a number >= 2.22e-14 (100 machine epsilons) and < 1, found 0"),
+    (["simulate", ROBUST, "--stages", "0"],
+     "--stages: expected an integer from 1 to 10000000, found '0'"),
+    (["simulate", ROBUST, "--offset", "3:x"], "--offset: expected K:DX,DY"),
+    (["optimize", ROBUST, "--format", "xml"], "--format: 'xml' is not one of 'text', 'json'"),
+    (["optimize", ROBUST, "--bogus"], "No such option '--bogus' (see `"),
+])
+def test_option_errors_all_come_in_the_tools_format(args, words):
+    code, out, err = run(*args)
+    assert code == 2 and out == ""
+    assert err.startswith(f"error: command line: {words}") and "Usage:" not in err
