@@ -158,6 +158,10 @@ def _parse(data: Any, source: str) -> Spec:
     _check_stages(verification, kind, design)
     expect_table = _table(data, "expect")
     _check_fields(expect_table, Expectations, "expect")
+    tolerances = _tolerances(_table(data, "tolerances"), kind.scene.kind)
+    if "min_yield" in expect_table and not tolerances:
+        raise _Invalid("expect.min_yield", "a [tolerances] table to draw the builds from",
+                       "no [tolerances]")
     return Spec(
         source=source,
         scene=scene,
@@ -166,7 +170,7 @@ def _parse(data: Any, source: str) -> Spec:
         requirements=_named_numbers(data, "requirements", kind.margins, _REQUIRED_MARGIN),
         verification=verification,
         expect=_build(Expectations, expect_table, "expect"),
-        tolerances=_tolerances(_table(data, "tolerances"), kind.scene.kind),
+        tolerances=tolerances,
         name=name,
         description=description,
         digest=content_digest(data),

@@ -54,6 +54,28 @@ def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accurac
                     confirm=tolerances.confirm, accuracy=acc, source=source, **kwargs)
 
 
+def unmet_min_yield(outcome) -> list[str]:
+    """`check`'s [expect] min_yield: the 95 % interval's lower end must reach it (the builds,
+    seed and stages are the spec's, so the verdict is reproducible)."""
+    spec, wanted = outcome.spec, outcome.spec.expect.min_yield
+    if not outcome.status.is_success:
+        return [f"expected a yield of at least {_pct(wanted)}, got none (no design: status "
+                f"{outcome.status.value})"]
+    tolerances = spec_tolerances(spec, spec.source)
+    _check_kind(spec)
+    point = spec.design_at(outcome.analysis.design)
+    r = yield_of(spec.scene, point, tolerances, builds=tolerances.builds,
+                 stages=spec.verification.stages, seed=tolerances.seed,
+                 confirm=tolerances.confirm, accuracy=outcome.accuracy or "default",
+                 source=spec.source, scales=())
+    if r.ci_low >= wanted:
+        return []
+    return [f"yield {_pct(r.estimate)} (95 % interval from {_pct(r.ci_low)}) over "
+            f"{r.stages} stages is not surely at least the expected {_pct(wanted)}"
+            + (f"; failures: {', '.join(f'{k} {v}' for k, v in r.failures.items())}"
+               if r.failures else f"; more builds than {r.builds} narrow the interval")]
+
+
 def _check_kind(spec) -> None:
     if spec.kind == "manipulators":
         return
