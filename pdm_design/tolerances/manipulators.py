@@ -52,10 +52,11 @@ def build_values(scene, design, deviations: dict, stages: int, count: int) -> di
     def each(name, nominal):
         dev = deviations.get(name)
         dev = 0.0 if dev is None else (dev if np.ndim(dev) == 2 else np.asarray(dev)[:, None])
-        return np.broadcast_to(nominal + dev, (count, stages)).astype(float)
+        return np.broadcast_to(np.asarray(nominal + dev, dtype=float), (count, stages))
 
     def lot(name, nominal):
-        return np.broadcast_to(nominal + deviations.get(name, 0.0), (count,)).astype(float)
+        return np.broadcast_to(np.asarray(nominal + deviations.get(name, 0.0), dtype=float),
+                               (count,))
 
     l, a = design.link_length, design.alpha
     pitch_x, pitch_y = (float(p) for p in phys.pitch(a, design.beta, l))
@@ -92,13 +93,16 @@ class _Builds:
     def __init__(self, scene, design, deviations, stages):
         self.n = n = _count(deviations)
         self.stages, self.g = stages, scene.gravity
-        self.v = build_values(scene, design, deviations, stages, n)
+        # every part's values by stage (stages, builds): a stage's values contiguous
+        self.v = {key: np.ascontiguousarray(x.T) if x.ndim == 2 else x
+                  for key, x in build_values(scene, design, deviations, stages, n).items()}
         self.beta, self.fs = design.beta, scene.palm.front_stop
         self.W, self.h, self.T = scene.palm.width, scene.body.height, scene.palm.thickness
         self.y0 = scene.initial.position[1]
         self.alive = np.ones(n, bool)
         self.passed = np.zeros(n, int)
-        self.failure = np.full(n, "", dtype=object)
+        self.code = np.zeros(n, np.int16)  # index in self.names of the failure
+        self.names = [""]
         self.closed = np.ones(n, bool)
         self.worst = np.full(n, np.inf)
         self.parked = _parked_rows(scene, design, stages)
@@ -111,7 +115,7 @@ class _Builds:
         cx, cy = self.rest_top(0)
         fall = self.y0 - cy
         vx, vy0 = v["feed_vx"], v["feed_vy"]
-        self.group(0, [("blocked", fall / v["link_length"][:, 0], False)])
+        self.group(0, [("blocked", fall / v["link_length"][0], False)])
         q_fall = np.sqrt(vy0**2 + 2.0 * self.g * np.maximum(fall, 0.0))
         offset = v["feed_x"] + vx * (vy0 + q_fall) / self.g - cx
         self.meets(0, offset, w)
@@ -121,46 +125,54 @@ class _Builds:
             if not self.alive.any():
                 break
         self.passed[self.alive] = self.stages
-        return BuildOutcome(self.passed, self.failure, np.where(np.isinf(self.worst), 1.0,
-                                                                 self.worst), self.closed)
+        failure = np.array(self.names, dtype=object)[self.code]
+        return BuildOutcome(self.passed, failure, np.where(np.isinf(self.worst), 1.0,
+                                                           self.worst), self.closed)
 
     # -- bookkeeping ------------------------------------------------------------------------
     def group(self, passed, checks):
         """Conditions judged at one moment: [(failure name, margin, closed form?)]. A build
         alive where one margin is < 0 (or not a number) fails with the first such name; it
         stays in the closed-form regime only if every failing condition is closed form."""
-        failing_any = np.zeros(self.n, bool)
-        open_any = np.zeros(self.n, bool)
-        name = np.full(self.n, "", dtype=object)
+        failing_any = None
         for kind, value, closed in checks:
-            value = np.broadcast_to(value, (self.n,))
+            np.fmin(self.worst, value, out=self.worst, where=self.alive)
             bad = self.alive & ~(value >= 0.0)
-            self.worst = np.where(self.alive, np.fmin(self.worst, value), self.worst)
-            name = np.where(bad & ~failing_any, kind, name)
+            if not bad.any():
+                continue
+            if failing_any is None:
+                failing_any, code = np.zeros(self.n, bool), np.zeros(self.n, np.int16)
+                open_any = np.zeros(self.n, bool)
+            code[bad & ~failing_any] = self._code(kind)
             failing_any |= bad
-            if not closed:
-                open_any |= bad
-            open_any |= bad & np.isnan(value)
-        self.failure[failing_any] = name[failing_any]
+            open_any |= bad & (np.isnan(value) if closed else True)
+        if failing_any is None:
+            return
+        self.code[failing_any] = code[failing_any]
         self.passed[failing_any] = passed
         self.closed[failing_any] = ~open_any[failing_any]
         self.alive &= ~failing_any
+
+    def _code(self, kind: str) -> int:
+        if kind not in self.names:
+            self.names.append(kind)
+        return self.names.index(kind)
 
     def invalid(self, v):
         """Parts no workshop can make (a link of length <= 0, a negative friction, ...): the
         build fails before it starts, as the simulator would refuse it."""
         bad = np.zeros(self.n, bool)
         for key in ("link_length", "palm_mass"):
-            bad |= (v[key] <= 0.0).any(axis=1)
-        bad |= (np.abs(v["back_stop"]) >= 0.5 * math.pi).any(axis=1)
+            bad |= (v[key] <= 0.0).any(axis=0)
+        bad |= (np.abs(v["back_stop"]) >= 0.5 * math.pi).any(axis=0)
         bad |= (v["object_mass"] <= 0.0) | (v["object_width"] <= 0.0) | (v["friction"] < 0.0)
         self.group(0, [("invalid_part", np.where(bad, -1.0, 1.0), True)])
 
     def rest_top(self, k):
         """Top-surface centre of palm k resting on its back stop."""
         v = self.v
-        return phys.palm_centre(v["pivot_x"][:, k], v["pivot_y"][:, k], -v["back_stop"][:, k],
-                                v["link_length"][:, k])
+        return phys.palm_centre(v["pivot_x"][k], v["pivot_y"][k], -v["back_stop"][k],
+                                v["link_length"][k])
 
     def support(self, offset, w):
         return np.maximum(-0.5 * w, -0.5 * self.W - offset), np.minimum(0.5 * w,
@@ -178,7 +190,7 @@ class _Builds:
     # -- the phases -------------------------------------------------------------------------
     def land(self, k, vx, vy, offset, m, w, mu, passed):
         """Plastic landing on palm k resting at -a_k: the speed the palm moves off with."""
-        a, M = self.v["back_stop"][:, k], self.v["palm_mass"][:, k]
+        a, M = self.v["back_stop"][k], self.v["palm_mass"][k]
         q = m / M
         u = phys.landing_speed(vx, vy, a, q)
         px, py = phys.landing_impulse(vx, vy, a, q)
@@ -190,8 +202,8 @@ class _Builds:
     def carry(self, k, u, offset, w, mu):
         """Stuck carry on palm k from -a_k at speed u; then the handover (k + 1 < stages)."""
         v, g = self.v, self.g
-        px, py = v["pivot_x"][:, k], v["pivot_y"][:, k]
-        l, a = v["link_length"][:, k], v["back_stop"][:, k]
+        px, py = v["pivot_x"][k], v["pivot_y"][k]
+        l, a = v["link_length"][k], v["back_stop"][k]
         self.group(k, [("lift_off", _margin(phys.lift_off_capacity(a, gravity=g,
                                                                    link_length=l), u * u), False),
                        *self.tips(phys.carry_force_point(-a, self.h), offset, w),
@@ -225,21 +237,31 @@ class _Builds:
     def parked_palms(self, k, theta, offset, w):
         """Clearance, in link lengths, to the palms 1 .. parked places behind palm k, each at
         its front stop (taken as there from the handover on: conservative, so a failure here
-        is left to the simulator, which follows the timing)."""
+        is left to the simulator, which follows the timing). Computed in full only for the
+        builds where the palm is not behind the object from the start of the carry (the
+        clearance is at least that distance: physics.parked_palm_clearance's `behind`)."""
         v = self.v
-        l, a = v["link_length"][:, k], v["back_stop"][:, k]
+        l, a = v["link_length"][k], v["back_stop"][k]
         sf, cf = math.sin(self.fs), math.cos(self.fs)
+        reach = 0.5 * (w + self.W)
+        back = -l * np.sin(a)
         out = []
         for n in range(1, min(k, self.parked) + 1):
             j = k - n
-            lj = v["link_length"][:, j]
+            lj = v["link_length"][j]
             # palm j's pivot and link as palm k's link and an effective pitch (exact)
-            pitch_x = v["pivot_x"][:, k] - v["pivot_x"][:, j] + (l - lj) * sf
-            pitch_y = v["pivot_y"][:, j] - v["pivot_y"][:, k] + (lj - l) * cf
-            gap = phys.parked_palm_clearance(
-                1, alpha=a, theta_end=theta, link_length=l, front_stop=self.fs,
-                pitch_x=pitch_x, pitch_y=pitch_y, offset_lo=offset, offset_hi=offset,
-                reach=0.5 * (w + self.W), depth=self.T + self.h)
+            pitch_x = v["pivot_x"][k] - v["pivot_x"][j] + (l - lj) * sf
+            behind = back - (l * sf - pitch_x + reach - offset)
+            near = np.flatnonzero(self.alive & (behind < 0.0))
+            gap = behind
+            if len(near):
+                pitch_y = v["pivot_y"][j] - v["pivot_y"][k] + (lj - l) * cf
+                gap = behind.copy()
+                gap[near] = phys.parked_palm_clearance(
+                    1, alpha=a[near], theta_end=theta[near], link_length=l[near],
+                    front_stop=self.fs, pitch_x=pitch_x[near], pitch_y=pitch_y[near],
+                    offset_lo=offset[near], offset_hi=offset[near],
+                    reach=np.broadcast_to(reach, (self.n,))[near], depth=self.T + self.h)
             out.append(("blocked", gap / l, False))
         return out
 
