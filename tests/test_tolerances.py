@@ -272,3 +272,33 @@ def test_check_min_yield(tmp_path):
     result = CliRunner().invoke(main, ["check", str(tmp_path / "high.toml")])
     assert result.exit_code == 1 and "is not surely at least the expected 99.90 %" in \
         result.output
+
+
+def test_absurd_tolerances_fail_by_name_never_nan(paper):
+    # +-100 m pivots and +-5 m links: every build fails, each by a named failure
+    from pdm_design.sim.manipulators import FAILURE_KINDS
+
+    scene, design = paper
+    tols = Tolerances((Tolerance("pivot_x", "each", 100.0), Tolerance("link_length", "each",
+                                                                      5.0)))
+    r = yield_of(scene, design, tols, builds=60, stages=5, seed=2, confirm=5, scales=(1.0,))
+    assert r.estimate == 0.0 and r.ci_low == 0.0 and 0.0 < r.ci_high < 0.1
+    assert set(r.failures) <= set(FAILURE_KINDS) | {"invalid_part", "refused"}
+    assert sum(r.failures.values()) == 60
+    out = run_builds(scene, design, draw(tols, 60, 5, seed=2), 5)
+    assert np.isfinite(out.min_margin).all() and (out.min_margin < 0).all()
+
+
+def test_build_and_offsets_together_are_refused(tmp_path):
+    path = _spec(tmp_path, "[tolerances]\npivot_x = { value = 0.1 }\n")
+    result = CliRunner().invoke(main, ["simulate", path, "--build", "0:3", "--offset",
+                                       "2:0.1,0"])
+    assert result.exit_code == 2 and "--build" in result.stderr
+
+
+def test_bouncing_landings_are_all_left_to_the_simulator(paper):
+    scene, design = paper
+    bouncy = scene.__class__(body=scene.body, palm=scene.palm.__class__(
+        width=1.6, restitution=0.3), initial=scene.initial)
+    out = run_builds(bouncy, design, draw([Tolerance("pivot_x", "each", 0.01)], 20, 3, 0), 3)
+    assert not out.closed_form.any()

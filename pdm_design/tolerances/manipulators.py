@@ -22,7 +22,7 @@ per-stage logic of formulation/manipulator_offsets.py, extended to every part's 
   the last palm   carries the object to the design's beta: the run is complete.
 
 These are the simulator's own judgements in the regime it follows in closed form (plastic
-landings that stick, stuck carries). A build that leaves it (a slip, a lift-off, a landing
+landings that stick, stuck carries; with a palm restitution > 0 no build is in it). A build that leaves it (a slip, a lift-off, a landing
 that drives the palm into its stop, a miss, a palm in the way) is marked closed_form = False
 with the failure the closed forms expect; the event simulator has the last word on it.
 """
@@ -99,6 +99,7 @@ class _Builds:
         self.beta, self.fs = design.beta, scene.palm.front_stop
         self.W, self.h, self.T = scene.palm.width, scene.body.height, scene.palm.thickness
         self.y0 = scene.initial.position[1]
+        self.restitution = scene.palm.restitution
         self.alive = np.ones(n, bool)
         self.passed = np.zeros(n, int)
         self.code = np.zeros(n, np.int16)  # index in self.names of the failure
@@ -125,6 +126,9 @@ class _Builds:
             if not self.alive.any():
                 break
         self.passed[self.alive] = self.stages
+        if self.restitution > 0.0:  # the closed forms' landings are plastic: none applies
+            self.closed[self.code != self.names.index("invalid_part")
+                        if "invalid_part" in self.names else slice(None)] = False
         failure = np.array(self.names, dtype=object)[self.code]
         return BuildOutcome(self.passed, failure, np.where(np.isinf(self.worst), 1.0,
                                                            self.worst), self.closed)
