@@ -19,8 +19,10 @@ the end of STREAM_ORDER so that earlier quantities keep their random streams.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:  # the spec loader reads this module: numpy is imported where arrays are made
+    import numpy as np
 
 DISTRIBUTIONS = ("normal", "uniform")
 APPLIES_TO = ("each", "lot")
