@@ -264,10 +264,13 @@ def _check_plot_path(plot: str) -> None:
 @click.option("--plot", type=str, default=None,
               help="Write figures like the paper's to this file; its extension picks the "
               "format (png, svg, pdf, ...).")
+@click.option("--build", default=None, metavar="SEED:INDEX",
+              help="Run build INDEX of `pdm-design yield --seed SEED` (its parts as drawn from "
+              "the spec's [tolerances]; give the same --stages).")
 @ACCURACY
 @FORMAT
 @_guarded
-def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
+def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
     """Run the event simulator on SPEC's design (optimised first if it has free variables;
     when no design meets every requirement, its least-violation design is run, with a warning,
     and the exit code is 1)."""
@@ -312,9 +315,18 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt):
             click.echo(f"warning: {spec}: the optimizer found no design that meets every "
                        f"requirement (status {found.status.value}); simulating its "
                        "least-violation design", err=True)
+    if build is not None and (offsets or step_errors):
+        raise SpecError("command line", "--build", "no --offset or --step-error with it (the "
+                        "build's parts are drawn)", "both")
     try:
-        result = simulate_spec(loaded, point, stages=stages, accuracy=accuracy,
-                               record_trajectory=plot is not None, **kwargs)
+        if build is not None:
+            from .tolerances.command import simulate_build_of_spec
+
+            result = simulate_build_of_spec(loaded, spec, point, build, row, accuracy=accuracy,
+                                            record_trajectory=plot is not None)
+        else:
+            result = simulate_spec(loaded, point, stages=stages, accuracy=accuracy,
+                                   record_trajectory=plot is not None, **kwargs)
     except SimulationRefused as refusal:  # the design is at fault, not the input's syntax: exit 1
         raise PdmError(f"{spec}: the simulator refuses this design: {refusal}") from None
     if plot is not None:
@@ -430,6 +442,35 @@ def sheet(source, out, count, no_tolerance, no_drawing):
         for failure in built.failures:
             click.echo(f"  {failure}", err=True)
         return EXIT_FAILED
+    return EXIT_OK
+
+
+@main.command(name="yield")
+@SPEC
+@click.option("--builds", type=click.IntRange(1, 10_000_000), default=None,
+              help="Builds drawn (default: the spec's tolerances.builds).")
+@click.option("--stages", type=click.IntRange(1, 100_000), default=None,
+              help="Stages each build must pass (default: the spec's verification.stages).")
+@click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=None,
+              help="Random seed of the builds (default: the spec's tolerances.seed).")
+@click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
+              help="Also write yield.json, survival.png and yield_scale.png to this folder.")
+@ACCURACY
+@FORMAT
+@_guarded
+def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
+    """Monte Carlo yield of SPEC's design under its [tolerances]: the fraction of builds that
+    pass every stage (95 % interval), survival by stage, failures by name, each failing build
+    as one `simulate --build` command; the event simulator confirms a sample."""
+    from .spec import load_spec
+    from .tolerances.command import run_yield, write_outputs, yield_json, yield_text
+
+    loaded = load_spec(spec)
+    result = run_yield(loaded, spec, builds=builds, stages=stages, seed=seed, accuracy=accuracy)
+    files = write_outputs(result, out) if out else []
+    click.echo(yield_json(result) if fmt == "json" else
+               yield_text(result, loaded.name or spec) + "".join(f"  {f}\n" for f in files),
+               nl=fmt == "json")
     return EXIT_OK
 
 

@@ -44,7 +44,7 @@ MAX_FILE_BYTES = 8 * 2**20
 """Larger files are refused unread: no spec needs megabytes."""
 
 TOP_LEVEL_KEYS = ("name", "description", "scene", "initial", "design", "objective",
-                  "requirements", "verification", "expect")
+                  "requirements", "verification", "expect", "tolerances")
 BOUNDS_KEYS = ("min", "max", "initial")
 FREE_OR_FIXED = "a number (fixed) or a table {min = .., max = .., initial = ..} (free)"
 RequiredMargin = Annotated[float, Strict(), Field(ge=-1, le=1)]
@@ -163,6 +163,10 @@ def _parse(data: Any, source: str) -> Spec:
             raise _Invalid(*problem)
     expect_table = _table(data, "expect")
     _check_fields(expect_table, Expectations, "expect")
+    tolerances = _tolerances(_table(data, "tolerances"), kind.scene.kind)
+    if "min_yield" in expect_table and not tolerances:
+        raise _Invalid("expect.min_yield", "a [tolerances] table to draw the builds from",
+                       "no [tolerances]")
     return Spec(
         source=source,
         scene=scene,
@@ -171,6 +175,7 @@ def _parse(data: Any, source: str) -> Spec:
         requirements=_named_numbers(data, "requirements", kind.margins, _REQUIRED_MARGIN),
         verification=verification,
         expect=_build(Expectations, expect_table, "expect"),
+        tolerances=tolerances,
         name=name,
         description=description,
         digest=content_digest(data),
@@ -279,6 +284,83 @@ def _check_unique(items, attribute: str, path: str) -> None:
             raise _Invalid(f"{path}[{i}].{attribute}", f"a {attribute} not listed before in "
                            f"{path}", _show(number))
         seen.add(number)
+
+
+# --------------------------------------------------------------------------- [tolerances]
+
+TOLERANCE_SETTINGS = {"distribution": "the default distribution of every quantity",
+                      "builds": "builds drawn by `pdm-design yield`",
+                      "seed": "the random seed of the builds drawn",
+                      "confirm": "random builds the event simulator confirms"}
+TOLERANCE_KEYS = ("value", "allocate", "weight", "applies_to", "distribution")
+_COUNT = TypeAdapter(Annotated[int, Strict(), Field(ge=1, le=10_000_000)], config=CONFIG)
+_SEED = TypeAdapter(Annotated[int, Strict(), Field(ge=0, le=2**63 - 1)], config=CONFIG)
+_CONFIRM = TypeAdapter(Annotated[int, Strict(), Field(ge=0, le=100_000)], config=CONFIG)
+_PLUS_MINUS = TypeAdapter(Annotated[float, Strict(), Field(gt=0, le=1e6)], config=CONFIG)
+_STRICT_BOOL = TypeAdapter(Annotated[bool, Strict()], config=CONFIG)
+
+
+def _tolerances(table: dict, kind: str):
+    """[tolerances]: settings (distribution, builds, seed, confirm) and one table per quantity
+    of the scene kind (tolerances.model.QUANTITIES) with value = +-t (SI) or allocate = true
+    (and a weight), applies_to ("each" or "lot") and distribution ("normal" or "uniform")."""
+    from ..tolerances.model import DISTRIBUTIONS, QUANTITIES, Tolerance, Tolerances
+
+    quantities = QUANTITIES[kind]
+    _check_keys(table, tuple(TOLERANCE_SETTINGS) + tuple(quantities), "tolerances",
+                {q: f"not a {kind} quantity" for q in
+                 set().union(*map(set, QUANTITIES.values())) - set(quantities)})
+    default = _choice(table, "distribution", DISTRIBUTIONS, "tolerances", "normal")
+    settings = {key: _setting(table, key, adapter) for key, adapter in
+                (("builds", _COUNT), ("seed", _SEED), ("confirm", _CONFIRM)) if key in table}
+    items = []
+    for name, quantity in quantities.items():
+        if name not in table:
+            continue
+        path = _join("tolerances", name)
+        entry = table[name]
+        if not isinstance(entry, dict):
+            raise _Invalid(path, "a table {value = .., applies_to = .., distribution = ..} "
+                           "or {allocate = true, weight = ..}", _show(entry))
+        _check_keys(entry, TOLERANCE_KEYS, path)
+        applies = _choice(entry, "applies_to", quantity.applies, path,
+                          quantity.default_applies_to)
+        value, weight = _tolerance_value(entry, path)
+        items.append(Tolerance(name, applies, value, weight,
+                               _choice(entry, "distribution", DISTRIBUTIONS, path, default)))
+    return Tolerances(tuple(items), **settings)
+
+
+def _tolerance_value(entry: dict, path: str) -> tuple[float | None, float]:
+    """(value, weight) of one quantity's table: exactly one of value and allocate = true."""
+    allocate = _setting(entry, "allocate", _STRICT_BOOL, path) if "allocate" in entry else False
+    if allocate and "value" in entry:
+        raise _Invalid(_join(path, "allocate"), "either value (a tolerance to check) or "
+                       "allocate = true (one to find), not both", "both")
+    if not allocate and "value" not in entry:
+        raise _Invalid(_join(path, "value"), "a number > 0 (the +- tolerance, SI), or "
+                       "allocate = true", "nothing")
+    if "weight" in entry and not allocate:
+        raise _Invalid(_join(path, "weight"), "a weight only with allocate = true (it says how "
+                       "cheap the quantity is to hold tight)", _show(entry["weight"]))
+    weight = _setting(entry, "weight", _PLUS_MINUS, path) if "weight" in entry else 1.0
+    value = None if allocate else _setting(entry, "value", _PLUS_MINUS, path)
+    return value, weight
+
+
+def _setting(table: dict, key: str, adapter, path: str = "tolerances"):
+    try:
+        return adapter.validate_python(table[key])
+    except pydantic.ValidationError as exc:
+        raise _invalid(exc.errors()[0], _join(path, key)) from None
+
+
+def _choice(table: dict, key: str, allowed: tuple[str, ...], path: str, default: str) -> str:
+    value = table.get(key, default)
+    if not isinstance(value, str) or value not in allowed:
+        raise _Invalid(_join(path, key), "one of: " + ", ".join(f'"{a}"' for a in allowed),
+                       _show(value) + did_you_mean(value, allowed))
+    return value
 
 
 # --------------------------------------------------------------------------- the design space

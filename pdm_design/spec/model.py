@@ -11,6 +11,7 @@ from pydantic.dataclasses import dataclass as checked
 from ..accuracy import ACCURACY_PRESETS, Accuracy, accuracy
 from ..scenes import ManipulatorsDesign, Scene, StairsDesign
 from ..scenes.common import CONFIG, LARGEST, Number
+from ..tolerances.model import Tolerances
 
 Count = Annotated[int, Strict(), Field(ge=1, le=10_000_000)]
 # A manipulator run keeps every stage's record and event (about 15 kB a stage); a stairs NLP has
@@ -113,6 +114,7 @@ class Expectations:
     min_objective: Number | None = None
     min_tolerance: Annotated[float, Strict(), Field(ge=0)] | None = None
     min_margin: Number | None = None
+    min_yield: Annotated[float, Strict(), Field(ge=0, le=1)] | None = None
 
 
 @dataclass(frozen=True)
@@ -130,6 +132,7 @@ class Spec:
     requirements: dict[str, float] = field(default_factory=dict)
     verification: Verification = Verification()
     expect: Expectations = Expectations()
+    tolerances: Tolerances = Tolerances()
     name: str = ""
     description: str = ""
     # sha256 of the spec's content (spec.loader.content_digest): a saved design names the spec

@@ -56,17 +56,18 @@ FAILURE_KINDS = {
 
 
 def simulate_manipulators(scene, design, *, stages: int = 6, offsets=(), accuracy="default",
-                          record_trajectory: bool = False) -> SimulationResult:
+                          record_trajectory: bool = False, parts=None) -> SimulationResult:
     """Simulate the object along a row of `stages` manipulators from the scene's initial state.
 
     offsets: objects with .manipulator (1-based), .dx, .dy (m, y up) shifting that pivot.
+    parts: geometry.Parts, every manipulator's own link length, back stop and palm mass.
     Returns a SimulationResult: outcome, one record per manipulator reached (see
     docs/manipulators_model.md for the fields), the event log, and, if asked for, trajectories
     (time, x, y, vx, vy of the object's bottom centre; theta and manipulator of its carrier).
     """
     acc = resolve_accuracy(accuracy)
     check_manipulators_scales(scene, design, offsets)
-    return Run(scene, design, stages, offsets, acc, record_trajectory).run()
+    return Run(scene, design, stages, offsets, acc, record_trajectory, parts).run()
 
 
 def check_manipulators_scales(scene, design, offsets=()) -> None:

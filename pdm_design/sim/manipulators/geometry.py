@@ -43,6 +43,11 @@ class Row:
     palm_thickness: float
     body_width: float
     body_height: float
+    # every palm's own link length and back stop (build_row fills them), and palm mass (empty:
+    # the design's for every palm)
+    link_lengths: tuple[float, ...] = ()
+    back_stops: tuple[float, ...] = ()
+    palm_masses: tuple[float, ...] = ()
 
     def __len__(self) -> int:
         return len(self.pivots)
@@ -50,7 +55,8 @@ class Row:
     def palm_top(self, k: int, theta: float) -> tuple[float, float]:
         """Top-surface centre of palm k (0-based) at angle theta."""
         px, py = self.pivots[k]
-        return px + self.link_length * math.sin(theta), py + self.link_length * math.cos(theta)
+        l = self.link_lengths[k]
+        return px + l * math.sin(theta), py + l * math.cos(theta)
 
     def box(self, k: int, theta: float) -> Box:
         """Contact box of palm k at angle theta (see the module docstring)."""
@@ -78,11 +84,38 @@ def support_words(point: float, support: tuple[float, float]) -> str:
     return f"passes the {edge} edge of the supported base by {beyond:.3g} m ({place})"
 
 
-def build_row(scene, design, stages: int, offsets=()) -> Row:
+@dataclass(frozen=True)
+class Parts:
+    """Every manipulator's own link length (m), back stop alpha (rad) and palm mass (kg), as
+    built: one value per manipulator of the row, or () for the design's everywhere. (The place
+    for further per-part quantities.)"""
+
+    link_length: tuple[float, ...] = ()
+    back_stop: tuple[float, ...] = ()
+    palm_mass: tuple[float, ...] = ()
+
+    def check(self, stages: int) -> None:
+        for name in ("link_length", "back_stop", "palm_mass"):
+            values = getattr(self, name)
+            if values and len(values) != stages:
+                raise SimulationRefused(f"{len(values)} values of {name} for a row of {stages} "
+                                        "manipulators")
+            limit = 0.5 * math.pi if name == "back_stop" else math.inf
+            low = -limit if name == "back_stop" else 0.0
+            bad = [i + 1 for i, v in enumerate(values)
+                   if not (low < v < limit if name == "back_stop" else 0.0 < v < limit)]
+            if bad:
+                raise SimulationRefused(f"manipulator {bad[0]}'s {name} = {values[bad[0] - 1]:g}"
+                                        " cannot be built (a back stop within +-pi/2, a "
+                                        "positive link length and palm mass)")
+
+
+def build_row(scene, design, stages: int, offsets=(), parts: Parts | None = None) -> Row:
     """Pivots of `stages` manipulators: pivot_k = pivot_1 + (k-1) (pitch_x, -pitch_y) + offset_k.
 
     offsets: objects with .manipulator (1-based), .dx, .dy (m, y up). Offsets of manipulators
-    beyond the row are an error (they would silently do nothing)."""
+    beyond the row are an error (they would silently do nothing). parts: every manipulator's
+    own link length, back stop and palm mass (default: the design's)."""
     if stages < 1:
         raise SimulationRefused(f"stages must be at least 1, not {stages}")
     l = design.link_length
@@ -100,10 +133,15 @@ def build_row(scene, design, stages: int, offsets=()) -> Row:
          design.first_pivot_y - i * pitch_y + shift[i][1])
         for i in range(stages)
     )
+    parts = parts or Parts()
+    parts.check(stages)
     return Row(pivots=pivots, link_length=l, alpha=design.alpha, beta=design.beta,
                front_stop=scene.palm.front_stop, palm_width=scene.palm.width,
                palm_thickness=scene.palm.thickness, body_width=scene.body.width,
-               body_height=scene.body.height)
+               body_height=scene.body.height,
+               link_lengths=tuple(map(float, parts.link_length)) or (l,) * stages,
+               back_stops=tuple(map(float, parts.back_stop)) or (design.alpha,) * stages,
+               palm_masses=tuple(map(float, parts.palm_mass)))
 
 
 @dataclass(frozen=True)

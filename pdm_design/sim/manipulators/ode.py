@@ -61,9 +61,10 @@ class OdePhases:
     # ------------------------------------------------------------ sliding carry
     def _sliding(self, t0, k, theta0, omega0, s0, sd0):
         """Object sliding on palm k, state (th, th', s, s'): phases.slide_accelerations."""
-        base = ph.SlideParams(self.m, self.M, self.mu, self.g, self.l, 1.0)
+        M, l = self.Ms[k], self.ls[k]
+        base = ph.SlideParams(self.m, M, self.mu, self.g, l, 1.0)
         sgn = math.copysign(1.0, sd0) if sd0 != 0.0 else ph.slide_direction(theta0, omega0, base)
-        p = ph.SlideParams(self.m, self.M, self.mu, self.g, self.l, sgn)
+        p = ph.SlideParams(self.m, M, self.mu, self.g, l, sgn)
         if sd0 == 0.0:
             # A slip from relative rest starts with zero relative acceleration (tan th = mu), so
             # integration noise would cross s' = 0 at once. Start strictly inside the slip-stop
@@ -79,7 +80,7 @@ class OdePhases:
         xb = ph.slide_force_point(sgn, self.mu, self.h)
 
         def point(z):
-            return px + self.l * math.sin(z[0]) + z[2], py + self.l * math.cos(z[0])
+            return px + l * math.sin(z[0]) + z[2], py + l * math.cos(z[0])
 
         physics = [
             (lambda t, z: sgn * z[3], "slip_stop"),
@@ -120,9 +121,9 @@ class OdePhases:
             return self._fail(te, "blocked", k + 1, state,
                               f"the sliding object hits the side of palm {j + 1}")
         if kind == "slip_stop":
-            if abs(math.tan(theta)) <= self.mu and self.g * math.cos(theta) > self.l * omega ** 2:
+            if abs(math.tan(theta)) <= self.mu and self.g * math.cos(theta) > l * omega ** 2:
                 self._log(te, "stick", k + 1, state, state, f"sticks again at th = {theta:.6g}")
-                return lambda: self._stuck(te, k, theta, self.l * omega, s)
+                return lambda: self._stuck(te, k, theta, l * omega, s)
             self._log(te, "slip", k + 1, state, state, "the slip reverses")
             return lambda: self._sliding(te, k, theta, omega, s, 0.0)
         if kind == "jam":
@@ -146,12 +147,12 @@ class OdePhases:
     def _jam(self, t, k, theta, omega, s, sd):
         """The sliding contact cannot continue (M + m c sin th <= 0): a tangential impact."""
         st = self._on_palm(k, theta, omega, s, sd)
-        imp = ph.impact(st["vx"], st["vy"], self.l * omega, theta, m=self.m, mass_ratio=self.q,
-                        mu=self.mu, eps=0.0)
+        imp = ph.impact(st["vx"], st["vy"], self.ls[k] * omega, theta, m=self.m,
+                        mass_ratio=self.qs[k], mu=self.mu, eps=0.0)
         if imp.jam or not imp.stick or imp.w <= 0.0:
             return self._fail(t, "impact_jam", k + 1, st,
                               "the sliding contact jams and no sticking impulse resolves it")
-        self._log(t, "jam", k + 1, st, self._on_palm(k, theta, imp.w / self.l, s),
+        self._log(t, "jam", k + 1, st, self._on_palm(k, theta, imp.w / self.ls[k], s),
                   "tangential impact: the contact sticks")
         return lambda: self._stuck(t, k, theta, imp.w, s)
 
@@ -159,7 +160,7 @@ class OdePhases:
     def _bouncing(self, t0, k, x, y, vx, vy, theta, omega, leaving=True):
         """Object in flight above its palm k, which swings freely (l th'' = g sin th); leaving:
         the object leaves the palm's top face at t0 (False: the phase goes on after a split)."""
-        g, l = self.g, self.l
+        g, l = self.g, self.ls[k]
 
         def rhs(t, z):
             return [z[2], z[3], 0.0, -g, z[5], g * math.sin(z[4]) / l]
@@ -167,7 +168,7 @@ class OdePhases:
         def point(z):
             return z[0], z[1]
 
-        physics = [(lambda t, z: z[4] + self.alpha, "back_stop"),
+        physics = [(lambda t, z: z[4] + self.alphas[k], "back_stop"),
                    (lambda t, z: self.fs - z[4], "front_stop"),
                    (lambda t, z: z[1] - self.y_floor, "fell_clear")]
         faces = [(f, d, v, (kind, k))
@@ -195,7 +196,7 @@ class OdePhases:
         if kind is None:
             return self._fail(te, "timeout", k + 1, state, "no event while bouncing")
         if kind in ("back_stop", "front_stop"):
-            stop = -self.alpha if kind == "back_stop" else self.fs
+            stop = -self.alphas[k] if kind == "back_stop" else self.fs
             self.rest_angle[k], self.rest_since[k] = stop, te
             self._log(te, kind, k + 1, state, dict(state, theta=stop, omega=0.0),
                       f"palm {k + 1} stopped while the object is in the air")

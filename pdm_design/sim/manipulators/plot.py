@@ -73,7 +73,7 @@ def _draw_mechanisms(ax, row, result):
         ax.plot(px, py, "k^", ms=6)
         ax.annotate(str(k + 1), (px, py), textcoords="offset points", xytext=(4, -10),
                     fontsize=7)
-        _draw_palm(ax, row, k, -row.alpha, color="0.8")
+        _draw_palm(ax, row, k, -row.back_stops[k], color="0.8")
     w, h = row.body_width, row.body_height
     for e in result.events:
         if not (e.kind in SNAPSHOT_KINDS or e.failure):

@@ -28,8 +28,8 @@ EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chatteri
 class Run(OdePhases, LiftOffPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
-    def __init__(self, scene, design, stages, offsets, acc, record):
-        self.row = build_row(scene, design, stages, offsets)
+    def __init__(self, scene, design, stages, offsets, acc, record, parts=None):
+        self.row = build_row(scene, design, stages, offsets, parts)
         self.acc, self.record = acc, record
         self.g, self.l = scene.gravity, design.link_length
         self.m = scene.body.mass
@@ -40,14 +40,19 @@ class Run(OdePhases, LiftOffPhases):
         self.h = scene.body.height
         self.n = stages
         self.initial = scene.initial
-        self.rest_angle = [-self.alpha] * stages
+        # every manipulator's own link, back stop and palm mass (geometry.Parts; nominal: all
+        # the design's); self.l, self.alpha and self.M stay the design's, for the run's scales
+        self.ls, self.alphas = self.row.link_lengths, self.row.back_stops
+        self.Ms = self.row.palm_masses or (self.M,) * stages
+        self.qs = tuple(self.m / M for M in self.Ms)
+        self.rest_angle = [-a for a in self.alphas]
         self.rest_since = [-math.inf] * stages
         self.swinging: list[int] = []  # released palms, some perhaps at rest by now
         self.y_floor = min(p[1] for p in self.row.pivots) - FALL_DEPTH * self.l
         self._pivot_order = sorted(range(stages), key=lambda j: self.row.pivots[j][0])
         self._pivot_x = [self.row.pivots[j][0] for j in self._pivot_order]
         self._boxes: dict = {}
-        self._reach = 2.0 * self.l + 1.5 * self.row.palm_width + self.row.body_width
+        self._reach = 2.0 * max(self.ls) + 1.5 * self.row.palm_width + self.row.body_width
         self.events: list[Event] = []
         self.palm_events: list[Event] = []
         self.stages: list[dict] = []
@@ -131,8 +136,8 @@ class Run(OdePhases, LiftOffPhases):
     def _release(self, k, t, theta, w):
         """Palm k, now empty, swings on alone from (theta, w) to one of its stops; it is an
         obstacle again once it is there."""
-        dt, stop, speed = ph.free_palm_arrival(theta, w, gravity=self.g, link_length=self.l,
-                                               back_stop=-self.alpha, front_stop=self.fs)
+        dt, stop, speed = ph.free_palm_arrival(theta, w, gravity=self.g, link_length=self.ls[k],
+                                               back_stop=-self.alphas[k], front_stop=self.fs)
         self.rest_angle[k], self.rest_since[k] = stop, t + dt
         if len(self.swinging) > 2:  # palms at rest by now are dropped now and then
             self.swinging = [j for j in self.swinging if self.rest_since[j] > t]
@@ -140,7 +145,7 @@ class Run(OdePhases, LiftOffPhases):
         if math.isfinite(dt):
             kind = "front_stop" if stop == self.fs else "back_stop"
             self.palm_events.append(Event(
-                float(t + dt), kind, k + 1, {"theta": float(stop), "omega": speed / self.l},
+                float(t + dt), kind, k + 1, {"theta": float(stop), "omega": speed / self.ls[k]},
                 {"theta": float(stop), "omega": 0.0}, f"empty palm {k + 1} stopped"))
 
     def _arrivals(self, t0, t1, carrier):
@@ -156,7 +161,7 @@ class Run(OdePhases, LiftOffPhases):
                    default=None)
 
     def _on_palm(self, k, theta, omega, s, sd=0.0):
-        x, y, vx, vy = ph.object_state_on_palm(self.row.pivots[k], theta, omega, s, sd, self.l)
+        x, y, vx, vy = ph.object_state_on_palm(self.row.pivots[k], theta, omega, s, sd, self.ls[k])
         return {"x": x, "y": y, "vx": vx, "vy": vy, "theta": theta, "omega": omega, "offset": s}
 
     def _stage(self, k):
@@ -196,13 +201,13 @@ class Run(OdePhases, LiftOffPhases):
             self._rec(ts, x, y, vx, vy, np.nan, 0)
 
     # ------------------------------------------------------------ impacts
-    def _resolve(self, vx, vy, w, theta, eps, at_rest):
+    def _resolve(self, j, vx, vy, w, theta, eps, at_rest):
         """Impact on palm at theta; a palm at rest on a stop that the impulse pushes into the stop
         is held there (the stop takes the impulse: infinite effective mass)."""
-        imp = ph.impact(vx, vy, w, theta, m=self.m, mass_ratio=self.q, mu=self.mu, eps=eps)
+        imp = ph.impact(vx, vy, w, theta, m=self.m, mass_ratio=self.qs[j], mu=self.mu, eps=eps)
         if imp.jam or not at_rest:
             return imp, False
-        if (theta <= -self.alpha and imp.w < 0.0) or (theta >= self.fs and imp.w > 0.0):
+        if (theta <= -self.alphas[j] and imp.w < 0.0) or (theta >= self.fs and imp.w > 0.0):
             return ph.impact(vx, vy, 0.0, theta, m=self.m, inv_M=0.0, mu=self.mu, eps=eps), True
         return imp, imp.w == 0.0
 
@@ -211,18 +216,18 @@ class Run(OdePhases, LiftOffPhases):
 
         log_as: "landing" (from a flight), "handover" (from the previous palm), "rebound" (onto
         the palm it bounced off), "stop" (its palm has just been stopped by the front stop)."""
-        imp, held = self._resolve(vx, vy, w, theta, self.eps, at_rest)
+        imp, held = self._resolve(j, vx, vy, w, theta, self.eps, at_rest)
         gn = imp.vy + imp.w * math.sin(theta)
         bounce = self.eps > 0.0 and not imp.jam and gn > self.zeno_speed
         if self.eps > 0.0 and not imp.jam and not bounce:  # too slow a bounce: contact persists
-            imp, held = self._resolve(vx, vy, w, theta, 0.0, at_rest)
+            imp, held = self._resolve(j, vx, vy, w, theta, 0.0, at_rest)
         if imp.jam:
             return self._fail(t, "impact_jam", j + 1, before,
                               f"landing on palm {j + 1}: no consistent sliding impact")
         cx, y = self.row.palm_top(j, theta)  # the contact is on the palm's top by definition
         offset = x - cx
         after = {"x": x, "y": y, "vx": imp.vx, "vy": imp.vy, "theta": theta,
-                 "omega": imp.w / self.l, "offset": offset, "palm": j + 1}
+                 "omega": imp.w / self.ls[j], "offset": offset, "palm": j + 1}
         rec = self._stage(j)
         if log_as == "handover" or (log_as == "landing" and rec is None):
             rec = self._new_stage(j, t, offset, vx, vy, imp)
@@ -256,7 +261,7 @@ class Run(OdePhases, LiftOffPhases):
                         return self._settle_in_place(t, j, theta, imp.vy, hops, after)
                 return lambda: self._flight(t, x, y, imp.vx, imp.vy, stage=j + 1)
             self.rest_since[j] = math.inf
-            return lambda: self._bouncing(t, j, x, y, imp.vx, imp.vy, theta, imp.w / self.l)
+            return lambda: self._bouncing(t, j, x, y, imp.vx, imp.vy, theta, imp.w / self.ls[j])
         if held:
             self.rest_angle[j], self.rest_since[j] = theta, t
             # a sticking impact leaves the object at rest on the held palm: exactly 0, not the
@@ -269,7 +274,7 @@ class Run(OdePhases, LiftOffPhases):
         if imp.stick:
             return lambda: self._stuck(t, j, theta, imp.w, offset)
         sd = imp.vx - imp.w * math.cos(theta)
-        return lambda: self._sliding(t, j, theta, imp.w / self.l, offset, sd)
+        return lambda: self._sliding(t, j, theta, imp.w / self.ls[j], offset, sd)
 
     def _bouncing_in_place(self, j, x, y, vx, t):
         """True when the object has just bounced straight up off palm j, held by a stop, at the
@@ -293,7 +298,7 @@ class Run(OdePhases, LiftOffPhases):
         vy, eps vy, eps^2 vy, ... until a hop would leave slower than the Zeno speed (as the
         event loop would do hop by hop, in 2 vy (1 - eps^n) / (g (1 - eps)) for n hops); then
         the object rests on the held palm. With restitution 1 it hops forever: refused."""
-        where = "back" if theta <= -self.alpha else "front"
+        where = "back" if theta <= -self.alphas[j] else "front"
         kind = "stall" if where == "back" else "stranded"
         if math.isinf(hops):
             return self._fail(t, kind, j + 1, state,
@@ -312,7 +317,7 @@ class Run(OdePhases, LiftOffPhases):
 
     def _new_stage(self, j, t, offset, vx, vy, imp):
         loss = (0.5 * self.m * (vx * vx + vy * vy - imp.vx ** 2 - imp.vy ** 2)
-                - 0.5 * self.M * imp.w ** 2)
+                - 0.5 * self.Ms[j] * imp.w ** 2)
         rec = {"manipulator": j + 1, "landing_time": t, "landing_offset": offset,
                "landing_vx": vx, "landing_vy": vy, "landing_speed": imp.w,
                "landing_stick": bool(imp.stick), "impact_loss": loss,
@@ -329,14 +334,14 @@ class Run(OdePhases, LiftOffPhases):
         otherwise the object decelerates at mu g and stops on the palm (stall at the back stop,
         stranded at the front stop), or reaches the palm's end first (tip over the edge when
         mu > 0, slid_off when frictionless)."""
-        at_back = theta <= -self.alpha
+        at_back = theta <= -self.alphas[j]
         stuck_kind = "stall" if at_back else "stranded"
         where = f"palm {j + 1} held by its {'back' if at_back else 'front'} stop"
         if sd == 0.0:
             return self._fail(t, stuck_kind, j + 1, state, f"the object rests on {where}")
         sgn = math.copysign(1.0, sd)
         if at_back:
-            p = ph.SlideParams(self.m, self.M, self.mu, self.g, self.l, sgn)
+            p = ph.SlideParams(self.m, self.Ms[j], self.mu, self.g, self.ls[j], sgn)
             if ph.slide_accelerations(theta, 0.0, p)[0] > 0.0:  # friction drags the palm along
                 self.rest_since[j] = math.inf
                 return lambda: self._sliding(t, j, theta, 0.0, s, sd)
@@ -362,9 +367,9 @@ class Run(OdePhases, LiftOffPhases):
         vx, vy = before["vx"], before["vy"]
         if rec is not None:
             rec.update(handover_time=t, handover_speed=math.hypot(vx, vy), handover_angle=theta,
-                       handover_vx=vx, handover_vy=vy, release_speed=self.l * omega)
+                       handover_vx=vx, handover_vy=vy, release_speed=self.ls[k] * omega)
         self.passed = max(self.passed, k + 1)
-        self._release(k, t, theta, self.l * omega)
+        self._release(k, t, theta, self.ls[k] * omega)
         return self._impact(t, j, self.rest_angle[j], 0.0, before["x"], before["y"], vx, vy,
                             log_as="handover", stage=k + 1, before=before, at_rest=True)
 
@@ -392,7 +397,7 @@ class Run(OdePhases, LiftOffPhases):
         whose crossing is closed form (phases.stuck_crossings), contacts are closed-form
         roots of the arc (geometry), and the time of an angle is the closed-form
         integral of l dth / v(th) (phases.swing_time)."""
-        g, l, tol = self.g, self.l, self.acc.event_tol
+        g, l, tol = self.g, self.ls[k], self.acc.event_tol
         if v0 <= 0.0:
             return self._fail(t0, "stall", k + 1, self._on_palm(k, theta0, v0 / l, s),
                               "the palm is not moving forward")
@@ -465,7 +470,7 @@ class Run(OdePhases, LiftOffPhases):
     def _rec_stuck(self, t0, k, theta0, v0, s, theta_e, turn):
         if not self.record or theta_e <= theta0:
             return
-        g, l = self.g, self.l
+        g, l = self.g, self.ls[k]
         ths = np.linspace(theta0, theta_e, 40)
         t = t0
         for i, th in enumerate(ths):

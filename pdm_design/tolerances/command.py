@@ -1,0 +1,198 @@
+"""`pdm-design yield`: the spec's design, its tolerances, the Monte Carlo yield, and its
+report (text, JSON, plots). Also the `simulate --build SEED:INDEX` reproduction of one build."""
+
+from __future__ import annotations
+
+import json
+
+from ..errors import PdmError, SpecError
+from .model import QUANTITIES
+from .yield_ import YieldResult, yield_of
+
+SHOWN_IN_TEXT = 5  # failing builds whose simulate command the text report prints
+
+
+def spec_tolerances(spec, source: str):
+    """The spec's tolerances, each with a value (else SpecError, exit 2)."""
+    if not spec.tolerances:
+        raise SpecError(source, "tolerances", "a [tolerances] table with at least one quantity "
+                        "and its value (docs/tolerances.md)", "none")
+    for tol in spec.tolerances:
+        if tol.value is None:
+            raise SpecError(source, f"tolerances.{tol.quantity}.value", "a value (+-, SI) for "
+                            "a yield: allocate = true asks the optimizer for one", "allocate = true")
+    return spec.tolerances
+
+
+def design_point(spec, source: str):
+    """The fixed design, or the optimizer's (exit 1 in words when it finds none)."""
+    if not spec.free_variables:
+        return spec.design_at()
+    from ..api import design
+
+    found = design(spec, verify=False)
+    if not found.status.is_success:
+        raise PdmError(f"{source}: no design to build: the optimizer found none that meets "
+                       f"every requirement (status {found.status.value})")
+    return spec.design_at(found.analysis.design)
+
+
+def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accuracy=None,
+              scales=None) -> YieldResult:
+    """The yield of the spec's design (the Python API of `pdm-design yield`)."""
+    from ..accuracy import accuracy as resolve
+
+    tolerances = spec_tolerances(spec, source)
+    _check_kind(spec)
+    point = design_point(spec, source)
+    builds = builds or tolerances.builds
+    stages = stages or spec.verification.stages
+    seed = tolerances.seed if seed is None else seed
+    acc = resolve(accuracy or spec.verification.accuracy)
+    kwargs = {} if scales is None else {"scales": scales}
+    return yield_of(spec.scene, point, tolerances, builds=builds, stages=stages, seed=seed,
+                    confirm=tolerances.confirm, accuracy=acc, source=source, **kwargs)
+
+
+def unmet_min_yield(outcome) -> list[str]:
+    """`check`'s [expect] min_yield: the 95 % interval's lower end must reach it (the builds,
+    seed and stages are the spec's, so the verdict is reproducible)."""
+    spec, wanted = outcome.spec, outcome.spec.expect.min_yield
+    if not outcome.status.is_success:
+        return [f"expected a yield of at least {_pct(wanted)}, got none (no design: status "
+                f"{outcome.status.value})"]
+    tolerances = spec_tolerances(spec, spec.source)
+    _check_kind(spec)
+    point = spec.design_at(outcome.analysis.design)
+    r = yield_of(spec.scene, point, tolerances, builds=tolerances.builds,
+                 stages=spec.verification.stages, seed=tolerances.seed,
+                 confirm=tolerances.confirm, accuracy=outcome.accuracy or "default",
+                 source=spec.source, scales=())
+    if r.ci_low >= wanted:
+        return []
+    return [f"yield {_pct(r.estimate)} (95 % interval from {_pct(r.ci_low)}) over "
+            f"{r.stages} stages is not surely at least the expected {_pct(wanted)}"
+            + (f"; failures: {', '.join(f'{k} {v}' for k, v in r.failures.items())}"
+               if r.failures else f"; more builds than {r.builds} narrow the interval")]
+
+
+def _check_kind(spec) -> None:
+    if spec.kind == "manipulators":
+        return
+    try:
+        from . import stairs  # noqa: F401
+    except ImportError:
+        raise PdmError("the yield of a stairs spec is not available in this installation: "
+                       "its closed-form map (pdm_design.tolerances.stairs) is missing") from None
+
+
+def simulate_build_of_spec(spec, source, design, build: str, stages, *, accuracy,
+                           record_trajectory=False):
+    """`simulate --build SEED:INDEX`: build INDEX of a yield run with SEED and `stages`."""
+    from ..accuracy import accuracy as resolve
+    from .yield_ import simulate_one
+
+    seed, index = parse_build(build)
+    accuracy = resolve(accuracy or spec.verification.accuracy)
+    tolerances = spec_tolerances(spec, source)
+    _check_kind(spec)
+    return simulate_one(spec.scene, design, tolerances, seed, index, stages,
+                        accuracy=accuracy, record_trajectory=record_trajectory)
+
+
+def parse_build(text: str) -> tuple[int, int]:
+    try:
+        seed, index = (int(v) for v in text.split(":"))
+        if seed < 0 or index < 0:
+            raise ValueError
+    except ValueError:
+        raise SpecError("command line", "--build", "SEED:INDEX, two integers >= 0 (as "
+                        "`pdm-design yield` prints them), e.g. 0:17", repr(text)) from None
+    return seed, index
+
+
+# ------------------------------------------------------------------------------ output
+
+def yield_json(result: YieldResult) -> str:
+    return json.dumps(result.to_json(), indent=2)
+
+
+def _pct(x: float) -> str:
+    return f"{100.0 * x:.2f} %"
+
+
+def yield_text(result: YieldResult, name: str) -> str:
+    r = result
+    lines = [f"{name} ({r.kind}): {r.builds} builds of {r.stages} stages, seed {r.seed}",
+             f"yield: {_pct(r.estimate)} pass all {r.stages} stages "
+             f"(95 % interval {_pct(r.ci_low)} to {_pct(r.ci_high)})",
+             f"mean stages before failure: {r.mean_stages_before_failure:.4g} of {r.stages}"]
+    marks = sorted({1, max(1, r.stages // 4), max(1, r.stages // 2), r.stages})
+    lines.append("still going after stage " + ", ".join(
+        f"{k}: {_pct(r.survival[k - 1])}" for k in marks))
+    if r.failures:
+        lines.append("failures: " + ", ".join(f"{k} {v}" for k, v in r.failures.items()))
+    lines.append("tolerances (build units):")
+    for t in r.tolerances:
+        q = QUANTITIES[r.kind][t["quantity"]]
+        size = f"+-{t['value'] * q.build_factor:.4g} {q.build_unit}"
+        lines.append(f"  {t['quantity']:<13} {size:<16} {t['applies_to']:<5} {t['distribution']}")
+    c = r.confirmed
+    lines.append(f"event simulator: {c['agreed']} of {c['random']} random builds agree with "
+                 f"the closed forms; {c['left_closed_form']} builds outside the closed forms "
+                 "simulated")
+    if r.sensitivity:
+        lines.append("sensitivity (Sobol total index): " + ", ".join(
+            f"{s['quantity']} {s['index']:.3g}" for s in r.sensitivity))
+    elif r.sensitivity_note:
+        lines.append(f"sensitivity: {r.sensitivity_note}")
+    if r.failing:
+        lines.append("reproduce a failing build:")
+        lines += [f"  {f['command']}   # {f['failure']} after {f['stages_passed']} stages"
+                  for f in r.failing[:SHOWN_IN_TEXT]]
+    return "\n".join(lines) + "\n"
+
+
+def yield_figures(result: YieldResult) -> dict[str, bytes]:
+    """survival.png (fraction still going after each stage, with its 95 % band) and
+    yield_scale.png (yield against a common scale of every tolerance)."""
+    from matplotlib.figure import Figure
+
+    from ..report.render import render_figure
+
+    r = result
+    out = {}
+    fig = Figure(figsize=(6.0, 3.6), layout="constrained")
+    ax = fig.subplots()
+    stages = range(1, r.stages + 1)
+    ax.fill_between(stages, r.survival_low, r.survival_high, color="C0", alpha=0.25,
+                    label="95 % interval", step="mid")
+    ax.step(stages, r.survival, where="mid", color="C0", label="still going")
+    ax.set(xlabel="stage", ylabel="fraction of builds still going",
+           title=f"survival of {r.builds} builds")
+    ax.legend(loc="lower left")
+    out["survival.png"] = render_figure(fig, "png")
+    if r.scale_curve:
+        fig = Figure(figsize=(6.0, 3.6), layout="constrained")
+        ax = fig.subplots()
+        xs = [s["scale"] for s in r.scale_curve]
+        ys = [s["estimate"] for s in r.scale_curve]
+        err = [[max(0.0, y - s["ci_low"]) for y, s in zip(ys, r.scale_curve)],
+               [max(0.0, s["ci_high"] - y) for y, s in zip(ys, r.scale_curve)]]
+        ax.errorbar(xs, ys, yerr=err, marker="o", capsize=3)
+        ax.set(xlabel="tolerance scale (1 = the spec's)", ylabel=f"yield over {r.stages} stages",
+               title=f"yield against tolerance scale ({r.scale_curve[0]['builds']} builds a point)")
+        out["yield_scale.png"] = render_figure(fig, "png")
+    return out
+
+
+def write_outputs(result: YieldResult, folder: str) -> list[str]:
+    """yield.json and the figures in `folder`, whole or not at all."""
+    from pathlib import Path
+
+    from ..io import write_all
+
+    files = {Path(folder) / "yield.json": yield_json(result) + "\n"}
+    files.update({Path(folder) / k: v for k, v in yield_figures(result).items()})
+    write_all(files)
+    return [str(p) for p in files]

@@ -1,0 +1,327 @@
+"""Many builds of a manipulators row at once: the closed-form stage map with every part's own
+pivot, link length, back stop and palm mass, and the lot's friction, object and feed.
+
+Build n, palm k (0-based) has pivot P_k (nominal pitch plus its deviations), link l_k, back stop
+a_k (it rests at -a_k) and palm mass M_k; the lot has friction mu, object mass m and width w,
+and the feed x and speed. Stage by stage, with physics.manipulators on numpy arrays (the
+per-stage logic of formulation/manipulator_offsets.py, extended to every part's own values):
+
+  first landing   palm 1's top at C = P_1 + l_1 (-sin a_1, cos a_1); fall H = y0 - C_y,
+                  Q = sqrt(vy0^2 + 2 g H), offset o = x0 + vx0 (vy0 + Q) / g - C_x
+  landing         u = m/(m+M_k) (V . t(-a_k)), impulse (px, py) = landing_impulse: sticks iff
+                  |px| <= mu py, no tip iff -(h/2) px/py lies in the support
+                  [max(-w/2, -W/2 - o), min(w/2, W/2 - o)]
+  carry on palm k over the top iff u^2 >= 2 g l_k (1 - cos a_k); at both ends of the carry
+                  (the guards are monotone or convex in the angle between them): no lift-off
+                  (v^2 < g l cos th), no slip (|tan th| <= mu), no tip ((h/2) tan th in the
+                  support); palms parked behind stay clear (physics.parked_palm_clearance)
+  handover        palm k+1's top at C' = P_{k+1} + l_{k+1} (-sin a_{k+1}, cos a_{k+1}) is met
+                  where the object's base comes down to it: cos th = (C'_y - P_k,y) / l_k,
+                  speed v^2 = u^2 + 2 g l_k (cos a_k - cos th) along t(th), new offset
+                  o' = P_k,x + o + l_k sin th - C'_x; it lands iff |o'| < (w + W)/2
+  the last palm   carries the object to the design's beta: the run is complete.
+
+These are the simulator's own judgements in the regime it follows in closed form (plastic
+landings that stick, stuck carries; with a palm restitution > 0 no build is in it). A build that leaves it (a slip, a lift-off, a landing
+that drives the palm into its stop, a miss, a palm in the way) is marked closed_form = False
+with the failure the closed forms expect; the event simulator has the last word on it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..physics import manipulators as phys
+from .model import BuildOutcome
+
+PARKED_CAP = 16  # palms parked behind the carrying one checked, at most
+
+
+def run_builds(scene, design, deviations: dict, stages: int) -> BuildOutcome:
+    """Outcome of every build (deviations: tolerances.draw's arrays, SI, added to nominal)."""
+    with np.errstate(all="ignore"):
+        return _Builds(scene, design, deviations, stages).run()
+
+
+def build_values(scene, design, deviations: dict, stages: int, count: int) -> dict:
+    """Every part's and the lot's values of `count` builds: pivot_x, pivot_y, link_length,
+    back_stop, palm_mass as (count, stages) arrays; friction, object_mass, object_width,
+    feed_x, feed_vx, feed_vy as (count,) arrays."""
+    def each(name, nominal):
+        dev = deviations.get(name)
+        dev = 0.0 if dev is None else (dev if np.ndim(dev) == 2 else np.asarray(dev)[:, None])
+        return np.broadcast_to(np.asarray(nominal + dev, dtype=float), (count, stages))
+
+    def lot(name, nominal):
+        return np.broadcast_to(np.asarray(nominal + deviations.get(name, 0.0), dtype=float),
+                               (count,))
+
+    l, a = design.link_length, design.alpha
+    pitch_x, pitch_y = (float(p) for p in phys.pitch(a, design.beta, l))
+    k = np.arange(stages)
+    (x0, _), (vx, vy) = scene.initial.position, scene.initial.velocity
+    speed = math.hypot(vx, vy)
+    direction = (vx / speed, vy / speed) if speed > 0.0 else (1.0, 0.0)
+    feed_speed = lot("feed_speed", speed)
+    return {
+        "pivot_x": each("pivot_x", design.first_pivot_x + k * pitch_x),
+        "pivot_y": each("pivot_y", design.first_pivot_y - k * pitch_y),
+        "link_length": each("link_length", l),
+        "back_stop": each("back_stop", a),
+        "palm_mass": each("palm_mass", scene.body.mass / design.mass_ratio),
+        "friction": lot("friction", scene.palm.friction),
+        "object_mass": lot("object_mass", scene.body.mass),
+        "object_width": lot("object_width", scene.body.width),
+        "feed_x": lot("feed_x", x0),
+        "feed_vx": feed_speed * direction[0],
+        "feed_vy": feed_speed * direction[1],
+    }
+
+
+def _margin(capacity, demand):
+    """analysis.result.margin on arrays: (capacity - demand) / max(capacity, demand)."""
+    scale = np.maximum(capacity, demand)
+    return np.where(scale > 0.0, (capacity - demand) / np.where(scale > 0.0, scale, 1.0),
+                    np.where(capacity == demand, 0.0, -1.0))
+
+
+class _Builds:
+    """The map's bookkeeping: one array entry per build, a build stops at its first failure."""
+
+    def __init__(self, scene, design, deviations, stages):
+        self.n = n = _count(deviations)
+        self.stages, self.g = stages, scene.gravity
+        # every part's values by stage (stages, builds): a stage's values contiguous
+        self.v = {key: np.ascontiguousarray(x.T) if x.ndim == 2 else x
+                  for key, x in build_values(scene, design, deviations, stages, n).items()}
+        self.beta, self.fs = design.beta, scene.palm.front_stop
+        self.W, self.h, self.T = scene.palm.width, scene.body.height, scene.palm.thickness
+        self.y0 = scene.initial.position[1]
+        self.restitution = scene.palm.restitution
+        self.alive = np.ones(n, bool)
+        self.passed = np.zeros(n, int)
+        self.code = np.zeros(n, np.int16)  # index in self.names of the failure
+        self.names = [""]
+        self.closed = np.ones(n, bool)
+        self.worst = np.full(n, np.inf)
+        self.parked = _parked_rows(scene, design, stages)
+
+    def run(self) -> BuildOutcome:
+        v = self.v
+        m, w, mu = v["object_mass"], v["object_width"], v["friction"]
+        self.half_w = 0.5 * w
+        self.invalid(v)
+        cx, cy = self.rest_top(0)
+        fall = self.y0 - cy
+        vx, vy0 = v["feed_vx"], v["feed_vy"]
+        self.group(0, [("blocked", fall / v["link_length"][0], False)])
+        q_fall = np.sqrt(vy0**2 + 2.0 * self.g * np.maximum(fall, 0.0))
+        offset = v["feed_x"] + vx * (vy0 + q_fall) / self.g - cx
+        self.meets(0, offset, w)
+        u = self.land(0, vx, -q_fall, offset, m, w, mu, passed=0)
+        for k in range(self.stages):
+            u, offset = self.carry(k, u, offset, w, mu)
+            if not self.alive.any():
+                break
+        self.passed[self.alive] = self.stages
+        if self.restitution > 0.0:  # the closed forms' landings are plastic: none applies
+            self.closed[self.code != self.names.index("invalid_part")
+                        if "invalid_part" in self.names else slice(None)] = False
+        failure = np.array(self.names, dtype=object)[self.code]
+        return BuildOutcome(self.passed, failure, np.where(np.isinf(self.worst), 1.0,
+                                                           self.worst), self.closed)
+
+    # -- bookkeeping ------------------------------------------------------------------------
+    def group(self, passed, checks):
+        """Conditions judged at one moment: [(failure name, margin, closed form?)]. A build
+        alive where one margin is < 0 (or not a number) fails with the first such name; it
+        stays in the closed-form regime only if every failing condition is closed form."""
+        failing_any = None
+        for kind, value, closed in checks:
+            np.fmin(self.worst, value, out=self.worst, where=self.alive)
+            bad = self.alive & ~(value >= 0.0)
+            if not bad.any():
+                continue
+            if failing_any is None:
+                failing_any, code = np.zeros(self.n, bool), np.zeros(self.n, np.int16)
+                open_any = np.zeros(self.n, bool)
+            code[bad & ~failing_any] = self._code(kind)
+            failing_any |= bad
+            open_any |= bad & (np.isnan(value) if closed else True)
+        if failing_any is None:
+            return
+        self.code[failing_any] = code[failing_any]
+        self.passed[failing_any] = passed
+        self.closed[failing_any] = ~open_any[failing_any]
+        self.alive &= ~failing_any
+
+    def _code(self, kind: str) -> int:
+        if kind not in self.names:
+            self.names.append(kind)
+        return self.names.index(kind)
+
+    def invalid(self, v):
+        """Parts no workshop can make (a link of length <= 0, a negative friction, ...): the
+        build fails before it starts, as the simulator would refuse it."""
+        bad = np.zeros(self.n, bool)
+        for key in ("link_length", "palm_mass"):
+            bad |= (v[key] <= 0.0).any(axis=0)
+        bad |= (np.abs(v["back_stop"]) >= 0.5 * math.pi).any(axis=0)
+        bad |= (v["object_mass"] <= 0.0) | (v["object_width"] <= 0.0) | (v["friction"] < 0.0)
+        self.group(0, [("invalid_part", np.where(bad, -1.0, 1.0), True)])
+
+    def rest_top(self, k):
+        """Top-surface centre of palm k resting on its back stop."""
+        v = self.v
+        return phys.palm_centre(v["pivot_x"][k], v["pivot_y"][k], -v["back_stop"][k],
+                                v["link_length"][k])
+
+    def support(self, offset, w):
+        return np.maximum(-0.5 * w, -0.5 * self.W - offset), np.minimum(0.5 * w,
+                                                                      0.5 * self.W - offset)
+
+    def tips(self, point, offset, w):
+        lo, hi = self.support(offset, w)
+        return [("tip", (hi - point) / self.half_w, True), ("tip", (point - lo) / self.half_w,
+                                                             True)]
+
+    def meets(self, passed, offset, w):
+        """The object comes down on a palm's top (else it passes it or hits its side)."""
+        self.group(passed, [("fell_clear", _margin(0.5 * (w + self.W), np.abs(offset)), False)])
+
+    # -- the phases -------------------------------------------------------------------------
+    def land(self, k, vx, vy, offset, m, w, mu, passed):
+        """Plastic landing on palm k resting at -a_k: the speed the palm moves off with."""
+        a, M = self.v["back_stop"][k], self.v["palm_mass"][k]
+        q = m / M
+        u = phys.landing_speed(vx, vy, a, q)
+        px, py = phys.landing_impulse(vx, vy, a, q)
+        self.group(passed, [("stall", u / np.hypot(vx, vy), False),
+                            ("slip", _margin(mu * py, np.abs(px)), False),
+                            *self.tips(-0.5 * self.h * px / py, offset, w)])
+        return u
+
+    def carry(self, k, u, offset, w, mu):
+        """Stuck carry on palm k from -a_k at speed u; then the handover (k + 1 < stages)."""
+        v, g = self.v, self.g
+        px, py = v["pivot_x"][k], v["pivot_y"][k]
+        l, a = v["link_length"][k], v["back_stop"][k]
+        self.group(k, [("lift_off", _margin(phys.lift_off_capacity(a, gravity=g,
+                                                                   link_length=l), u * u), False),
+                       *self.tips(phys.carry_force_point(-a, self.h), offset, w),
+                       ("slip", _margin(mu, phys.friction_demand(a)), False)])
+        need = np.where(a > 0.0, phys.top_speed_squared_needed(a, gravity=g, link_length=l), 0.0)
+        self.group(k, [("stall", _margin(u * u, need), True)])
+        last = k + 1 == self.stages
+        if last:
+            theta = np.full(self.n, self.beta)
+        else:
+            nx, ny = self.rest_top(k + 1)
+            start_y = py + l * np.cos(a)
+            self.group(k, [("blocked", (start_y - ny) / l, False)])
+            theta = np.arccos(np.clip((ny - py) / l, -1.0, 1.0))
+        self.group(k, [("stranded", _margin(self.fs, theta), False)])
+        v2 = phys.carry_speed_squared(u, a, theta, gravity=g, link_length=l)
+        self.group(k, [("lift_off", _margin(phys.lift_off_capacity(theta, gravity=g,
+                                                                   link_length=l), v2), False),
+                       *self.tips(phys.carry_force_point(theta, self.h), offset, w),
+                       ("slip", _margin(mu, phys.friction_demand(theta)), False),
+                       *self.parked_palms(k, theta, offset, w)])
+        if last:
+            return u, offset
+        speed = np.sqrt(np.maximum(v2, 0.0))
+        offset = px + offset + l * np.sin(theta) - nx
+        self.meets(k, offset, w)
+        vx, vy = speed * np.cos(theta), -speed * np.sin(theta)
+        u = self.land(k + 1, vx, vy, offset, v["object_mass"], w, mu, passed=k + 1)
+        return u, offset
+
+    def parked_palms(self, k, theta, offset, w):
+        """Clearance, in link lengths, to the palms 1 .. parked places behind palm k, each at
+        its front stop (taken as there from the handover on: conservative, so a failure here
+        is left to the simulator, which follows the timing). Computed in full only for the
+        builds where the palm is not behind the object from the start of the carry (the
+        clearance is at least that distance: physics.parked_palm_clearance's `behind`)."""
+        v = self.v
+        l, a = v["link_length"][k], v["back_stop"][k]
+        sf, cf = math.sin(self.fs), math.cos(self.fs)
+        reach = 0.5 * (w + self.W)
+        back = -l * np.sin(a)
+        out = []
+        for n in range(1, min(k, self.parked) + 1):
+            j = k - n
+            lj = v["link_length"][j]
+            # palm j's pivot and link as palm k's link and an effective pitch (exact)
+            pitch_x = v["pivot_x"][k] - v["pivot_x"][j] + (l - lj) * sf
+            behind = back - (l * sf - pitch_x + reach - offset)
+            near = np.flatnonzero(self.alive & (behind < 0.0))
+            gap = behind
+            if len(near):
+                pitch_y = v["pivot_y"][j] - v["pivot_y"][k] + (lj - l) * cf
+                gap = behind.copy()
+                gap[near] = phys.parked_palm_clearance(
+                    1, alpha=a[near], theta_end=theta[near], link_length=l[near],
+                    front_stop=self.fs, pitch_x=pitch_x[near], pitch_y=pitch_y[near],
+                    offset_lo=offset[near], offset_hi=offset[near],
+                    reach=np.broadcast_to(reach, (self.n,))[near], depth=self.T + self.h)
+            out.append(("blocked", gap / l, False))
+        return out
+
+
+def _count(deviations: dict) -> int:
+    sizes = {np.shape(d)[0] for d in deviations.values()}
+    if len(sizes) != 1:
+        raise ValueError("run_builds needs deviations of one number of builds (and at least "
+                         "one quantity)")
+    return sizes.pop()
+
+
+def _parked_rows(scene, design, stages) -> int:
+    """Palms behind the carrying one that can reach the carried object: those within
+    2 l + W + w of its pivot along the row (nominal pitch), at most PARKED_CAP."""
+    pitch_x = float(phys.pitch(design.alpha, design.beta, design.link_length)[0])
+    far = 2.0 * design.link_length + scene.palm.width + scene.body.width
+    reach = math.ceil(far / pitch_x) if pitch_x > 0.0 else PARKED_CAP
+    return max(0, min(stages - 1, reach, PARKED_CAP))
+
+
+def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="default",
+                   record_trajectory: bool = False):
+    """The event simulator on one build (deviations of one build: arrays of 1 row), every
+    part as drawn: pivots as offsets, link lengths, back stops and palm masses as
+    sim.manipulators.geometry.Parts, the lot's values in the scene. A build whose values no
+    scene can hold (a negative mass, say) is refused (sim.core.SimulationRefused)."""
+    import dataclasses
+
+    import pydantic
+
+    from ..sim.core import SimulationRefused
+    from ..sim.manipulators import simulate_manipulators
+    from ..sim.manipulators.geometry import Parts
+    from ..spec.model import ManipulatorOffset
+
+    v = build_values(scene, design, deviations, stages, 1)
+    dx = deviations.get("pivot_x", np.zeros((1, stages)))
+    dy = deviations.get("pivot_y", np.zeros((1, stages)))
+    dx, dy = (np.broadcast_to(np.reshape(d, (1, -1)), (1, stages))[0] for d in (dx, dy))
+    offsets = tuple(ManipulatorOffset(manipulator=k + 1, dx=float(dx[k]), dy=float(dy[k]))
+                    for k in range(stages) if dx[k] or dy[k])
+    parts = Parts(link_length=tuple(v["link_length"][0]), back_stop=tuple(v["back_stop"][0]),
+                  palm_mass=tuple(v["palm_mass"][0]))
+    try:
+        built = dataclasses.replace(
+            scene,
+            body=dataclasses.replace(scene.body, mass=float(v["object_mass"][0]),
+                                     width=float(v["object_width"][0])),
+            palm=dataclasses.replace(scene.palm, friction=float(v["friction"][0])),
+            initial=dataclasses.replace(
+                scene.initial, position=(float(v["feed_x"][0]), scene.initial.position[1]),
+                velocity=(float(v["feed_vx"][0]), float(v["feed_vy"][0]))))
+    except pydantic.ValidationError as error:
+        raise SimulationRefused(f"this build cannot be made: {error.errors()[0]['msg']}") \
+            from None
+    return simulate_manipulators(built, design, stages=stages, offsets=offsets,
+                                 accuracy=accuracy, record_trajectory=record_trajectory,
+                                 parts=parts)

@@ -1,0 +1,169 @@
+"""Typed tolerances: which quantities of a build vary, by how much, and how.
+
+A tolerance is a +- value in SI units (or a request to allocate one, with a relative weight:
+what is cheap to hold tight gets a small weight), applied to every part on its own ("each":
+every manipulator's own pivot, link, stop, palm; every step's own rise and tread) or once to
+the whole build ("lot": one friction for a material batch, one mass for an object batch).
+
+Distributions, for the statistical analysis:
+  normal   (the default) mean 0, sigma = t / 3, the mechanical engineering convention: 99.73 %
+           of parts within +-t; not truncated;
+  uniform  uniform in [-t, t].
+
+QUANTITIES lists, per scene kind, every quantity that may vary, with its SI unit, the unit a
+build sheet shows it in (and the factor from SI to that unit), and how it may apply. A new
+quantity (the link and pivot parameters of the built device, say) is one more entry, added at
+the end of STREAM_ORDER so that earlier quantities keep their random streams.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the spec loader reads this module: numpy is imported where arrays are made
+    import numpy as np
+
+DISTRIBUTIONS = ("normal", "uniform")
+APPLIES_TO = ("each", "lot")
+SIGMAS_PER_TOLERANCE = 3.0  # normal: sigma = t / 3
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One quantity that may vary: name, SI unit, build unit and the factor from SI to it,
+    the applies_to values it allows (the first is its default), and what it is."""
+
+    name: str
+    unit: str
+    build_unit: str
+    build_factor: float
+    applies: tuple[str, ...]
+    what: str
+
+    @property
+    def default_applies_to(self) -> str:
+        return self.applies[0]
+
+
+def _q(name, unit, build_unit, factor, applies, what):
+    return Quantity(name, unit, build_unit, factor, applies, what)
+
+
+_EACH_OR_LOT, _LOT = ("each", "lot"), ("lot",)
+QUANTITIES: dict[str, dict[str, Quantity]] = {
+    "manipulators": {q.name: q for q in (
+        _q("pivot_x", "m", "mm", 1e3, _EACH_OR_LOT, "a pivot's place along the row"),
+        _q("pivot_y", "m", "mm", 1e3, _EACH_OR_LOT, "a pivot's height (up)"),
+        _q("link_length", "m", "mm", 1e3, _EACH_OR_LOT, "a manipulator's link length"),
+        _q("back_stop", "rad", "deg", 57.29577951308232, _EACH_OR_LOT,
+           "a back stop's angle alpha (the palm rests at -alpha)"),
+        _q("palm_mass", "kg", "g", 1e3, _EACH_OR_LOT, "a palm's mass"),
+        _q("friction", "1", "1", 1.0, _LOT, "the object-palm friction coefficient"),
+        _q("object_mass", "kg", "g", 1e3, _LOT, "the object's mass"),
+        _q("object_width", "m", "mm", 1e3, _LOT, "the object's width along the row"),
+        _q("feed_x", "m", "mm", 1e3, _LOT, "where the object starts along the row"),
+        _q("feed_speed", "m/s", "mm/s", 1e3, _LOT,
+           "the object's initial speed (along its initial velocity; +x if that is 0)"),
+    )},
+    "stairs": {q.name: q for q in (
+        _q("rise", "m", "mm", 1e3, _EACH_OR_LOT, "a step's rise"),
+        _q("tread", "m", "mm", 1e3, _EACH_OR_LOT, "a step's tread"),
+        _q("restitution", "1", "1", 1.0, _LOT, "the ball's coefficient of restitution"),
+        _q("friction", "1", "1", 1.0, _LOT, "the ball-step friction coefficient"),
+        _q("launch_speed", "m/s", "mm/s", 1e3, _LOT, "the launch speed"),
+        _q("launch_x", "m", "mm", 1e3, _LOT, "where the ball is launched along the stairs"),
+    )},
+}
+
+# One random stream per quantity name, in this fixed order (tolerances.draw): append only.
+STREAM_ORDER = ("pivot_x", "pivot_y", "link_length", "back_stop", "palm_mass", "friction",
+                "object_mass", "object_width", "feed_x", "feed_speed", "rise", "tread",
+                "restitution", "launch_speed", "launch_x")
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """One toleranced quantity. value: +- t in SI units, or None when it is to be allocated
+    (then weight says how cheap it is to hold tight, relative to the others)."""
+
+    quantity: str
+    applies_to: str = "each"
+    value: float | None = None
+    weight: float = 1.0
+    distribution: str = "normal"
+
+    def __post_init__(self):
+        if self.quantity not in STREAM_ORDER:
+            raise ValueError(f"unknown quantity {self.quantity!r}")
+        if self.applies_to not in APPLIES_TO:
+            raise ValueError(f"applies_to must be one of {APPLIES_TO}")
+        if self.distribution not in DISTRIBUTIONS:
+            raise ValueError(f"distribution must be one of {DISTRIBUTIONS}")
+        if self.value is not None and not self.value > 0.0:
+            raise ValueError("value must be > 0")
+
+    @property
+    def allocate(self) -> bool:
+        return self.value is None
+
+    @property
+    def sigma(self) -> float:
+        """Standard deviation of the deviation (SI)."""
+        if self.value is None:
+            raise ValueError(f"{self.quantity} has no value yet (it is to be allocated)")
+        if self.distribution == "normal":
+            return self.value / SIGMAS_PER_TOLERANCE
+        return self.value / 3.0 ** 0.5
+
+    def scaled(self, factor: float) -> Tolerance:
+        """The same tolerance with its value times factor (yield against tolerance scale)."""
+        return Tolerance(self.quantity, self.applies_to, self.value * factor, self.weight,
+                         self.distribution)
+
+    def to_json(self, kind: str) -> dict:
+        q = QUANTITIES[kind][self.quantity]
+        return {"quantity": self.quantity, "applies_to": self.applies_to, "value": self.value,
+                "unit": q.unit, "distribution": self.distribution,
+                "allocate": self.allocate, "weight": self.weight}
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """A spec's [tolerances]: the toleranced quantities and the yield run's settings (builds
+    drawn, the random seed, and how many random builds the event simulator confirms)."""
+
+    items: tuple[Tolerance, ...] = ()
+    builds: int = 10_000
+    seed: int = 0
+    confirm: int = 20
+
+    def __iter__(self):
+        return iter(self.items)
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def __bool__(self) -> bool:
+        return bool(self.items)
+
+    def scaled(self, factor: float) -> Tolerances:
+        return Tolerances(tuple(t.scaled(factor) for t in self.items), self.builds, self.seed,
+                          self.confirm)
+
+
+@dataclass(frozen=True)
+class BuildOutcome:
+    """What happened to each of N builds (the same for every scene kind):
+    stages_passed (N,) int; failure (N,) object: the failure's name, "" for a build that
+    passed every stage; min_margin (N,) float: its smallest margin over the run (1 -
+    demand/capacity, < 0 at a failure); closed_form (N,) bool: False where the build left the
+    regime the closed forms follow (a slip, a lift-off, ...): the event simulator decides it."""
+
+    stages_passed: np.ndarray
+    failure: np.ndarray
+    min_margin: np.ndarray
+    closed_form: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.stages_passed)

@@ -1,0 +1,227 @@
+"""The Monte Carlo yield of a design under its spec's tolerances.
+
+Builds are drawn (tolerances.draw, reproducible one by one), run through the scene's
+vectorised closed-form map (run_builds) in chunks, and the event simulator then runs
+  * every build that left the closed-form regime (its verdict replaces the map's), and
+  * `confirm` builds picked at random among the others (agreement reported: same number of
+    stages passed and the same failure).
+The yield is the fraction of builds that pass every one of the K stages, with a 95 % Wilson
+score interval; the survival curve is the fraction still going after each stage (each with
+its Wilson interval), and the mean number of stages before failure is the mean of the
+stages passed over all builds, a build that passes all counting K (the area under the
+survival curve).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+
+from .draw import draw
+from .model import BuildOutcome, Tolerances
+
+Z95 = 1.959963984540054  # two-sided 95 % normal quantile
+CHUNK_ENTRIES = 2_000_000  # builds x stages drawn and mapped at once (memory: ~16 MB an array)
+SCALES = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0)  # tolerance scales of the yield curve
+SCALE_BUILDS = 500  # builds per point of that curve, at most
+SHOWN_COMMANDS = 100  # failing builds listed with their simulate command, at most
+
+
+def wilson(passed, total, z: float = Z95):
+    """Wilson score interval (low, high) of a binomial proportion; arrays allowed."""
+    passed, total = np.asarray(passed, float), np.asarray(total, float)
+    p = passed / total
+    denom = 1.0 + z * z / total
+    centre = (p + z * z / (2.0 * total)) / denom
+    half = z * np.sqrt(p * (1.0 - p) / total + z * z / (4.0 * total * total)) / denom
+    return np.clip(centre - half, 0.0, 1.0), np.clip(centre + half, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class YieldResult:
+    """Plain data of one yield run (JSON by to_json; report and sheet read the fields)."""
+
+    kind: str
+    builds: int
+    stages: int
+    seed: int
+    estimate: float
+    ci_low: float
+    ci_high: float
+    survival: tuple[float, ...]
+    survival_low: tuple[float, ...]
+    survival_high: tuple[float, ...]
+    mean_stages_before_failure: float
+    failures: dict[str, int]
+    failing: tuple[dict, ...]  # {index, stages_passed, failure, command}: the first ones
+    confirmed: dict
+    tolerances: tuple[dict, ...]
+    sensitivity: tuple[dict, ...] = ()
+    sensitivity_note: str = ""
+    scale_curve: tuple[dict, ...] = ()
+    source: str = ""
+
+    def to_json(self) -> dict:
+        return {
+            "yield": {"estimate": self.estimate, "ci_low": self.ci_low, "ci_high": self.ci_high,
+                      "builds": self.builds, "stages": self.stages, "seed": self.seed},
+            "survival": list(self.survival),
+            "survival_band": {"low": list(self.survival_low), "high": list(self.survival_high)},
+            "mean_stages_before_failure": self.mean_stages_before_failure,
+            "failures": dict(self.failures),
+            "failing_builds": [dict(f) for f in self.failing],
+            "sensitivity": [dict(s) for s in self.sensitivity],
+            "sensitivity_note": self.sensitivity_note,
+            "confirmed": dict(self.confirmed),
+            "tolerances": [dict(t) for t in self.tolerances],
+            "yield_against_scale": [dict(s) for s in self.scale_curve],
+        }
+
+
+def build_command(source: str, seed: int, index: int, stages: int) -> str:
+    """The command that simulates build `index` of a yield run."""
+    return f"pdm-design simulate {source} --build {seed}:{index} --stages {stages}"
+
+
+def one_build(tolerances, seed: int, index: int, stages: int) -> dict:
+    """Deviations of build `index` alone (1-row arrays), as the yield run drew them."""
+    return draw(tolerances, 1, stages, seed, start=index)
+
+
+def simulate_one(scene, design, tolerances, seed, index, stages, *, accuracy="default",
+                 record_trajectory=False):
+    """The event simulator on build `index` of a yield run with `seed` and `stages`."""
+    deviations = one_build(tolerances, seed, index, stages)
+    if scene.kind == "manipulators":
+        from .manipulators import simulate_build
+    else:
+        from .stairs import simulate_build  # absent until the stairs module exists
+    return simulate_build(scene, design, deviations, stages, accuracy=accuracy,
+                          record_trajectory=record_trajectory)
+
+
+def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int) -> BuildOutcome:
+    """The closed-form outcome of builds 0 .. builds - 1, drawn and mapped chunk by chunk."""
+    from . import run_builds
+
+    chunk = max(1, CHUNK_ENTRIES // stages)
+    parts = []
+    for start in range(0, builds, chunk):
+        count = min(chunk, builds - start)
+        deviations = draw(tolerances, count, stages, seed, start=start)
+        parts.append(run_builds(scene, design, deviations, stages))
+    return BuildOutcome(*(np.concatenate([getattr(p, f) for p in parts]) for f in
+                          ("stages_passed", "failure", "min_margin", "closed_form")))
+
+
+def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int, seed: int = 0,
+             confirm: int = 20, accuracy="default", source: str = "SPEC",
+             scales=SCALES, progress=None) -> YieldResult:
+    """Yield of `design` built with `tolerances` (every one with a value), K = `stages`."""
+    missing = [t.quantity for t in tolerances if t.value is None]
+    if missing or not len(tolerances):
+        raise ValueError("a yield needs tolerances with values" + (
+            f"; {', '.join(missing)} are still to be allocated" if missing else ""))
+    outcome = map_builds(scene, design, tolerances, builds, stages, seed)
+    passed = outcome.stages_passed.copy()
+    failure = outcome.failure.copy()
+    confirmed = _confirm(scene, design, tolerances, outcome, passed, failure, seed=seed,
+                         stages=stages, confirm=confirm, accuracy=accuracy, progress=progress)
+    whole = passed >= stages
+    low, high = wilson(whole.sum(), builds)
+    alive = np.array([(passed >= j).sum() for j in range(1, stages + 1)])
+    s_low, s_high = wilson(alive, builds)
+    failing = np.flatnonzero(~whole)
+    shown = tuple({"index": int(i), "stages_passed": int(passed[i]), "failure": failure[i],
+                   "command": build_command(source, seed, int(i), stages)}
+                  for i in failing[:SHOWN_COMMANDS])
+    sensitivity, note = _sensitivity(scene, design, tolerances, stages, seed)
+    return YieldResult(
+        kind=scene.kind, builds=builds, stages=stages, seed=seed,
+        estimate=float(whole.mean()), ci_low=float(low), ci_high=float(high),
+        survival=tuple(map(float, alive / builds)), survival_low=tuple(map(float, s_low)),
+        survival_high=tuple(map(float, s_high)),
+        mean_stages_before_failure=float(passed.mean()),
+        failures=dict(Counter(failure[failing]).most_common()), failing=shown,
+        confirmed=confirmed, tolerances=tuple(t.to_json(scene.kind) for t in tolerances),
+        sensitivity=tuple(sensitivity), sensitivity_note=note,
+        scale_curve=tuple(_scale_curve(scene, design, tolerances, builds, stages, seed,
+                                       scales, accuracy)), source=source)
+
+
+def _confirm(scene, design, tolerances, outcome, passed, failure, *, seed, stages, confirm,
+             accuracy, progress) -> dict:
+    """Simulate every build outside the closed-form regime (their verdicts replace the map's)
+    and `confirm` random closed-form builds (agreement counted); passed and failure are
+    updated in place."""
+    open_builds = np.flatnonzero(~outcome.closed_form)
+    closed = np.flatnonzero(outcome.closed_form)
+    rng = np.random.default_rng([seed, 1])
+    sample = rng.choice(closed, size=min(confirm, len(closed)), replace=False) \
+        if len(closed) else closed
+    agreed, disagreements = 0, []
+    todo = [(int(i), True) for i in np.sort(sample)] + [(int(i), False) for i in open_builds]
+    for i, is_sample in todo:
+        got = _simulated(scene, design, tolerances, seed, i, stages, accuracy)
+        if progress is not None:
+            progress()
+        if is_sample:
+            same = got == (int(passed[i]), failure[i])
+            agreed += same
+            if not same:
+                disagreements.append({"index": i, "closed_form": [int(passed[i]), failure[i]],
+                                      "simulated": list(got)})
+        passed[i], failure[i] = got
+    return {"simulated": len(todo), "agreed": int(agreed), "random": len(sample),
+            "left_closed_form": len(open_builds), "disagreements": disagreements}
+
+
+def _simulated(scene, design, tolerances, seed, index, stages, accuracy) -> tuple[int, str]:
+    """(stages passed, failure name or "") of one build in the event simulator."""
+    from ..sim.core import SimulationRefused
+
+    try:
+        result = simulate_one(scene, design, tolerances, seed, index, stages, accuracy=accuracy)
+    except SimulationRefused:
+        return 0, "refused"
+    outcome = result.outcome
+    if outcome.completed:
+        return outcome.stages_passed, ""
+    return outcome.stages_passed, outcome.failure.kind if outcome.failure else "incomplete"
+
+
+def _scale_curve(scene, design, tolerances, builds, stages, seed, scales, accuracy
+                 ) -> list[dict]:
+    """Yield against a common scale of every tolerance, on the first SCALE_BUILDS builds (at
+    most): the closed-form map, and the event simulator for every build outside its regime."""
+    count = min(builds, SCALE_BUILDS)
+    out = []
+    for scale in scales:
+        scaled = tolerances.scaled(scale)
+        o = map_builds(scene, design, scaled, count, stages, seed)
+        passed, failure = o.stages_passed.copy(), o.failure.copy()
+        for i in np.flatnonzero(~o.closed_form):
+            passed[i], failure[i] = _simulated(scene, design, scaled, seed, int(i), stages,
+                                               accuracy)
+        ok = int((passed >= stages).sum())
+        low, high = wilson(ok, count)
+        out.append({"scale": scale, "estimate": ok / count, "ci_low": float(low),
+                    "ci_high": float(high), "builds": count,
+                    "simulated": int((~o.closed_form).sum())})
+    return out
+
+
+def _sensitivity(scene, design, tolerances, stages, seed) -> tuple[list, str]:
+    """Sobol indices from tolerances.sensitivity where that module exists."""
+    try:
+        from .sensitivity import sobol_indices
+    except ImportError:
+        return [], ("not computed: the variance-based sensitivity module "
+                    "(pdm_design.tolerances.sensitivity) is not part of this installation")
+    if len(tolerances) < 2:
+        return [], "not computed: one toleranced quantity has all the variance"
+    indices = sobol_indices(scene, design, tolerances, stages=stages, seed=seed)
+    return [{"quantity": q, "index": float(v)} for q, v in indices], ""
+
