@@ -149,7 +149,7 @@ class LiftOffPhases:
 
     def _lift_off(self, t0, k, theta0, omega0, s, sd, detail):
         """The object lifts off palm k at (theta0, omega0), sitting at s and slipping at sd."""
-        g, l = self.g, self.l
+        g, l = self.g, self.ls[k]  # palm k's own link
         v0 = l * omega0
         # A sliding lift-off is located by solve_ivp's event to its tolerance, perhaps a hair
         # before N = 0: start the free motion where the palm no longer pushes (v^2 >= g l cos th).
@@ -170,7 +170,7 @@ class LiftOffPhases:
         box = Box(k, 0.0, 0.5 * (row.body_width + row.palm_width),
                   -row.palm_thickness - row.body_height, 0.0)
         for seg, a, b in swing_segments(fly, row.pivots[k], theta0, v0, gravity=self.g,
-                                        link_length=self.l, back_stop=-self.alpha,
+                                        link_length=self.ls[k], back_stop=-self.alphas[k],
                                         front_stop=self.fs):
             if not a < b:
                 continue
@@ -199,7 +199,7 @@ class LiftOffPhases:
             return lambda: self._flight_after_lift_off(t1, k, path.at(t1), contact, planned)
         self._rec_flight(path, t0, t_c)
         x, y, vx, vy = path.at(t_c)
-        state = {"x": x, "y": y, "vx": vx, "vy": vy, "theta": theta, "omega": w / self.l}
+        state = {"x": x, "y": y, "vx": vx, "vy": vy, "theta": theta, "omega": w / self.ls[k]}
         del self.palm_events[planned:]  # palm k does not reach the stop planned at the lift-off
         if kind != "top":
             return self._fail(t_c, "blocked", k + 1, state,
