@@ -78,23 +78,36 @@ def run_builds(scene: StairsScene, design: StairsDesign, deviations: dict,
 
 
 class _Values:
-    """The builds' actual values, nominal + deviation, per step (k from 1) or per build."""
+    """The builds' actual values, nominal + deviation, per step (k from 1) or per build. A
+    per-step array is held step-major (one contiguous row a step), and the values of the steps
+    a stage reads are kept until the stage after next."""
 
     def __init__(self, scene, design, geo, deviations, stages):
         self.n, self.stages = _check_deviations(deviations, stages, scene)
-        self.dev = deviations
+        self.dev = {q: np.ascontiguousarray(d.T) if d.ndim == 2 else d
+                    for q, d in deviations.items()}
         self.nominal = {"rise": geo.rise, "tread": geo.tread,
                         "restitution": design.restitution, "friction": scene.friction,
                         "launch_speed": design.launch_speed, "launch_x": 0.0}
+        self._kept: dict = {}
 
     def at(self, name, k=None):
         """Step k's value (k beyond the staircase asked: nominal), or the build's."""
+        key = (name, k)
+        if key not in self._kept:
+            if k is not None and len(self._kept) > 64:
+                self._kept = {key: v for key, v in self._kept.items() if key[1] is None
+                              or key[1] >= k - 1}
+            self._kept[key] = self._value(name, k)
+        return self._kept[key]
+
+    def _value(self, name, k):
         nominal = self.nominal[name]
         d = self.dev.get(name)
         if d is None or (k is not None and k > self.stages):
             value = nominal
         else:
-            value = nominal + (d[:, k - 1] if d.ndim == 2 else d)
+            value = nominal + (d[k - 1] if d.ndim == 2 else d)
         if name == "restitution":
             return np.clip(value, 0.0, 1.0)
         return np.maximum(value, 0.0) if name == "friction" else value
