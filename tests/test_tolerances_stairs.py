@@ -14,7 +14,7 @@ from scipy import optimize, stats
 
 from pdm_design.scenes import Ball, StairsDesign, StairsInitial, StairsScene
 from pdm_design.sim.core import SimulationRefused
-from pdm_design.sim.stairs import build_variation, simulate_stairs
+from pdm_design.sim.stairs import FAILURE_KINDS, build_variation, simulate_stairs
 from pdm_design.tolerances.outcome import BuildOutcome
 from pdm_design.tolerances.stairs import (
     FAILURES,
@@ -273,6 +273,19 @@ def test_huge_tolerances_give_named_failures_not_nan():
     for i in np.flatnonzero(out.closed_form)[:40]:      # still the simulator's verdicts
         result, kind = simulated(scene, ROBUST, dev, i, stages)
         assert (kind, result.outcome.stages_passed) == (out.failure[i], out.stages_passed[i])
+    outside = np.flatnonzero(~out.closed_form)
+    assert outside.size > 0
+    for i in outside[:20]:                              # the simulator takes them all, in words
+        result, kind = simulated(scene, ROBUST, dev, i, stages)
+        assert kind in (*FAILURE_KINDS, "unbuildable_step")
+
+
+def test_a_simulated_build_takes_the_simulator_options():
+    dev = {"tread": np.full(5, 0.01), "restitution": np.full(5, -0.001)}
+    result = simulate_build(scene_of(), ROBUST, dev, 5, "fast", record_trajectory=True)
+    assert result.outcome.completed and len(result.trajectory["time"]) > 5 * 48
+    assert result.accuracy.name == "fast"
+    assert result.stages[0]["vy_after"] == pytest.approx(0.799 * math.sqrt(2 * G * H0), rel=1e-12)
 
 
 def test_no_builds_and_no_stages():
