@@ -212,7 +212,8 @@ def ball_interval(r):
 
 
 DISTRIBUTIONS = {
-    "normal": (lambda rng, t, n: rng.normal(0.0, t / 3, n), lambda x, t: stats.norm.cdf(x, 0, t / 3)),
+    "normal": (lambda rng, t, n: rng.normal(0.0, t / 3, n),
+               lambda x, t: stats.norm.cdf(x, 0, t / 3)),
     "uniform": (lambda rng, t, n: rng.uniform(-t, t, n),
                 lambda x, t: stats.uniform.cdf(x, -t, 2 * t)),
 }

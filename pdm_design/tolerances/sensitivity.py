@@ -4,9 +4,9 @@ The output Y of a batch of builds (their smallest margin, or whether they passed
 of every deviation drawn. Sobol' indices split its variance among the tolerances: the first-order
 index S1 of a quantity is the share of Var(Y) its deviations explain alone, the total-order index
 ST the share they take part in, interactions included (SALib: Saltelli's sampling on a scrambled
-Sobol' sequence, the estimators of Saltelli et al. 2010, bootstrap confidence intervals). A quantity toleranced per part (every step's rise, every
-manipulator's pivot) is one group: its index is that of all its parts together, which is what a
-workshop tightens. The build map is any callable run(deviations, stages) -> BuildOutcome
+Sobol' sequence, the estimators of Saltelli et al. 2010, bootstrap confidence intervals). A
+quantity toleranced per part (every step's rise, every manipulator's pivot) is one group: its
+index is that of all its parts together, which is what a workshop tightens. The build map is any callable run(deviations, stages) -> BuildOutcome
 (`pdm_design.tolerances.stairs.run_builds` with its scene and design bound), so the same code
 serves every scene.
 

@@ -149,7 +149,7 @@ def march_builds(scene: StairsScene, design: StairsDesign, deviations: dict,
     run = _Run(scene, geo.tread, val.n)
     g, r, h0 = scene.gravity, scene.ball.radius, scene.initial.drop_height
     if val.stages == 0:
-        return run.finish(val, geo)
+        return run.finish(val)
     # the launch: from its apex h0 - rise above the top landing, whose nose is x_back_1 ahead
     v = np.broadcast_to(val.at("launch_speed"), (val.n,)).astype(float)
     ahead = np.broadcast_to(geo.x_back_1 - val.at("launch_x"), (val.n,)).astype(float)
@@ -177,7 +177,7 @@ def march_builds(scene: StairsScene, design: StairsDesign, deviations: dict,
         run.state(flight.landing, after.vx, flight.vy, after.omega)
         if not run.alive.any():
             break
-    return run.finish(val, geo)
+    return run.finish(val)
 
 
 class _Flight(NamedTuple):
@@ -295,7 +295,7 @@ class _Run:
             self.last[i] = np.where(a, x, self.last[i])
         return after
 
-    def finish(self, val, geo) -> StairsBuilds:
+    def finish(self, val) -> StairsBuilds:
         if self.s is not None and self.alive.any():
             self.impact(val, int(self.passed.max()))
         outcome = BuildOutcome(self.passed, np.array(FAILURES, dtype=object)[self.code],

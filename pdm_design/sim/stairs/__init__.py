@@ -12,6 +12,9 @@ The staircase (built from the design, see `stairs_geometry`):
       later steps; the launcher fixes step 0.
     * step 0 is the top landing, one nominal rise above (nominal) tread 1, running back without
       end; its nose is the top of riser 1. The launch behaves like the apex of a bounce on it.
+    * as built, each tread may have its own restitution and friction against the ball, and the
+      launcher its own speed and place (`build_variation`, module `materials`); the staircase
+      is still laid out from the design.
     * the stairs are placed so that, as designed (no errors), the ball's first landing is
       ``landing_offset`` from the back of tread 1. The ball is launched horizontally at x = 0
       with its lowest point drop_height above nominal tread 1.
@@ -52,7 +55,9 @@ Vectorised closed forms for many samples at once: `impact_map` (one impact) and
 
 Modules: this one holds the event-located run; `stairs_geometry` the staircase as built,
 `flight` the closed-form next contact of a flight, `maps` the impact maps and the
-vectorised bounces. Their public names are importable from here.
+vectorised bounces, `materials` each step's restitution and friction and the launch as built.
+Their public names are importable from here. (Many builds at once, each with its own steps:
+`pdm_design.tolerances.stairs`.)
 """
 
 from __future__ import annotations
@@ -136,7 +141,8 @@ class _Summary:
 
 def simulate_stairs(scene: StairsScene, design: StairsDesign, *, stages: int,
                     accuracy: str | Accuracy = "default", step_errors=(),
-                    variation: BuildVariation | None = None, record_trajectory: bool = False, record_limit: int = DEFAULT_RECORD_LIMIT,
+                    variation: BuildVariation | None = None, record_trajectory: bool = False,
+                    record_limit: int = DEFAULT_RECORD_LIMIT,
                     trajectory_samples: int = 48, trajectory_limit: int = 1000,
                     ) -> StairsSimulationResult:
     """Simulate the ball from its launch for `stages` bounces (impacts on successive steps).
