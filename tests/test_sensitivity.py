@@ -99,6 +99,7 @@ def test_no_variation_gives_zero_indices():
     ([("rise", "each", 1.0, "gauss")], {}, "distribution must be one of normal, uniform"),
     ([("rise", "each", -1.0, "normal")], {}, "finite number >= 0"),
     ([("rise", "each", math.inf, "normal")], {}, "finite number >= 0"),
+    ([("rise", "each", None, "normal")], {}, "finite number >= 0, not None"),
     ([("rise", "each", 1.0, "normal")] * 2, {}, "given twice"),
     ([("rise", "each", 1.0, "normal")], {"output": "yield"}, "output must be one of"),
     ([("rise", "each", 1.0, "normal")], {"samples": 1}, "samples must be >= 2"),

@@ -78,7 +78,11 @@ def _tolerances(tolerances) -> list[tuple[str, str, float, str]]:
             q, applies, value, dist = t
         else:
             q, applies, value, dist = t.quantity, t.applies_to, t.value, t.distribution
-        value = float(value)
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"tolerance of {q}: value must be a finite number >= 0, not "
+                             f"{value!r}") from None
         if applies not in APPLIES_TO:
             raise ValueError(f"tolerance of {q}: applies_to must be one of "
                              f"{', '.join(APPLIES_TO)}, not {applies!r}")
