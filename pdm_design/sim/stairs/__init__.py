@@ -12,6 +12,9 @@ The staircase (built from the design, see `stairs_geometry`):
       later steps; the launcher fixes step 0.
     * step 0 is the top landing, one nominal rise above (nominal) tread 1, running back without
       end; its nose is the top of riser 1. The launch behaves like the apex of a bounce on it.
+    * as built, each tread may have its own restitution and friction against the ball, and the
+      launcher its own speed and place (`build_variation`, module `materials`); the staircase
+      is still laid out from the design.
     * the stairs are placed so that, as designed (no errors), the ball's first landing is
       ``landing_offset`` from the back of tread 1. The ball is launched horizontally at x = 0
       with its lowest point drop_height above nominal tread 1.
@@ -52,7 +55,9 @@ Vectorised closed forms for many samples at once: `impact_map` (one impact) and
 
 Modules: this one holds the event-located run; `stairs_geometry` the staircase as built,
 `flight` the closed-form next contact of a flight, `maps` the impact maps and the
-vectorised bounces. Their public names are importable from here.
+vectorised bounces, `materials` each step's restitution and friction and the launch as built.
+Their public names are importable from here. (Many builds at once, each with its own steps:
+`pdm_design.tolerances.stairs`.)
 """
 
 from __future__ import annotations
@@ -66,19 +71,21 @@ from ...scenes import StairsDesign, StairsScene
 from ..core import Event, Outcome, SimulationRefused, SimulationResult, check_scales
 from .flight import Contact, next_contact, step_under
 from .geometry import StairsGeometry, stairs_geometry
+from .materials import BuildVariation, build_variation
 from .maps import (
     BOUNCE_FAILURES,
     BounceSequence,
     Impact,
     bounce_sequence,
+    corner_hits,
     impact_map,
     impact_once,
 )
 
 __all__ = [
-    "BOUNCE_FAILURES", "DEFAULT_RECORD_LIMIT", "FAILURE_KINDS", "BounceSequence", "Impact",
-    "StairsGeometry", "StairsSimulationResult", "bounce_sequence", "impact_map", "impact_once",
-    "simulate_stairs", "stairs_geometry",
+    "BOUNCE_FAILURES", "DEFAULT_RECORD_LIMIT", "FAILURE_KINDS", "BounceSequence", "BuildVariation",
+    "Impact", "StairsGeometry", "StairsSimulationResult", "bounce_sequence", "build_variation",
+    "corner_hits", "impact_map", "impact_once", "simulate_stairs", "stairs_geometry",
 ]
 
 FAILURE_KINDS = ("nose_hit", "riser_hit", "skipped_step", "double_landing", "bounced_back",
@@ -134,14 +141,17 @@ class _Summary:
 
 def simulate_stairs(scene: StairsScene, design: StairsDesign, *, stages: int,
                     accuracy: str | Accuracy = "default", step_errors=(),
-                    record_trajectory: bool = False, record_limit: int = DEFAULT_RECORD_LIMIT,
+                    variation: BuildVariation | None = None, record_trajectory: bool = False,
+                    record_limit: int = DEFAULT_RECORD_LIMIT,
                     trajectory_samples: int = 48, trajectory_limit: int = 1000,
                     ) -> StairsSimulationResult:
     """Simulate the ball from its launch for `stages` bounces (impacts on successive steps).
 
     step_errors: objects (or dicts) with step (from 1), rise and tread: metres added to that
-    step's rise and tread. The run stops at the first failure event. See the module docstring
-    for the staircase, the event kinds and the memory policy of long runs.
+    step's rise and tread. variation (`build_variation`): each step's restitution and friction
+    and the launch as built, where they differ from the design's and the scene's (the staircase
+    is built from the design). The run stops at the first failure event. See the module
+    docstring for the staircase, the event kinds and the memory policy of long runs.
     """
     acc = accuracy_preset(accuracy)
     stages = int(stages)
@@ -153,12 +163,14 @@ def simulate_stairs(scene: StairsScene, design: StairsDesign, *, stages: int,
     g, eps, mu = scene.gravity, design.restitution, scene.friction
     r, m, inertia = scene.ball.radius, scene.ball.mass, scene.ball.inertia
     tol = acc.event_tol
+    built = variation or BuildVariation()
 
     # launch, in the frame of step 0's nose (x_back_1, level of step 0)
     k = 0
-    x0, y0 = -geo.x_back_1, geo.launch_height - geo.level(0)
+    x0, y0 = built.launch_x - geo.x_back_1, geo.launch_height - geo.level(0)
     _check_start(geo, x0, y0, r)
-    vx, vy, omega = design.launch_speed, 0.0, scene.initial.spin
+    v0 = design.launch_speed if built.launch_speed is None else built.launch_speed
+    vx, vy, omega = v0, 0.0, scene.initial.spin
     t_sum, t_comp = 0.0, 0.0
 
     stage_records: list[dict] = []
@@ -192,7 +204,10 @@ def simulate_stairs(scene: StairsScene, design: StairsDesign, *, stages: int,
             break
         j = c.step
         back, nose, level = geo.relative(k, j)
-        vx_a, vy_a, om_a, slipped, demand = impact_once(vx, c.vy, omega, eps, mu, r, m, inertia)
+        mu_j = built.friction_at(j, mu)
+        vx_a, vy_a, om_a, slipped, demand = impact_once(vx, c.vy, omega,
+                                                        built.restitution_at(j, eps), mu_j, r,
+                                                        m, inertia)
         landing_x = c.x - back
         speed = math.hypot(vx, c.vy)
         apex = 0.5 * vy_a * vy_a / g
@@ -201,16 +216,16 @@ def simulate_stairs(scene: StairsScene, design: StairsDesign, *, stages: int,
         if slipped:
             summary.slips += 1
         raw = (k, c.x, j, t_sum, landing_x, speed, vx, vx_a, c.vy, vy_a, omega, om_a, apex,
-               slipped, demand)
+               slipped, demand, mu_j)
         if passed <= record_limit or passed == stages:
-            last_record = _record(geo, raw, stage_records, events, r, mu)
+            last_record = _record(geo, raw, stage_records, events, r)
             raw = None
         # new frame: step j's nose
         k, x0, y0 = j, c.x - nose, 0.0
         vx, vy, omega = vx_a, vy_a, om_a
     if failure is not None:
         if passed and raw is not None:  # the impact before a failure beyond record_limit
-            last_record = _record(geo, raw, stage_records, events, r, mu)
+            last_record = _record(geo, raw, stage_records, events, r)
         events.append(failure)
     outcome = Outcome(completed=failure is None and passed == stages, stages_passed=passed,
                       failure=failure)
@@ -254,10 +269,10 @@ def check_stairs_scales(scene: StairsScene, design: StairsDesign,
     check_scales(("1", 1.0), dimensionless)
 
 
-def _record(geo, raw, stage_records, events, r, mu):
+def _record(geo, raw, stage_records, events, r):
     """Append the stage record and the impact (and slip) events of one impact."""
     (k, x, j, t, landing_x, speed, vx, vx_a, vy, vy_a, omega, om_a, apex, slipped,
-     demand) = raw
+     demand, mu) = raw
     xg, yg = geo.nose_x(k) + x, geo.level(j)
     record = {
         "step": j, "impact_time": t, "landing_x": landing_x, "impact_speed": speed,
@@ -320,7 +335,7 @@ def _failure_detail(kind, c, geo, k, r):
 
 def _slip_detail(slip_after, demand, mu):
     return (f"the contact point still slides at {slip_after:.6g} m/s after the impact: rolling "
-            f"would need friction >= {demand:.4g}, the scene has {mu:g}")
+            f"would need friction >= {demand:.4g}, the tread has {mu:g}")
 
 
 def _failure(geo, k, t, x, y, vx, vy, omega, kind, stage, detail):

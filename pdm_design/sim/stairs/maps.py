@@ -159,7 +159,7 @@ def _bounce_loop(s, vx, vy, om, bounces, rise, tread, eps, mu, r, m, J, g, check
             near = (x_same - tread < r) & ~bad
             if near.any():
                 idx = np.flatnonzero(near)
-                hit = _nose_hits(tread - s[idx], vx_a[idx], up[idx], r, g, t[idx])
+                hit = corner_hits(tread - s[idx], vx_a[idx], up[idx], r, g, t[idx])
                 nose = np.zeros(n, dtype=bool)
                 nose[idx[hit]] = True
                 bad |= nose
@@ -195,22 +195,31 @@ def _bounce_loop(s, vx, vy, om, bounces, rise, tread, eps, mu, r, m, J, g, check
     return BounceSequence(s, vx, vy, om, time, done, code, lo, hi)
 
 
-def _nose_hits(d, vx, up, r, g, t_land):
-    """True where the ball (leaving a tread at speed (vx, up), nose a distance d ahead) touches
-    the nose before landing at t_land. Only called for samples that pass the nose."""
-    t0 = 2.0 * up / g                                       # back at take-off height, past the nose
-    t1 = np.minimum((up + np.sqrt(up * up + 2.0 * g * r)) / g, t_land)  # centre at nose level
+def corner_hits(d, vx, up, r, g, t_land, h=0.0):
+    """True where a ball of radius r touches a corner before t_land: its lowest point starts h
+    above the corner's level and d behind it (horizontally), moving at (vx > 0, up).
 
-    def grad(t):  # f(t) = (vx t - d)^2 + (r + up t - g t^2/2)^2 - r^2; returns f, f', f''
+    Contact needs the lowest point at or below the corner's level and the centre above it (below,
+    the ball is past the corner and moving away), so it is sought between t0, the lowest point at
+    the corner's level, and t1, the centre at it (or t_land): the least of
+    f(t) = (vx t - d)^2 + (r + h + up t - g t^2/2)^2 - r^2 there, by safeguarded Newton steps on
+    f'. Exact where f is convex over that window: f'' >= 2 (vx^2 + up^2 + 2 g h - g r) > 0, any
+    ball small against its path's curvature radius. Only meaningful for samples whose lowest point
+    passes the corner's level less than r beyond it (elsewhere there is no contact)."""
+    t0 = (up + np.sqrt(up * up + 2.0 * g * h)) / g          # lowest point at the corner's level
+    t1 = np.minimum((up + np.sqrt(up * up + 2.0 * g * (h + r))) / g, t_land)  # centre at it
+
+    def grad(t):  # f, f', f''
         dx = vx * t - d
-        dy = r + up * t - 0.5 * g * t * t
+        dy = r + h + up * t - 0.5 * g * t * t
         vyc = up - g * t
         f = dx * dx + dy * dy - r * r
         return f, 2.0 * (vx * dx + dy * vyc), 2.0 * (vx * vx + vyc * vyc - g * dy)
 
-    lo, hi = t0.copy(), t1.copy()
-    t = t1.copy()
-    best = np.minimum(grad(t0)[0], grad(t1)[0])
+    lo, hi = np.broadcast_arrays(t0, t1)
+    lo, hi = lo.copy(), hi.copy()
+    t = hi.copy()
+    best = np.minimum(grad(lo)[0], grad(hi)[0])
     for _ in range(8):                                      # safeguarded Newton on f'
         f, d1, d2 = grad(t)
         best = np.minimum(best, f)
