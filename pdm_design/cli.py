@@ -356,6 +356,23 @@ def sheet(source, out, count, no_tolerance, no_drawing):
 
 
 @main.command()
+@click.argument("source", metavar="SPEC_OR_JSON", type=click.Path(dir_okay=False, path_type=str))
+@click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
+              help="Folder for report.html (default: the source's name followed by -report).")
+@click.option("--count", type=click.IntRange(1, 10_000_000), default=None,
+              help="Manipulators or steps on the drawing (default: verification.stages).")
+@click.option("--no-tolerance", is_flag=True, help="Do not solve for the tolerance.")
+@_guarded
+def report(source, out, count, no_tolerance):
+    """One self-contained HTML page of a design (docs/report.md): design, margins, tolerances,
+    parts, the drawing and the simulated run animated. Exit 1 (page still written) when the
+    design does not work."""
+    from .report.page import report_command
+
+    return EXIT_OK if report_command(source, out, count, no_tolerance, click.echo) else EXIT_FAILED
+
+
+@main.command()
 @click.argument("targets", nargs=-1, required=True, type=click.Path(path_type=str))
 @click.option("--junit", type=click.Path(dir_okay=False), default=None,
               help="Also write a JUnit XML report to this file (not one of the specs checked).")

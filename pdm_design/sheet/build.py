@@ -43,7 +43,9 @@ class BuildSheet:
     items: one dict per manipulator or step (CSV columns, SI units in the names); the tolerance
     columns are None past the spec's verification.stages (`tolerance_covers`). violations and
     verification: why the design does not meet its requirements, and the simulator's verdict
-    (`passed`, `summary`, `failures`; None when it was not run)."""
+    (`passed`, `summary`, `failures`; None when it was not run). tolerances: tolerances of
+    further parts (link length, back stop, palm mass, ...) a tolerance analysis found, shown
+    on their parts (sheet/parts.py)."""
 
     spec: Spec
     status: str
@@ -58,6 +60,7 @@ class BuildSheet:
     notes: tuple[str, ...] = field(default=())
     violations: tuple[str, ...] = field(default=())
     verification: dict | None = None
+    tolerances: tuple = field(default=())  # further ToleranceEntry (sheet/parts.py), by part
 
     @property
     def kind(self) -> str:
