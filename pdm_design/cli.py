@@ -315,15 +315,15 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
 @click.argument("source", metavar="SPEC_OR_JSON",
                 type=click.Path(dir_okay=False, path_type=str))
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Folder for sheet.md, sheet.csv, sheet.png and sheet.svg (default: the "
-              "source's name followed by -sheet).")
+              help="Folder for sheet.md, sheet.csv, the drawing (sheet.png, .svg, .pdf) and "
+              "sheet.dxf (default: the source's name followed by -sheet).")
 @click.option("--count", type=click.IntRange(1, 10_000_000), default=None,
               help="Manipulators or steps listed (default: the spec's verification.stages; the "
               "tolerance covers only the first verification.stages of them).")
 @click.option("--no-tolerance", is_flag=True,
               help="Do not solve for the placement tolerance when the design carries none.")
 @click.option("--no-drawing", is_flag=True,
-              help="Write the Markdown and CSV only (an earlier sheet.png / sheet.svg in the "
+              help="Write the Markdown and CSV only (an earlier drawing and DXF in the "
               "folder is removed).")
 @_guarded
 def sheet(source, out, count, no_tolerance, no_drawing):
