@@ -10,7 +10,8 @@ stop it comes to rest on (the simulator's arrival event: the empty palm's swing 
 is not recorded, and is drawn as a straight interpolation of the angle). Stairs: the ball's
 centre and its spin angle, the integral of the recorded spin rate (counter-clockwise positive).
 
-Coordinates are millimetres, y up; the SVG flips y.
+Coordinates are millimetres, y up; the SVG flips y. A device longer than the page's window
+(five pitches, four treads) is shown through a window that follows the object.
 """
 
 from __future__ import annotations
@@ -72,7 +73,16 @@ def _stairs(spec, result, t, order, frames) -> dict:
         if nose < left or back > right:
             continue
         steps.append([round(back * MM, 3), round(nose * MM, 3), round(s["level"] * MM, 3)])
-    return {"radius": r * MM, "spin": _round(np.interp(frames, t, spin), 4), "steps": steps}
+    tread, rise = _stairs_pitch(steps)
+    return {"radius": r * MM, "spin": _round(np.interp(frames, t, spin), 4), "steps": steps,
+            "window": max(4.0 * tread, 8.0 * rise, 40 * r * MM, 1.0), "below": 0.0}
+
+
+def _stairs_pitch(steps):
+    """(tread, rise) of the first full step drawn, mm (steps[0] is the launch platform)."""
+    if len(steps) >= 3:
+        return steps[1][1] - steps[1][0], steps[1][2] - steps[2][2]
+    return (steps[0][1] - steps[0][0], 0.0) if steps else (1.0, 0.0)
 
 
 def _manipulators(spec, result) -> dict:
@@ -99,7 +109,10 @@ def _manipulators(spec, result) -> dict:
         k.sort(key=lambda p: p[0])
         palms.append({"pivot": [round(px * MM, 3), round(py * MM, 3)],
                       "keys": [[round(a, 5), round(b, 6)] for a, b in _thin(k)]})
-    return {"link": row.link_length * MM, "palm_width": row.palm_width * MM,
+    pitch = abs(row.pivots[1][0] - row.pivots[0][0]) if len(row) > 1 else row.palm_width
+    return {"window": max(5.0 * pitch, 3.2 * row.link_length) * MM,
+            "below": 0.4 * row.link_length * MM,
+            "link": row.link_length * MM, "palm_width": row.palm_width * MM,
             "palm_thickness": row.palm_thickness * MM, "hole_spacing": row.palm_width * MM / 2,
             "body_width": row.body_width * MM, "body_height": row.body_height * MM,
             "palms": palms}
@@ -168,14 +181,24 @@ _SCRIPT = r"""
   }
   var x0 = Math.min.apply(null, xs) - pad, x1 = Math.max.apply(null, xs) + pad;
   var y0 = Math.min.apply(null, ys) - pad, y1 = Math.max.apply(null, ys) + pad;
-  svg.setAttribute("viewBox", [x0, -y1, x1 - x0, y1 - y0].join(" "));
+  // a long device: the view follows the object, D.window wide (the whole when it fits)
+  var follow = x1 - x0 > 1.2 * D.window, aspect = 0.42;
+  var viewW = follow ? D.window : x1 - x0, viewH = follow ? aspect * D.window : y1 - y0;
+  function look(i) {
+    if (!follow) { svg.setAttribute("viewBox", [x0, -y1, viewW, viewH].join(" ")); return; }
+    var cx = Math.max(x0 + viewW / 2, Math.min(x1 - viewW / 2, D.x[i]));
+    var cy = D.y[i] - D.below;
+    svg.setAttribute("viewBox", [cx - viewW / 2, -(cy + viewH / 2), viewW, viewH].join(" "));
+  }
+  look(0);
   var world = document.createElementNS(NS, "g");
   world.setAttribute("transform", "scale(1,-1)");
   svg.appendChild(world);
   var thin = {"vector-effect": "non-scaling-stroke", "stroke-width": 1.5};
   function styled(extra) { var o = {}; for (var k in thin) o[k] = thin[k];
     for (var j in extra) o[j] = extra[j]; return o; }
-  var path = D.x.map(function (x, i) { return x + "," + D.y[i]; }).join(" ");
+  var lift = D.kind === "stairs" ? D.radius : 0;  // stairs: the path of the ball's centre
+  var path = D.x.map(function (x, i) { return x + "," + (D.y[i] + lift); }).join(" ");
   el("polyline", styled({points: path, fill: "none", stroke: "#2ca02c",
                          "stroke-dasharray": "6 4", opacity: 0.6}));
   var draw;
@@ -185,10 +208,9 @@ _SCRIPT = r"""
     D.steps.forEach(function (s) { outline.push(s[0] + "," + s[2], s[1] + "," + s[2]); });
     outline.push(D.steps[D.steps.length - 1][1] + "," + bottom, D.steps[0][0] + "," + bottom);
     el("polygon", styled({points: outline.join(" "), fill: "#d9d9d9", stroke: "#333"}));
-    var ball = el("g", {});
-    el("circle", styled({cx: 0, cy: 0, r: Math.max(D.radius, 5), fill: "#1f77b4",
-                         stroke: "#08306b"}), ball);
-    el("line", styled({x1: 0, y1: 0, x2: Math.max(D.radius, 5), y2: 0, stroke: "#fff"}), ball);
+    var ball = el("g", {}), shown = Math.max(D.radius, viewW / 120);
+    el("circle", styled({cx: 0, cy: 0, r: shown, fill: "#1f77b4", stroke: "#08306b"}), ball);
+    el("line", styled({x1: 0, y1: 0, x2: shown, y2: 0, stroke: "#fff"}), ball);
     draw = function (i) {
       var deg = D.spin[i] * 180 / Math.PI;
       ball.setAttribute("transform", "translate(" + D.x[i] + "," + (D.y[i] + D.radius) +
@@ -234,6 +256,7 @@ _SCRIPT = r"""
   function show(i) {
     frame = Math.max(0, Math.min(n - 1, i));
     draw(frame);
+    look(frame);
     svg.setAttribute("data-frame", String(frame));
     slider.value = String(frame);
     label.textContent = "t = " + D.t[frame].toFixed(3) + " s";

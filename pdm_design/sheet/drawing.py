@@ -28,6 +28,7 @@ DRAWING_FORMATS = ("png", "svg", "pdf")
 PAGE_ITEMS = 6          # manipulators or steps on each detail page of the PDF
 TABLE_ROWS = 60         # rows of the pivot or step table on each of its PDF pages
 WIDTH = 13.0            # inches
+DPI = 120               # of the PNG, and of the text extents that keep labels apart
 WARNING_WIDTH, WARNING_LINES = 110, 3  # characters a line, lines: the drawing's warning
 NOTE_WIDTH = 170        # characters a line of the notes below the drawing
 
@@ -35,7 +36,7 @@ NOTE_WIDTH = 170        # characters a line of the notes below the drawing
 def drawing_files(sheet: BuildSheet, stem: str = "sheet") -> dict[str, bytes]:
     """{file name: bytes}: the whole device as PNG and SVG, and the PDF of it page by page."""
     figure = draw(sheet)
-    return {f"{stem}.png": render_figure(figure, "png", dpi=120),
+    return {f"{stem}.png": render_figure(figure, "png", dpi=DPI),
             f"{stem}.svg": render_figure(figure, "svg"),
             f"{stem}.pdf": drawing_pdf(sheet, figure)}
 
@@ -49,7 +50,7 @@ def draw(sheet: BuildSheet, first: int = 1, last: int | None = None, *, notes: b
     last = sheet.count if last is None else last
     items = sheet.items[first - 1:last]
     lines = _notes(sheet) if notes else []
-    figure = Figure(figsize=(WIDTH, 6.0))
+    figure = Figure(figsize=(WIDTH, 6.0), dpi=DPI)  # labels are kept apart at this dpi
     FigureCanvasAgg(figure)
     ax = figure.add_axes((0, 0, 1, 1))
     ax.set_aspect("equal", adjustable="datalim")

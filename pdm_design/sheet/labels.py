@@ -14,7 +14,8 @@ import math
 from dataclasses import dataclass, field
 
 FONT = 7.5
-SHIFTS = 14   # places tried around a label's point: rings of 8, 1.1 text heights apart
+SHIFTS = 40   # places tried around a label's point: rings of 8, 1.1 text heights apart
+GAP = 3.0     # pixels: labels are placed this far apart (another renderer's fonts may differ)
 
 
 @dataclass
@@ -46,7 +47,7 @@ class Labels:
         frame = figure.bbox
         for note, optional in self.made:
             box = _extent(note, renderer)
-            if not _hits(box, placed) and _inside(box, frame):
+            if not _hits(box, placed, -GAP) and _inside(box, frame):
                 placed.append(box)
                 continue
             spot = self._free_spot(note, renderer, placed, frame)
@@ -70,7 +71,7 @@ class Labels:
                 note.xyann = (x0 + ring * step * 2.5 * math.cos(angle),
                               y0 + ring * step * math.sin(angle))
                 box = _extent(note, renderer)
-                if not _hits(box, placed) and _inside(box, frame):
+                if not _hits(box, placed, -GAP) and _inside(box, frame):
                     return note.xyann
         note.xyann = (x0, y0)
         return None
@@ -89,8 +90,8 @@ def _extent(text, renderer):
 
 
 def _inside(box, frame) -> bool:
-    return (frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0
-            and box.y1 <= frame.y1)
+    return (frame.x0 + GAP <= box.x0 and box.x1 <= frame.x1 - GAP and frame.y0 + GAP <= box.y0
+            and box.y1 <= frame.y1 - GAP)
 
 
 def _hits(box, boxes, pad=1.0) -> bool:
