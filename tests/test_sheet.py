@@ -243,7 +243,7 @@ def test_a_zero_tolerance_is_listed_as_zero_not_as_none(tmp_path):
     assert code == 0, err
     lines = (tmp_path / "out" / "sheet.md").read_text().splitlines()
     pivots = [line for line in lines if line.startswith("| pivot k ")]
-    assert len(pivots) == 2 and all(line.endswith("| m | 0 |") for line in pivots), pivots
+    assert len(pivots) == 2 and all(line.endswith("| mm | 0 |") for line in pivots), pivots
 
 
 def test_a_saved_design_whose_spec_changed_since_is_refused(tmp_path):

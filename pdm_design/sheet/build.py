@@ -341,10 +341,10 @@ def _manipulators(spec, analysis, tol, count):
         ("handover angle beta", b, "rad", None),
         ("front stop", scene.palm.front_stop, "rad", None),
         ("palm mass M = m / mass_ratio", palm_mass, "kg", None),
-        ("palm width x thickness", f"{scene.palm.width:g} x {scene.palm.thickness:g}", "m",
-         None),
-        ("object mass, width x height", f"{scene.body.mass:g} kg, {scene.body.width:g} x "
-         f"{scene.body.height:g}", "m", None),
+        ("palm width x thickness", f"{scene.palm.width * 1e3:g} x "
+         f"{scene.palm.thickness * 1e3:g}", "mm", None),
+        ("object mass, width x height", f"{scene.body.mass:g} kg, {scene.body.width * 1e3:g} x "
+         f"{scene.body.height * 1e3:g}", "mm", None),
         ("handover speed (periodic)", analysis.periodic.get("handover_speed"), "m/s", None),
     ]
     return summary, items
@@ -415,20 +415,51 @@ def sheet_markdown(sheet: BuildSheet, drawing: str | None = None) -> str:
         lines += [f"![drawing]({drawing})", ""]
     covered = (f" ({unit_word}s 1 to {sheet.tolerance_covers} only)"
                if sheet.tolerance and sheet.tolerance_covers < sheet.count else "")
-    lines += ["| quantity | value | unit | tolerance (+-) |", "|---|---|---|---|"]
+    from .parts import workshop_column, workshop_value
+
+    lines += ["Millimetres and degrees (the CSV and the JSON are in SI units).", "",
+              "| quantity | value | unit | tolerance (+-) |", "|---|---|---|---|"]
     for name, value, unit, tol in sheet.summary:
-        shown = _show(tol) + covered if tol is not None else "-"  # 0: build it exactly
-        lines.append(f"| {name} | {_show(value)} | {unit} | {shown} |")
+        shown_value, shown_unit = (workshop_value(value, unit) if isinstance(value, float)
+                                   else (value, unit))
+        shown = (_show(workshop_value(tol, unit)[0]) + covered if tol is not None
+                 else "-")  # 0: build it exactly
+        lines.append(f"| {name} | {_show_in(shown_value, shown_unit)} | {shown_unit} | "
+                     f"{shown} |")
+    lines += _parts_markdown(sheet)
     header = list(sheet.items[0])
+    shown_header = [workshop_column(c)[0] for c in header]
     lines += ["", f"## Every {unit_word}", "",
-              "| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+              "| " + " | ".join(shown_header) + " |",
+              "|" + "|".join("---" for _ in header) + "|"]
     for item in sheet.items[:MARKDOWN_ROWS]:
-        lines.append("| " + " | ".join(_show(item[c]) for c in header) + " |")
+        cells = (workshop_column(c, item[c]) for c in header)
+        lines.append("| " + " | ".join(_show_in(value, heading.rsplit("(", 1)[-1][:-1])
+                                       for heading, value in cells) + " |")
     if sheet.count > MARKDOWN_ROWS:
         lines.append(f"\n... {sheet.count - MARKDOWN_ROWS} more {unit_word}s in the CSV.")
     if sheet.notes:
         lines += ["", "## Problems", "", *(f"- {n}" for n in sheet.notes)]
     return "\n".join(lines) + "\n"
+
+
+def _parts_markdown(sheet: BuildSheet) -> list[str]:
+    """The parts list and every tolerance by part (sheet/parts.py), as Markdown lines."""
+    from .parts import parts_list, tolerance_entries
+
+    parts, _ = parts_list(sheet)
+    lines = ["", "## Parts", "", "| qty | part | dimensions | tolerance (+-) |",
+             "|---|---|---|---|"]
+    lines += [f"| {p.quantity} | {p.name} | {p.dimensions} | "
+              + ("; ".join(f"{e.quantity} {e.shown()}" for e in p.tolerances) or "-") + " |"
+              for p in parts]
+    entries = tolerance_entries(sheet)
+    if entries:
+        lines += ["", "## Tolerances", "", "| quantity | applies to | value | limited by |",
+                  "|---|---|---|---|"]
+        lines += [f"| {e.quantity} | {e.applies_to} | {e.shown()} | {e.limited_by} |"
+                  for e in entries]
+    return lines
 
 
 def tolerance_limit(sheet: BuildSheet) -> str:
@@ -450,6 +481,13 @@ def tolerance_limit(sheet: BuildSheet) -> str:
             f"{covers + 1} to {count} none is known (blank in the CSV): the errors it allows "
             f"may add up over more {unit_word} to a device that fails, even when those are "
             f"built exactly. {how}")
+
+
+def _show_in(value, unit: str) -> str:
+    """A value in mm to 0.001 mm, in degrees to 0.0001 degree, others as _show."""
+    if isinstance(value, float) and math.isfinite(value) and unit in ("mm", "deg", "mm/s"):
+        return f"{value:.3f}" if unit != "deg" else f"{value:.4f}"
+    return _show(value)
 
 
 def _show(value) -> str:

@@ -79,6 +79,18 @@ def workshop_value(value: float, unit: str) -> tuple[float, str]:
     return value, unit
 
 
+def workshop_column(column: str, value=None) -> tuple[str, object]:
+    """(the heading, the value) of a CSV column in workshop units: 'pivot_x_m' is shown as
+    'pivot_x (mm)' in mm, 'back_stop_rad' as 'back_stop (deg)'; other columns as they are."""
+    for suffix, unit in (("_m", "m"), ("_rad", "rad")):
+        if column.endswith(suffix):
+            name = column[: -len(suffix)]
+            shown, words = workshop_value(value, unit) if isinstance(value, float) else (
+                value, workshop_value(0.0, unit)[1])
+            return f"{name} ({words})", shown
+    return column, value
+
+
 def _number(value: float) -> str:
     return f"{value:.4g}" if abs(value) < 1e4 else f"{value:.0f}"
 
