@@ -165,3 +165,21 @@ def test_pause_and_the_slider_control_the_frame(browser, pages):
         assert not problems, problems
     finally:
         page.close()
+
+
+def test_a_design_that_does_not_work_gets_its_page_and_exit_1(tmp_path):
+    spec = tmp_path / "slip.toml"
+    spec.write_text(MANIP.read_text().replace("friction = 0.8", "friction = 0.3"))
+    result = CliRunner().invoke(main, ["report", str(spec), "--out", str(tmp_path / "out"),
+                                       "--no-tolerance"])
+    assert result.exit_code == 1 and "infeasible" in result.stderr
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert "Do not build it" in page and 'id="pdm-animation"' in page
+    assert len(data_of(tmp_path / "out" / "report.html")["t"]) > 10  # the run is animated
+
+
+def test_a_missing_spec_is_bad_input_and_writes_nothing(tmp_path):
+    result = CliRunner().invoke(main, ["report", str(tmp_path / "none.toml"), "--out",
+                                       str(tmp_path / "out")])
+    assert result.exit_code == 2 and "none.toml" in result.stderr
+    assert not (tmp_path / "out").exists()

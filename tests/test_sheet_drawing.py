@@ -54,12 +54,19 @@ def test_no_two_labels_overlap(path, count, tol):
 def test_every_manipulator_is_drawn_in_millimetres_and_degrees():
     from matplotlib.patches import Rectangle
 
-    figure = draw(sheet_of(MANIP, 30, {"dx": 0.01, "dy": 0.02}))
+    sheet = sheet_of(MANIP, 30, {"dx": 0.01, "dy": 0.02})
+    figure = draw(sheet)
     ax = figure.axes[0]
     palms = [p for p in ax.patches if isinstance(p, Rectangle) and p.get_fill()]
     assert len(palms) == 30
     assert all(abs(p.get_width() - 1600.0) < 1e-9 for p in palms)  # mm
-    words = " ".join(texts(figure))
+    assert "pdf, pages 2 to 6 (6 a page)" in " ".join(texts(figure)).replace("\n", " ")
+    page = draw(sheet, 25, 30, notes=False)  # the PDF's last page of manipulators
+    assert len([p for p in page.axes[0].patches if isinstance(p, Rectangle) and p.get_fill()]) == 6
+    # 24 pitches on: l (sin a + sin b), -l (cos a - cos b) each; past verification.stages = 6,
+    # so no tolerance on it
+    assert "pivot 25 (36638.967, -7427.086) mm" in texts(page)
+    words = " ".join(texts(draw(sheet_of(MANIP, 6, None))))
     assert "link l = 2000.000 mm" in words and "back stop -11.46 deg" in words
     assert "handover beta 34.38 deg" in words and "pitch x 1526.624 mm" in words
     assert " rad" not in words and ax.get_xlabel() == "x (mm)"

@@ -5,12 +5,11 @@ from __future__ import annotations
 import math
 
 from .labels import dimension
-from .parts import MM, hole_spacing, link_holes, part_of, tolerance_entries
-
-_PATHS: dict[int, tuple] = {}  # id(sheet) -> (sheet, path in mm): simulated once per sheet
+from .parts import MM, hole_spacing, link_holes, nominal_run, part_of, tolerance_entries
 
 
-def draw_manipulators(ax, labels, sheet, items):
+def draw_manipulators(ax, labels, sheet, items, detail=True):
+    """detail: dimension the first manipulator drawn (its link, angles, pivot and palm)."""
     from matplotlib.patches import Rectangle
 
     d, scene = sheet.design, sheet.spec.scene
@@ -42,7 +41,8 @@ def draw_manipulators(ax, labels, sheet, items):
             hx, hy = x + l * math.sin(b), y + l * math.cos(b)
             ax.plot([hx * MM], [hy * MM], marker="*", color="tab:orange", markersize=8)
     _path(ax, sheet, items)
-    _first_dimensions(ax, labels, sheet, items[0])
+    if detail:
+        _first_dimensions(ax, labels, sheet, items[0])
     if len(items) > 1:
         _pitch(ax, labels, items[0], items[1], l)
     if items[0]["manipulator"] == 1:
@@ -90,10 +90,12 @@ def _first_dimensions(ax, labels, sheet, item):
         labels.add(ax, text + more, at, (60 * math.copysign(1, angle), 14), line=True,
                    color=color)
     pivot = f"pivot {item['manipulator']} ({px:.3f}, {py:.3f}) mm"
-    if tol.get("pivot bracket"):
-        pivot += f"\n{tol['pivot bracket']}"
-    labels.add(ax, pivot, (px, py), (0, -26), line=True, color="tab:red" if tol.get(
-        "pivot bracket") else "black")
+    # the placement box holds for the first verification.stages pivots only
+    placed = tol.get("pivot bracket") if item["pivot_x_tolerance_m"] is not None else None
+    if placed:
+        pivot += f"\n{placed}"
+    labels.add(ax, pivot, (px, py), (0, -26), line=True,
+               color="tab:red" if placed else "black")
     cx, cy = (x + l * math.sin(-a)) * MM, (y + l * math.cos(-a)) * MM
     mass = sheet.spec.scene.body.mass / d["mass_ratio"]
     more = f", {tol['palm']}" if tol.get("palm") else ""
@@ -141,29 +143,12 @@ def _feed(ax, labels, sheet, first):
 
 def _path(ax, sheet, items):
     """The object's bottom-centre path as simulated, where it passes the items drawn."""
-    path = _simulated(sheet)
-    if not path:
+    run = nominal_run(sheet)
+    if run is None or not run.trajectory.get("x"):
         return
-    lo = items[0]["pivot_x_m"] * MM - 1.5 * sheet.design["link_length"] * MM
-    hi = items[-1]["pivot_x_m"] * MM + 1.5 * sheet.design["link_length"] * MM
-    shown = [(x, y) for x, y in path if lo <= x <= hi]
+    lo = items[0]["pivot_x_m"] - 1.5 * sheet.design["link_length"]
+    hi = items[-1]["pivot_x_m"] + 1.5 * sheet.design["link_length"]
+    shown = [(x * MM, y * MM) for x, y in zip(run.trajectory["x"], run.trajectory["y"])
+             if lo <= x <= hi]
     if shown:
         ax.plot(*zip(*shown), color="tab:green", lw=0.9, ls=":")
-
-
-def _simulated(sheet):
-    cached = _PATHS.get(id(sheet))
-    if cached is not None and cached[0] is sheet:
-        return cached[1]
-    try:
-        from ..verify import simulate_spec
-
-        result = simulate_spec(sheet.spec, sheet.spec.design_at(), stages=sheet.count,
-                               record_trajectory=True)
-        t = result.trajectory
-        path = [(x * MM, y * MM) for x, y in zip(t.get("x", ()), t.get("y", ()))]
-    except Exception:  # the drawing does not need the path to be useful
-        path = []
-    _PATHS.clear()
-    _PATHS[id(sheet)] = (sheet, path)
-    return path

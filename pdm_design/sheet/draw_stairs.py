@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 from .labels import dimension
-from .parts import MM
-
-_RUNS: dict[int, tuple] = {}  # id(sheet) -> (sheet, (path, impacts) in mm)
+from .parts import MM, nominal_run
 
 
-def draw_stairs(ax, labels, sheet, items):
+def draw_stairs(ax, labels, sheet, items, detail=True):
+    """detail: dimension a step's tread and rise."""
     from matplotlib.patches import Circle, Polygon
 
     first, last = items[0], items[-1]
@@ -24,7 +23,10 @@ def draw_stairs(ax, labels, sheet, items):
     outline += [(last["nose_x_m"] * MM, bottom), (left, bottom)]
     ax.add_patch(Polygon(outline, closed=True, facecolor="0.85", edgecolor="black", lw=1.1))
     r = sheet.spec.scene.ball.radius * MM
-    path, impacts = _simulated(sheet)
+    run = nominal_run(sheet)
+    path = [] if run is None else [(x * MM, y * MM) for x, y in zip(run.trajectory["x"],
+                                                                   run.trajectory["y"])]
+    impacts = [] if run is None else [(s["x"] * MM, s["y"] * MM) for s in run.stages]
     lo, hi = left - tread0, last["nose_x_m"] * MM + tread0
     shown = [(x, y + r) for x, y in path if lo <= x <= hi]
     if shown:
@@ -36,9 +38,10 @@ def draw_stairs(ax, labels, sheet, items):
     more = {k: (f" +-{v * MM:.3g} mm" if v is not None else "") for k, v in tol.items()}
     dim = items[1] if len(items) > 1 else first
     depth = dim["level_m"] * MM - 0.3 * max(dim["rise_m"] * MM, 0.1 * tread0)
-    dimension(ax, labels, (dim["back_x_m"] * MM, depth), (dim["nose_x_m"] * MM, depth),
-              f"tread {tread0:.3f} mm{more['tread']}", side=-1.0)
-    if len(items) > 2:  # the riser of the third step drawn, beside it in the solid
+    if detail:
+        dimension(ax, labels, (dim["back_x_m"] * MM, depth), (dim["nose_x_m"] * MM, depth),
+                  f"tread {tread0:.3f} mm{more['tread']}", side=-1.0)
+    if detail and len(items) > 2:  # the riser of the third step drawn, beside it
         upper, riser = items[1], items[2]
         x = riser["back_x_m"] * MM - 0.05 * tread0
         dimension(ax, labels, (x, riser["level_m"] * MM), (x, upper["level_m"] * MM),
@@ -69,22 +72,3 @@ def _feed(ax, labels, sheet, first, r):
         y = level + h0 + r + 0.25 * max(h0, tread)
         dimension(ax, labels, (0.0, y), (first["back_x_m"] * MM, y),
                   f"{first['back_x_m'] * MM:.3f} mm to tread 1", color="tab:green")
-
-
-def _simulated(sheet):
-    cached = _RUNS.get(id(sheet))
-    if cached is not None and cached[0] is sheet:
-        return cached[1]
-    try:
-        from ..verify import simulate_spec
-
-        result = simulate_spec(sheet.spec, sheet.spec.design_at(), stages=sheet.count,
-                               record_trajectory=True)
-        t = result.trajectory
-        run = ([(x * MM, y * MM) for x, y in zip(t["x"], t["y"])],
-               [(s["x"] * MM, s["y"] * MM) for s in result.stages])
-    except Exception:  # the drawing does not need the path to be useful
-        run = ([], [])
-    _RUNS.clear()
-    _RUNS[id(sheet)] = (sheet, run)
-    return run

@@ -58,14 +58,15 @@ def draw(sheet: BuildSheet, first: int = 1, last: int | None = None, *, notes: b
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     labels = Labels()
+    detail = len(items) <= PAGE_ITEMS  # a longer view: the PDF's pages carry the dimensions
     if sheet.kind == "manipulators":
         from .draw_manipulators import draw_manipulators
 
-        draw_manipulators(ax, labels, sheet, items)
+        draw_manipulators(ax, labels, sheet, items, detail)
     else:
         from .draw_stairs import draw_stairs
 
-        draw_stairs(ax, labels, sheet, items)
+        draw_stairs(ax, labels, sheet, items, detail)
     notes_top = _layout(figure, ax, len(lines), bool(sheet.failures))
     _title(figure, sheet, first, last)
     if lines:
@@ -115,6 +116,13 @@ def _notes(sheet) -> list[str]:
               "boxes: pivot tolerance (to scale); stars: handover points; dotted: the object's "
               "path (simulated)" if kind == "manipulators" else
               "dashed: the ball's centre (simulated); circles: the ball at each impact")
+    if sheet.count > PAGE_ITEMS:
+        pages = math.ceil(sheet.count / PAGE_ITEMS)
+        what = "manipulator" if kind == "manipulators" else "step"
+        where = "pivot's" if kind == "manipulators" else "step's"
+        legend += (f". Each {what} dimensioned: sheet.pdf, pages 2 to {pages + 1} "
+                   f"({PAGE_ITEMS} a page); every {where} coordinates: the pages after them "
+                   "and sheet.csv")
     lines = textwrap.wrap(legend, NOTE_WIDTH) + ["", "PARTS"]
     parts, other = parts_list(sheet)
     for part in parts:

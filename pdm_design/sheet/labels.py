@@ -4,8 +4,8 @@ Every label is an annotation placed at an offset in points from the point it lab
 can be moved without moving what it points at. `Labels.settle` measures each label's extent
 with the figure's renderer (in the order they were made: the first ones stay where they are),
 moves a label that runs into one already placed (or into any other text of the figure: tick
-labels, titles, notes) to the nearest free place around its point, and hides an optional label
-(an item's number) that finds none.
+labels, titles, notes) to the nearest free place around its point (with a thin line back to
+it), and hides an optional label (an item's number) instead.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ class Labels:
             if not _hits(box, placed, -GAP) and _inside(box, frame):
                 placed.append(box)
                 continue
-            spot = self._free_spot(note, renderer, placed, frame)
+            spot = None if optional else self._free_spot(note, renderer, placed, frame)
             if spot is None:
                 if optional:
                     note.set_visible(False)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 MM = 1e3
 HOLE_SPACING_FRACTION = 0.5   # link holes on the palm: half the palm's width apart
+_RUNS: dict[int, tuple] = {}  # id(sheet) -> (sheet, its nominal run or None)
 
 
 @dataclass(frozen=True)
@@ -153,6 +154,25 @@ def link_holes(pivot: tuple[float, float], theta: float, link: float, spacing: f
 def pivots(sheet) -> list[tuple[int, float, float]]:
     """[(k, x, y)] of every manipulator's pivot (m)."""
     return [(item["manipulator"], item["pivot_x_m"], item["pivot_y_m"]) for item in sheet.items]
+
+
+def nominal_run(sheet):
+    """The simulator's run of the sheet's design over its items, with the trajectory (None
+    when the simulator refuses it: the drawing does without the path). Kept for the last sheet
+    asked: its drawing's pages all draw the same path."""
+    cached = _RUNS.get(id(sheet))
+    if cached is not None and cached[0] is sheet:
+        return cached[1]
+    try:
+        from ..verify import simulate_spec
+
+        run = simulate_spec(sheet.spec, sheet.spec.design_at(), stages=sheet.count,
+                            record_trajectory=True)
+    except Exception:  # e.g. more stages than the simulator keeps records for
+        run = None
+    _RUNS.clear()
+    _RUNS[id(sheet)] = (sheet, run)
+    return run
 
 
 # --------------------------------------------------------------------------- parts list
