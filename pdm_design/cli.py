@@ -362,14 +362,17 @@ def sheet(source, out, count, no_tolerance, no_drawing):
 @click.option("--count", type=click.IntRange(1, 10_000_000), default=None,
               help="Manipulators or steps on the drawing (default: verification.stages).")
 @click.option("--no-tolerance", is_flag=True, help="Do not solve for the tolerance.")
+@click.option("--yield", "yield_path", type=click.Path(dir_okay=False, path_type=str),
+              default=None, help="A yield analysis saved as JSON, shown on the page.")
 @_guarded
-def report(source, out, count, no_tolerance):
+def report(source, out, count, no_tolerance, yield_path):
     """One self-contained HTML page of a design (docs/report.md): design, margins, tolerances,
     parts, the drawing and the simulated run animated. Exit 1 (page still written) when the
     design does not work."""
     from .report.page import report_command
 
-    return EXIT_OK if report_command(source, out, count, no_tolerance, click.echo) else EXIT_FAILED
+    works = report_command(source, out, count, no_tolerance, click.echo, yield_path)
+    return EXIT_OK if works else EXIT_FAILED
 
 
 @main.command()

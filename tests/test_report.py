@@ -183,3 +183,19 @@ def test_a_missing_spec_is_bad_input_and_writes_nothing(tmp_path):
                                        str(tmp_path / "out")])
     assert result.exit_code == 2 and "none.toml" in result.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_a_saved_yield_analysis_goes_on_the_page(tmp_path):
+    analysis = tmp_path / "yield.json"
+    analysis.write_text(json.dumps({"yield": 0.9973, "survival": [[1, 1.0], [2, 0.998]]}))
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["report", str(MANIP), "--out", str(out),
+                                       "--no-tolerance", "--yield", str(analysis)])
+    assert result.exit_code == 0, result.output
+    page = (out / "report.html").read_text()
+    assert "<h2>Yield</h2>" in page and "0.9973" in page and 'alt="survival"' in page
+    analysis.write_text("[1, 2]")
+    result = CliRunner().invoke(main, ["report", str(MANIP), "--out", str(tmp_path / "b"),
+                                       "--yield", str(analysis)])
+    assert result.exit_code == 2 and "yield.json" in result.stderr
+    assert not (tmp_path / "b").exists()

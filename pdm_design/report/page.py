@@ -43,11 +43,30 @@ def write_report(source, folder, **options) -> tuple[Path, object]:
     return path, sheet
 
 
-def report_command(source, out, count, no_tolerance, echo) -> bool:
+def read_yield(path) -> dict:
+    """A yield analysis saved as JSON (a table of numbers and curves: docs/report.md)."""
+    import json
+
+    from ..errors import SpecError
+
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SpecError("command line", "--yield", "an existing JSON file", str(path)) from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise SpecError(str(path), "", "a JSON document (a yield analysis)", str(exc)) from None
+    if not isinstance(data, dict):
+        raise SpecError(str(path), "", "a JSON table (a yield analysis)", type(data).__name__)
+    return data
+
+
+def report_command(source, out, count, no_tolerance, echo, yield_path=None) -> bool:
     """The body of `pdm-design report`: write the page, say where; True when the design works
     (else its failures go to stderr: the page is written with them at its top)."""
     folder = out or f"{Path(source).stem}-report"
-    path, sheet = write_report(source, folder, count=count, tolerance=not no_tolerance)
+    analysis = read_yield(yield_path) if yield_path else None
+    path, sheet = write_report(source, folder, count=count, tolerance=not no_tolerance,
+                               yield_result=analysis)
     echo(f"report of {sheet.spec.name or source} (status {sheet.status}): {path}")
     for failure in sheet.failures:
         echo(f"warning: {failure}", err=True)
