@@ -105,3 +105,8 @@ def test_every_step_corner_is_where_the_periodic_bounce_puts_it():
 def test_the_dxf_renders_to_a_png():
     sheet = sheet_for(PROBLEMS / "paper_stairs_friction.toml", count=4, tolerance=False)
     assert dxf_png(sheet).startswith(b"\x89PNG")
+
+
+def test_the_same_sheet_gives_the_same_bytes(manip):
+    sheet, _ = manip
+    assert dxf_bytes(sheet) == dxf_bytes(sheet)  # no dates or GUIDs of the moment

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import io
 import math
+import re
 
 from .parts import MM, deg, hole_spacing, link_holes, mm, parts_list, pivots
 
@@ -44,9 +45,22 @@ def dxf_document(sheet):
 
 
 def dxf_bytes(sheet) -> bytes:
+    """The DXF file; the same bytes for the same sheet (fixed dates and GUIDs, as ezdxf writes
+    them for its own tests: a drawing that did not change gives no diff)."""
+    import ezdxf
+
     stream = io.StringIO()
-    dxf_document(sheet).write(stream)
-    return stream.getvalue().encode("utf-8")
+    document = dxf_document(sheet)
+    fixed = ezdxf.options.write_fixed_meta_data_for_testing
+    ezdxf.options.write_fixed_meta_data_for_testing = True
+    try:
+        document.write(stream)
+    finally:
+        ezdxf.options.write_fixed_meta_data_for_testing = fixed
+    # ezdxf's "created by" and "written by" markers carry the time: the fixed date instead
+    text = re.sub(r"^(ezdxf )?(\d+\.\d+\.\d+\S* @ )\d{4}-\d\d-\d\dT[\d:.+-]+$",
+                  r"\1\g<2>2000-01-01T00:00:00+00:00", stream.getvalue(), flags=re.M)
+    return text.encode("utf-8")
 
 
 def dxf_png(sheet, *, dpi: int = 110) -> bytes:
