@@ -110,8 +110,8 @@ def _manipulators(spec, result) -> dict:
         palms.append({"pivot": [round(px * MM, 3), round(py * MM, 3)],
                       "keys": [[round(a, 5), round(b, 6)] for a, b in _thin(k)]})
     pitch = abs(row.pivots[1][0] - row.pivots[0][0]) if len(row) > 1 else row.palm_width
-    return {"window": max(5.0 * pitch, 3.2 * row.link_length) * MM,
-            "below": 0.4 * row.link_length * MM,
+    return {"window": max(5.0 * pitch, 3.6 * row.link_length) * MM,
+            "below": 0.5 * row.link_length * MM,
             "link": row.link_length * MM, "palm_width": row.palm_width * MM,
             "palm_thickness": row.palm_thickness * MM, "hole_spacing": row.palm_width * MM / 2,
             "body_width": row.body_width * MM, "body_height": row.body_height * MM,
