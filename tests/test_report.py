@@ -13,7 +13,6 @@ import pytest
 from click.testing import CliRunner
 
 from pdm_design.cli import main
-from pdm_design.report.animation import animation_data
 from pdm_design.spec import load_spec
 from pdm_design.verify import simulate_spec
 

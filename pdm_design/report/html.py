@@ -50,7 +50,8 @@ def report_page(sheet, *, margins: dict, run=None, refused: str = "",
     if yield_result is not None:
         body += ["<h2>Yield</h2>", _yield(yield_result)]
     if drawing_png:
-        body += ["<h2>Drawing</h2>", f'<img alt="build sheet drawing" src="{_data_uri(drawing_png)}">']
+        body += ["<h2>Drawing</h2>",
+                 f'<img alt="build sheet drawing" src="{_data_uri(drawing_png)}">']
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>{name}: pdm-design report</title><style>{_STYLE}</style></head>\n"
             "<body>\n" + "\n".join(body) + "\n</body></html>\n")
@@ -166,7 +167,8 @@ def _yield(result) -> str:
     out = ["<table>" + "".join(f"<tr><td>{html.escape(k)}</td><td class=num>{_cell(v)}</td>"
                                "</tr>" for k, v in scalars.items()) + "</table>"]
     for key, (xs, ys, xlabel, ylabel) in curves.items():
-        out.append(f'<img alt="{html.escape(key)}" src="{_data_uri(_plot(key, xs, ys, xlabel, ylabel))}">')
+        png = _plot(key, xs, ys, xlabel, ylabel)
+        out.append(f'<img alt="{html.escape(key)}" src="{_data_uri(png)}">')
     return "\n".join(out)
 
 

@@ -6,8 +6,9 @@ from __future__ import annotations
 import stat
 from pathlib import Path
 
-from .build import BuildSheet, make_sheet, sheet_csv, sheet_for, sheet_markdown
+from .build import BuildSheet, make_sheet, sheet_for
 from .drawing import DRAWING_FORMATS
+from .markdown import sheet_csv, sheet_markdown
 
 STEM = "sheet"
 DRAWING_FILES = (*(f"{STEM}.{fmt}" for fmt in DRAWING_FORMATS), f"{STEM}.dxf",
