@@ -405,15 +405,15 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
 @main.command()
 @click.argument("source", metavar="SPEC_OR_JSON", type=str)
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Folder for sheet.md, sheet.csv, sheet.png and sheet.svg (default: the "
-              "source's name followed by -sheet).")
+              help="Folder for sheet.md, sheet.csv, the drawing (sheet.png, .svg, .pdf) and "
+              "sheet.dxf (default: the source's name followed by -sheet).")
 @click.option("--count", type=_Count(1, 10_000_000), default=None,
               help="Manipulators or steps listed (default: the spec's verification.stages; the "
               "tolerance covers only the first verification.stages of them).")
 @click.option("--no-tolerance", is_flag=True,
               help="Do not solve for the placement tolerance when the design carries none.")
 @click.option("--no-drawing", is_flag=True,
-              help="Write the Markdown and CSV only (an earlier sheet.png / sheet.svg in the "
+              help="Write the Markdown and CSV only (an earlier drawing and DXF in the "
               "folder is removed).")
 @_guarded
 def sheet(source, out, count, no_tolerance, no_drawing):
@@ -447,11 +447,11 @@ def sheet(source, out, count, no_tolerance, no_drawing):
 
 @main.command(name="yield")
 @SPEC
-@click.option("--builds", type=click.IntRange(1, 10_000_000), default=None,
+@click.option("--builds", type=_Count(1, 10_000_000), default=None,
               help="Builds drawn (default: the spec's tolerances.builds).")
-@click.option("--stages", type=click.IntRange(1, 100_000), default=None,
+@click.option("--stages", type=_Count(1, 100_000), default=None,
               help="Stages each build must pass (default: the spec's verification.stages).")
-@click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=None,
+@click.option("--seed", type=_Count(0, 2**63 - 1), default=None,
               help="Random seed of the builds (default: the spec's tolerances.seed).")
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
               help="Also write yield.json, survival.png and yield_scale.png to this folder.")
@@ -472,6 +472,26 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
                yield_text(result, loaded.name or spec) + "".join(f"  {f}\n" for f in files),
                nl=fmt == "json")
     return EXIT_OK
+
+
+@main.command()
+@click.argument("source", metavar="SPEC_OR_JSON", type=str)
+@click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
+              help="Folder for report.html (default: the source's name followed by -report).")
+@click.option("--count", type=_Count(1, 10_000_000), default=None,
+              help="Manipulators or steps on the drawing (default: verification.stages).")
+@click.option("--no-tolerance", is_flag=True, help="Do not solve for the tolerance.")
+@click.option("--yield", "yield_path", type=click.Path(dir_okay=False, path_type=str),
+              default=None, help="A yield analysis saved as JSON, shown on the page.")
+@_guarded
+def report(source, out, count, no_tolerance, yield_path):
+    """One self-contained HTML page of a design (docs/report.md): design, margins, tolerances,
+    parts, the drawing and the simulated run animated. Exit 1 (page still written) when the
+    design does not work."""
+    from .report.page import report_command
+
+    works = report_command(source, out, count, no_tolerance, click.echo, yield_path)
+    return EXIT_OK if works else EXIT_FAILED
 
 
 @main.command()

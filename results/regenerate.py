@@ -3,13 +3,16 @@
     results/paper/    the paper reproduction: `pdm-design optimize --format json` of the three
                       paper specs, and comparison.md against the paper's numbers
     results/tables/   one design table per scene (`pdm-design table`)
-    results/sheets/   build sheets of the shipped problems that work (`pdm-design sheet`)
+    results/sheets/   build sheets of the shipped problems that work (`pdm-design sheet`):
+                      Markdown, CSV, the drawing (PNG, SVG, PDF) and the DXF
+    results/reports/  report pages (`pdm-design report`) and a screenshot of each as headless
+                      Chromium renders it (when playwright and Chromium are installed)
     results/bench_sweep.md   sweep throughput (designs per second) at 1 and 2 workers
 
 Run from anywhere (it works in the repository's root):
 
     python results/regenerate.py            # everything
-    python results/regenerate.py paper tables sheets bench   # or some of it
+    python results/regenerate.py paper tables sheets reports bench   # or some of it
 
 Every output comes from the command line, exactly as a user would run it (the commands are
 printed as they run and written into the outputs).
@@ -30,7 +33,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results"
 PAPER_SPECS = ("paper_stairs_frictionless", "paper_stairs_friction", "paper_manipulators")
-OPTIMISED_SPECS = ("manipulators_robust", "manipulators_robust_all_free", "stairs_design")
+OPTIMISED_SPECS = ("manipulators_robust", "manipulators_robust_all_free", "stairs_design",
+                   "manipulators_long_row")
+REPORT_SPECS = ("manipulators_robust", "manipulators_long_row", "stairs_design")
 TABLES = {  # folder: (spec, sweeps)
     "manipulators_mass_ratio": ("problems/paper_manipulators.toml", ["mass_ratio=1:30:30"]),
     "manipulators_alpha_beta": ("problems/paper_manipulators.toml",
@@ -139,11 +144,47 @@ def tables() -> None:
         cli("table", spec, *(f"--sweep={s}" for s in sweeps), "--out", str(out.relative_to(ROOT)))
 
 
+def _shipped(names):
+    """The names whose spec is in problems/ (a spec not there yet is skipped, and said so)."""
+    for name in names:
+        if (ROOT / "problems" / f"{name}.toml").is_file():
+            yield name
+        else:
+            print(f"(skipped: problems/{name}.toml does not exist)", flush=True)
+
+
 def sheets() -> None:
-    for name in (*PAPER_SPECS, *OPTIMISED_SPECS):
+    for name in _shipped((*PAPER_SPECS, *OPTIMISED_SPECS)):
         out = RESULTS / "sheets" / name
         shutil.rmtree(out, ignore_errors=True)
         cli("sheet", f"problems/{name}.toml", "--out", str(out.relative_to(ROOT)))
+
+
+def reports() -> None:
+    for name in _shipped(REPORT_SPECS):
+        out = RESULTS / "reports" / name
+        shutil.rmtree(out, ignore_errors=True)
+        cli("report", f"problems/{name}.toml", "--out", str(out.relative_to(ROOT)))
+        _screenshot(out / "report.html", out / "screenshot.png")
+
+
+def _screenshot(page: Path, png: Path) -> None:
+    """The page as headless Chromium shows it 1.5 s after loading (the animation playing)."""
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        print("(no screenshot: the playwright package is not installed)", flush=True)
+        return
+    flags = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+             "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=shutil.which("chromium") or
+                                    "/usr/bin/chromium", args=flags)
+        tab = browser.new_page(viewport={"width": 1200, "height": 900})
+        tab.goto(page.resolve().as_uri())
+        tab.wait_for_timeout(1500)
+        tab.screenshot(path=str(png))
+        browser.close()
 
 
 # --------------------------------------------------------------------------- benchmark
@@ -250,7 +291,7 @@ def _bench_figure(results, points, path):
     figure.savefig(path, dpi=110, metadata={"Software": None})
 
 
-STEPS = {"paper": paper, "tables": tables, "sheets": sheets, "bench": bench}
+STEPS = {"paper": paper, "tables": tables, "sheets": sheets, "reports": reports, "bench": bench}
 
 if __name__ == "__main__":
     chosen = sys.argv[1:] or list(STEPS)

@@ -165,11 +165,16 @@ def test_sheet_command_writes_markdown_csv_and_drawing(tmp_path):
     assert b"<svg" in (tmp_path / "sheet.svg").read_bytes()
 
 
-def test_csv_lists_every_step_the_drawing_only_some(tmp_path):
+def test_every_step_is_drawn_and_the_pdf_has_a_page_for_each_six(tmp_path):
+    import re
+
     code, _, err = run("sheet", STAIRS, "--out", tmp_path, "--count", "40", "--no-tolerance")
     assert code == 0, err
     assert len(csv_rows(tmp_path / "sheet.csv")) == 40
-    assert b"first 8 of 40" in (tmp_path / "sheet.svg").read_bytes()
+    assert b"40 steps (millimetres)" in (tmp_path / "sheet.svg").read_bytes()
+    pdf = (tmp_path / "sheet.pdf").read_bytes()
+    pages = len(re.findall(rb"/Type /Page\b(?!s)", pdf))
+    assert pages == 1 + math.ceil(40 / 6) + 1  # the whole, six steps a page, the table
 
 
 def test_sheet_of_a_saved_design_json_matches_the_spec(tmp_path):
@@ -238,7 +243,7 @@ def test_a_zero_tolerance_is_listed_as_zero_not_as_none(tmp_path):
     assert code == 0, err
     lines = (tmp_path / "out" / "sheet.md").read_text().splitlines()
     pivots = [line for line in lines if line.startswith("| pivot k ")]
-    assert len(pivots) == 2 and all(line.endswith("| m | 0 |") for line in pivots), pivots
+    assert len(pivots) == 2 and all(line.endswith("| mm | 0 |") for line in pivots), pivots
 
 
 def test_a_saved_design_whose_spec_changed_since_is_refused(tmp_path):
@@ -346,14 +351,15 @@ def test_sheet_without_drawing_removes_an_earlier_drawing_only(tmp_path):
     assert run("sheet", MANIP, "--out", tmp_path, "--no-tolerance")[0] == 0
     assert (tmp_path / "sheet.png").exists() and (tmp_path / "sheet.svg").exists()
     (tmp_path / "notes.txt").write_text("the workshop's")
-    (tmp_path / "sheet.pdf").write_text("not the sheet's")
+    (tmp_path / "sheet.dwg").write_text("not the sheet's")
     code, out, err = run("sheet", STAIRS, "--out", tmp_path, "--no-tolerance", "--no-drawing")
     assert code == 0, err
-    assert not (tmp_path / "sheet.png").exists() and not (tmp_path / "sheet.svg").exists()
+    for name in ("sheet.png", "sheet.svg", "sheet.pdf", "sheet.dxf", "sheet_dxf.png"):
+        assert not (tmp_path / name).exists(), name
     assert len(csv_rows(tmp_path / "sheet.csv")) == 20 and "sheet.svg" not in (
         tmp_path / "sheet.md").read_text()
     assert (tmp_path / "notes.txt").read_text() == "the workshop's"
-    assert (tmp_path / "sheet.pdf").read_text() == "not the sheet's"
+    assert (tmp_path / "sheet.dwg").read_text() == "not the sheet's"
 
 
 def test_stale_drawing_removal_leaves_folders_and_link_targets(tmp_path):

@@ -1,22 +1,25 @@
-"""Build sheets: `sheet_for(path)` makes one, `write_sheet` writes its Markdown, CSV and drawing
-(PNG, SVG), each file whole or not at all."""
+"""Build sheets: `sheet_for(path)` makes one, `write_sheet` writes its Markdown, CSV, drawing
+(PNG, SVG, PDF) and DXF (with a PNG rendering of it), each file whole or not at all."""
 
 from __future__ import annotations
 
 import stat
 from pathlib import Path
 
-from .build import BuildSheet, make_sheet, sheet_csv, sheet_for, sheet_markdown
+from .build import BuildSheet, make_sheet, sheet_for
 from .drawing import DRAWING_FORMATS
+from .markdown import sheet_csv, sheet_markdown
 
 STEM = "sheet"
+DRAWING_FILES = (*(f"{STEM}.{fmt}" for fmt in DRAWING_FORMATS), f"{STEM}.dxf",
+                 f"{STEM}_dxf.png")
 
 
 def write_sheet(sheet: BuildSheet, folder, *, drawing: bool = True) -> tuple[Path, ...]:
-    """Write sheet.md, sheet.csv and (unless drawing=False) sheet.png and sheet.svg: all of them
-    or, when one cannot be written, none. Without the drawing, an earlier sheet's sheet.png and
-    sheet.svg in the folder are removed once the new files are in place (they would show
-    another design)."""
+    """Write sheet.md, sheet.csv and (unless drawing=False) the drawing (sheet.png, sheet.svg,
+    sheet.pdf) and the DXF (sheet.dxf, rendered as sheet_dxf.png): all of them or, when one
+    cannot be written, none. Without the drawing, an earlier sheet's drawing and DXF in the
+    folder are removed once the new files are in place (they would show another design)."""
     from ..io import write_all
 
     folder = Path(folder)
@@ -24,11 +27,14 @@ def write_sheet(sheet: BuildSheet, folder, *, drawing: bool = True) -> tuple[Pat
              folder / f"{STEM}.csv": sheet_csv(sheet)}
     if drawing:
         from .drawing import drawing_files
+        from .dxf import dxf_bytes, dxf_png
 
         files |= {folder / name: payload
                   for name, payload in drawing_files(sheet, STEM).items()}
+        files |= {folder / f"{STEM}.dxf": dxf_bytes(sheet),
+                  folder / f"{STEM}_dxf.png": dxf_png(sheet)}
     write_all(files)
-    for stale in (folder / f"{STEM}.{fmt}" for fmt in DRAWING_FORMATS):
+    for stale in (folder / name for name in DRAWING_FILES):
         if stale not in files:
             _remove_stale(stale)
     return tuple(files)

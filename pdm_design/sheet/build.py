@@ -29,7 +29,7 @@ from pathlib import Path
 from ..errors import PdmError, SpecError
 from ..physics import manipulators as phys
 from ..spec import load_spec
-from ..spec.model import MAX_MANIPULATOR_STAGES, MAX_OPTIMISED_BOUNCES, Bounds, Spec
+from ..spec.model import MAX_OPTIMISED_BOUNCES, Bounds, Spec
 from ..status import Status
 
 JSON_SCHEMA_PREFIX = "pdm-design/optimize/"
@@ -43,7 +43,9 @@ class BuildSheet:
     items: one dict per manipulator or step (CSV columns, SI units in the names); the tolerance
     columns are None past the spec's verification.stages (`tolerance_covers`). violations and
     verification: why the design does not meet its requirements, and the simulator's verdict
-    (`passed`, `summary`, `failures`; None when it was not run)."""
+    (`passed`, `summary`, `failures`; None when it was not run). tolerances: tolerances of
+    further parts (link length, back stop, palm mass, ...) a tolerance analysis found, shown
+    on their parts (sheet/parts.py)."""
 
     spec: Spec
     status: str
@@ -58,6 +60,7 @@ class BuildSheet:
     notes: tuple[str, ...] = field(default=())
     violations: tuple[str, ...] = field(default=())
     verification: dict | None = None
+    tolerances: tuple = field(default=())  # further ToleranceEntry (sheet/parts.py), by part
 
     @property
     def kind(self) -> str:
@@ -338,10 +341,10 @@ def _manipulators(spec, analysis, tol, count):
         ("handover angle beta", b, "rad", None),
         ("front stop", scene.palm.front_stop, "rad", None),
         ("palm mass M = m / mass_ratio", palm_mass, "kg", None),
-        ("palm width x thickness", f"{scene.palm.width:g} x {scene.palm.thickness:g}", "m",
-         None),
-        ("object mass, width x height", f"{scene.body.mass:g} kg, {scene.body.width:g} x "
-         f"{scene.body.height:g}", "m", None),
+        ("palm width x thickness", f"{scene.palm.width * 1e3:g} x "
+         f"{scene.palm.thickness * 1e3:g}", "mm", None),
+        ("object mass, width x height", f"{scene.body.mass:g} kg, {scene.body.width * 1e3:g} x "
+         f"{scene.body.height * 1e3:g}", "mm", None),
         ("handover speed (periodic)", analysis.periodic.get("handover_speed"), "m/s", None),
     ]
     return summary, items
@@ -376,84 +379,3 @@ def _stairs(spec, analysis, tol, count):
         ("impact speed (periodic)", analysis.periodic.get("impact_speed"), "m/s", None),
     ]
     return summary, items
-
-
-# --------------------------------------------------------------------------- text
-
-def sheet_csv(sheet: BuildSheet) -> str:
-    """Every manipulator or step, one row each (exact floats)."""
-    from ..sweep.tables import cell, csv_line
-
-    header = list(sheet.items[0])
-    return csv_line(header) + "".join(csv_line([cell(item[c]) for c in header])
-                                      for item in sheet.items)
-
-
-def sheet_markdown(sheet: BuildSheet, drawing: str | None = None) -> str:
-    spec = sheet.spec
-    unit_word = "manipulator" if sheet.kind == "manipulators" else "step"
-    lines = [f"# Build sheet: {spec.name or Path(spec.source).stem}", ""]
-    if sheet.failures:
-        lines += ["## WARNING: this design does not work. Do not build it.", "",
-                  *(f"- {f}" for f in sheet.failures), ""]
-    lines += [f"Spec: `{spec.source}` ({sheet.kind}); from `{sheet.source}`; status: "
-              f"{sheet.status}.", ""]
-    v = sheet.verification
-    if v is not None:
-        verdict = "passed" if v.get("passed") else "FAILED"
-        lines += [f"Verification (the event simulator): {verdict}: {v.get('summary')}.", ""]
-    lines += [f"Tolerance: {sheet.tolerance_note}"
-              + (" (half-widths: build each within +- this of its nominal)." if sheet.tolerance
-                 else "."), ""]
-    limit = tolerance_limit(sheet)
-    if limit:
-        lines += [limit, ""]
-    if drawing:
-        lines += [f"![drawing]({drawing})", ""]
-    covered = (f" ({unit_word}s 1 to {sheet.tolerance_covers} only)"
-               if sheet.tolerance and sheet.tolerance_covers < sheet.count else "")
-    lines += ["| quantity | value | unit | tolerance (+-) |", "|---|---|---|---|"]
-    for name, value, unit, tol in sheet.summary:
-        shown = _show(tol) + covered if tol is not None else "-"  # 0: build it exactly
-        lines.append(f"| {name} | {_show(value)} | {unit} | {shown} |")
-    header = list(sheet.items[0])
-    lines += ["", f"## Every {unit_word}", "",
-              "| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    for item in sheet.items[:MARKDOWN_ROWS]:
-        lines.append("| " + " | ".join(_show(item[c]) for c in header) + " |")
-    if sheet.count > MARKDOWN_ROWS:
-        lines.append(f"\n... {sheet.count - MARKDOWN_ROWS} more {unit_word}s in the CSV.")
-    if sheet.notes:
-        lines += ["", "## Problems", "", *(f"- {n}" for n in sheet.notes)]
-    return "\n".join(lines) + "\n"
-
-
-def tolerance_limit(sheet: BuildSheet) -> str:
-    """In words, when more items are listed than the tolerance holds for: which ones carry it
-    and how to get it for all (empty otherwise)."""
-    covers, count = sheet.tolerance_covers, sheet.count
-    if not sheet.tolerance or covers >= count:
-        return ""
-    unit_word = "manipulators" if sheet.kind == "manipulators" else "steps"
-    # the most stages a tolerance is solved for: stairs' NLP has rows for every bounce; the
-    # simulator keeps every manipulator's record
-    most = MAX_OPTIMISED_BOUNCES if sheet.kind == "stairs" else MAX_MANIPULATOR_STAGES
-    how = (f"For a tolerance on all {count}, set `verification.stages = {count}` in the spec "
-           "and make the sheet again." if count <= most else
-           f"A tolerance is solved for at most {most} {unit_word} (`verification.stages` = "
-           f"{most}): a longer device cannot be given one.")
-    return (f"The tolerance holds for a device of the first {covers} {unit_word} only: it was "
-            f"solved for the spec's `verification.stages` = {covers}. For {unit_word} "
-            f"{covers + 1} to {count} none is known (blank in the CSV): the errors it allows "
-            f"may add up over more {unit_word} to a device that fails, even when those are "
-            f"built exactly. {how}")
-
-
-def _show(value) -> str:
-    if value is None:
-        return "-"
-    if isinstance(value, int) and not isinstance(value, bool):
-        return str(value)
-    if isinstance(value, float):
-        return f"{value:.6g}" if math.isfinite(value) else "-"
-    return str(value)

@@ -1,8 +1,11 @@
 """Plots of a design table: how the optimum and its tolerance move across the sweep.
 
 x is the first swept parameter; each further combination of the other swept parameters is one
-line. Points whose status is not a success are drawn as red crosses. Figures are made with
-matplotlib's object API (Figure + Agg canvas, no pyplot state) and returned as PNG and SVG bytes.
+line. Points whose status is not a success are drawn as red crosses (the figure's legend says
+so). Every panel of a figure has the same x range (the grid's). A column equal to one already
+drawn at every point (tolerance, dx and dy of a square box) is not drawn again: the panel that
+shows it names both. Lengths are drawn in millimetres. Figures are made with matplotlib's object
+API (Figure + Agg canvas, no pyplot state) and returned as PNG and SVG bytes.
 """
 
 from __future__ import annotations
@@ -16,20 +19,26 @@ from .tables import DESIGN, GEOMETRY, PERIODIC, TOLERANCE_AXES, number
 MAX_PANELS = 6
 MAX_LINES = 8
 SUCCESS = ("optimal", "evaluated")
-_LABELS = {
-    "objective": "objective", "tolerance": "tolerance (smallest half-width, m)",
-    "min_margin": "smallest margin", "handover_speed": "handover speed (m/s)",
-    "pitch_x": "pitch x (m)", "pitch_y": "pitch y, down (m)", "rise": "rise (m)",
-    "tread": "tread (m)", "impact_speed": "impact speed (m/s)", "alpha": "alpha (rad)",
-    "beta": "beta (rad)", "link_length": "link length (m)", "palm_mass": "palm mass (kg)",
-    "landing_offset": "landing offset (m)", "landing_speed": "landing speed (m/s)",
-    "contraction": "contraction factor", "drop_per_stage": "drop per stage (m)",
-    "nose_clearance": "nose clearance (m)", "flight_time": "flight time (s)",
-    "launch_speed": "launch speed (m/s)", "horizontal_speed": "horizontal speed (m/s)",
-    "vertical_impact_speed": "vertical impact speed (m/s)", "spin": "spin (rad/s)",
-    "tolerance.dx": "tolerance dx (m)", "tolerance.dy": "tolerance dy (m)",
-    "tolerance.rise": "tolerance rise (m)", "tolerance.tread": "tolerance tread (m)",
+_LABELS = {  # (label, unit); a unit "m" is drawn in millimetres
+    "objective": ("objective", ""), "tolerance": ("tolerance (smallest half-width)", "m"),
+    "min_margin": ("smallest margin", ""), "handover_speed": ("handover speed", "m/s"),
+    "pitch_x": ("pitch x", "m"), "pitch_y": ("pitch y, down", "m"), "rise": ("rise", "m"),
+    "tread": ("tread", "m"), "impact_speed": ("impact speed", "m/s"),
+    "alpha": ("alpha", "rad"), "beta": ("beta", "rad"), "link_length": ("link length", "m"),
+    "palm_mass": ("palm mass", "kg"), "landing_offset": ("landing offset", "m"),
+    "landing_speed": ("landing speed", "m/s"), "contraction": ("contraction factor", ""),
+    "drop_per_stage": ("drop per stage", "m"), "nose_clearance": ("nose clearance", "m"),
+    "flight_time": ("flight time", "s"), "launch_speed": ("launch speed", "m/s"),
+    "horizontal_speed": ("horizontal speed", "m/s"),
+    "vertical_impact_speed": ("vertical impact speed", "m/s"), "spin": ("spin", "rad/s"),
+    "first_pivot_x": ("first pivot x", "m"), "first_pivot_y": ("first pivot y", "m"),
+    "drift_per_bounce": ("drift per bounce", "m"),
+    "tolerance.dx": ("tolerance dx", "m"), "tolerance.dy": ("tolerance dy", "m"),
+    "tolerance.rise": ("tolerance rise", "m"), "tolerance.tread": ("tolerance tread", "m"),
 }
+# swept keys (by last name) that are lengths: drawn in millimetres on the x axis
+LENGTH_KEYS = {"link_length", "first_pivot_x", "first_pivot_y", "rise", "tread",
+               "landing_offset", "width", "height", "thickness", "radius", "drop_height"}
 
 
 def sweep_figures(kind: str, axes: tuple[SweepAxis, ...], rows: list[dict[str, str]]
@@ -42,8 +51,8 @@ def sweep_figures(kind: str, axes: tuple[SweepAxis, ...], rows: list[dict[str, s
     tolerance = [c for c in tolerance if _present(rows, c)] + ["min_margin"]
     out = {}
     for name, panels, empty in (
-        ("optimum", optimum, "no design quantity changes across this sweep"),
-        ("tolerance", tolerance, ""),
+        ("optimum", _distinct(rows, optimum), "no design quantity changes across this sweep"),
+        ("tolerance", _distinct(rows, tolerance), ""),
     ):
         figure = _figure(axes, rows, panels, empty, f"{name} across the sweep")
         if name == "tolerance" and len(tolerance) == 1:
@@ -53,6 +62,35 @@ def sweep_figures(kind: str, axes: tuple[SweepAxis, ...], rows: list[dict[str, s
         for fmt in ("png", "svg"):
             out[f"{name}.{fmt}"] = _render(figure, fmt)
     return out
+
+
+def _distinct(rows, columns) -> list[list[str]]:
+    """The columns grouped by equal values at every row (each group one panel), in order."""
+    groups: list[list[str]] = []
+    for column in columns:
+        values = [number(r.get(column, "")) for r in rows]
+        for group in groups:
+            if [number(r.get(group[0], "")) for r in rows] == values:
+                group.append(column)
+                break
+        else:
+            groups.append([column])
+    return groups
+
+
+def _label(columns) -> tuple[str, float]:
+    """(the y label of a panel showing `columns`, the factor its values are drawn with)."""
+    text, unit = _LABELS.get(columns[0], (columns[0], ""))
+    text = " = ".join([text, *(c.rsplit(".", 1)[-1] for c in columns[1:])])
+    if unit == "m":
+        return f"{text} (mm)", 1e3
+    return (f"{text} ({unit})" if unit else text), 1.0
+
+
+def _x_axis(axis) -> tuple[str, float]:
+    if axis.path[-1] in LENGTH_KEYS:
+        return f"{axis.column} (mm)", 1e3
+    return axis.column, 1.0
 
 
 def _present(rows, column) -> bool:
@@ -86,33 +124,48 @@ def _series(axes, rows, column):
 
 
 def _figure(axes, rows, panels, empty, title):
+    """panels: groups of columns equal at every point, one panel each."""
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
     count = max(1, len(panels))
     cols = 1 if count == 1 else 2
     nrows = math.ceil(count / cols)
-    figure = Figure(figsize=(5.0 * cols, 2.8 * nrows + 0.6), layout="constrained")
+    figure = Figure(figsize=(5.0 * cols, 2.8 * nrows + 0.9), layout="constrained")
     figure.suptitle(title)
     grid = figure.subplots(nrows, cols, squeeze=False)
     flat = [a for row in grid for a in row]
     for extra in flat[count:]:
         extra.set_visible(False)
+    xlabel, xscale = _x_axis(axes[0])
     if not panels:
         flat[0].text(0.5, 0.5, empty, ha="center", va="center", transform=flat[0].transAxes)
-        flat[0].set_xlabel(axes[0].column)
+        flat[0].set_xlabel(xlabel)
         return figure
-    for ax, column in zip(flat, panels):
-        for label, xs, ys, ok in _series(axes, rows, column):
+    lo, hi = min(axes[0].values) * xscale, max(axes[0].values) * xscale
+    pad = 0.04 * (hi - lo) or 0.5 * max(abs(lo), 1e-12)
+    failed = False
+    for ax, columns in zip(flat, panels):
+        ylabel, yscale = _label(columns)
+        for label, xs, ys, ok in _series(axes, rows, columns[0]):
+            xs = [x * xscale for x in xs]
+            ys = [y * yscale for y in ys]
             ax.plot(xs, ys, marker="o", markersize=3, label=label or None)
             bad = [(x, y) for x, y, good in zip(xs, ys, ok) if not good and not math.isnan(y)]
             if bad:
+                failed = True
                 ax.plot(*zip(*bad), linestyle="none", marker="x", color="tab:red",
                         markersize=6)
-        ax.set_xlabel(axes[0].column)
-        ax.set_ylabel(_LABELS.get(column, column), fontsize=8)
+        ax.set_xlim(lo - pad, hi + pad)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel, fontsize=8)
         ax.grid(True, alpha=0.3)
         if len(axes) > 1:
             ax.legend(fontsize=6)
+    if failed:
+        marker = Line2D([], [], linestyle="none", marker="x", color="tab:red", markersize=6)
+        figure.legend([marker], ["not a success (infeasible or failed: see the table's "
+                                 "status and reason)"], loc="outside lower center", fontsize=7)
     return figure
 
 

@@ -1,0 +1,73 @@
+"""`pdm-design report SPEC`: the report page of a design (report/html.py), written whole."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+PAGE = "report.html"
+
+
+def report_for(source, *, count: int | None = None, tolerance: bool = True,
+               yield_result=None) -> tuple[str, object]:
+    """(the page, its build sheet) of a spec (solved first) or a saved design JSON."""
+    from ..analysis import analyse
+    from ..sheet import sheet_for
+    from ..sheet.drawing import draw
+    from ..sim.core import SimulationRefused
+    from ..verify import simulate_spec
+    from .html import report_page
+    from .render import render_figure
+
+    sheet = sheet_for(source, count=count, tolerance=tolerance)
+    spec = sheet.spec
+    point = spec.design_at()
+    margins = analyse(spec.scene, point, spec.verification.stages).margins
+    run, refused = None, ""
+    try:
+        run = simulate_spec(spec, point, record_trajectory=True)
+    except SimulationRefused as refusal:
+        refused = f"the simulator refuses this design: {refusal}"
+    drawing = render_figure(draw(sheet), "png", dpi=90)
+    page = report_page(sheet, margins=margins, run=run, refused=refused, drawing_png=drawing,
+                       yield_result=yield_result)
+    return page, sheet
+
+
+def write_report(source, folder, **options) -> tuple[Path, object]:
+    """Write FOLDER/report.html (whole or not at all); (its path, the build sheet)."""
+    from ..io import write_all
+
+    page, sheet = report_for(source, **options)
+    path = Path(folder) / PAGE
+    write_all({path: page.encode("utf-8")})
+    return path, sheet
+
+
+def read_yield(path) -> dict:
+    """A yield analysis saved as JSON (a table of numbers and curves: docs/report.md)."""
+    import json
+
+    from ..errors import SpecError
+
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SpecError("command line", "--yield", "an existing JSON file", str(path)) from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise SpecError(str(path), "", "a JSON document (a yield analysis)", str(exc)) from None
+    if not isinstance(data, dict):
+        raise SpecError(str(path), "", "a JSON table (a yield analysis)", type(data).__name__)
+    return data
+
+
+def report_command(source, out, count, no_tolerance, echo, yield_path=None) -> bool:
+    """The body of `pdm-design report`: write the page, say where; True when the design works
+    (else its failures go to stderr: the page is written with them at its top)."""
+    folder = out or f"{Path(source).stem}-report"
+    analysis = read_yield(yield_path) if yield_path else None
+    path, sheet = write_report(source, folder, count=count, tolerance=not no_tolerance,
+                               yield_result=analysis)
+    echo(f"report of {sheet.spec.name or source} (status {sheet.status}): {path}")
+    for failure in sheet.failures:
+        echo(f"warning: {failure}", err=True)
+    return not sheet.failures
