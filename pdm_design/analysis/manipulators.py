@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 from ..physics import manipulators as phys
 from ..scenes import ManipulatorsDesign, ManipulatorsScene
@@ -11,6 +12,40 @@ from .result import Analysis, margin
 APPROACH_STAGES = 6
 # Margins that depend on the landing velocity (the others are the same at every stage).
 _SPEED_DEPENDENT = ("over_the_top", "lift_off", "slip_impact", "tip_impact")
+# With links or pivot friction the carry's contact force has a tangential part beyond gravity's,
+# so the friction it needs and where it acts depend on the speed too.
+_MECHANISM_SPEED_DEPENDENT = ("slip_carry", "tip_carry")
+
+
+class CarryTerms(NamedTuple):
+    """The carry of palm + links + stuck object (physics.manipulators.carry_terms): effective
+    mass ratio, effective gravity, pivot friction per carried mass, the palm-plus-links mass felt
+    along the swing (kg), and whether these are the paper's (massless links, no friction)."""
+
+    q: float
+    gravity: float
+    friction: float
+    felt_mass: float
+    plain: bool
+
+
+def carry_terms(scene, design) -> CarryTerms:
+    mech = scene.mechanism()
+    kw = dict(object_mass=scene.body.mass, gravity=scene.gravity,
+              link_length=design.link_length, **mech)
+    q, g_e, f = phys.carry_terms(design.mass_ratio, **kw)
+    felt = phys.palm_terms(design.mass_ratio, **kw)[0]
+    return CarryTerms(q, g_e, f, felt, scene.plain_mechanism)
+
+
+def _mechanism_report(scene, design) -> dict:
+    """The links and pivots as the analysis used them: each link's mass and inertia about its
+    pivot, how many, and the pivots' friction torque and damping (all joints together)."""
+    links, l = scene.links, design.link_length
+    inertia = links.mass * l * l / 3.0 if links.inertia is None else links.inertia
+    return {"link_mass": links.mass, "link_inertia": inertia, "link_count": links.count,
+            "pivot_friction_torque": scene.pivots.friction_torque,
+            "pivot_damping": scene.pivots.damping}
 
 
 def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
@@ -18,16 +53,24 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
     """stages: manipulators in the row (default APPROACH_STAGES); palms parked behind the
     carrying one are checked as far back as the row has them."""
     g, l = scene.gravity, design.link_length
-    a, b, q = design.alpha, design.beta, design.mass_ratio
+    a, b = design.alpha, design.beta
     body, palm = scene.body, scene.palm
+    carry = carry_terms(scene, design)
+    q, g_e, f = carry.q, carry.gravity, carry.friction
     problems: list[str] = []
     margins: dict[str, float] = {}
 
     pitch_x, pitch_y = phys.pitch(a, b, l)
-    geometry = {"pitch_x": float(pitch_x), "pitch_y": float(pitch_y), "palm_mass": body.mass / q}
+    geometry = {"pitch_x": float(pitch_x), "pitch_y": float(pitch_y),
+                "palm_mass": body.mass / design.mass_ratio}
+    if not scene.plain_mechanism:
+        geometry.update(_mechanism_report(scene, design))
     if palm.front_stop <= b:
         problems.append(f"the front stop at {palm.front_stop:g} rad stops the palm before the "
                         f"handover angle beta = {b:g} rad")
+    if scene.pivots.damping > 0.0:
+        problems.append("pivot damping has no closed form: these figures leave it out "
+                        "(the simulator integrates it)")
 
     # First approach: ballistic flight onto the first palm resting at -alpha.
     first = _first_landing(scene, design, problems)
@@ -37,12 +80,17 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
         margins["landing"] = margin(palm.width / 2, abs(offset) + body.width / 2)
 
     # Periodic orbit: fixed point of the handover-speed map.
-    s2 = phys.handover_speed_squared(a, b, q, gravity=g, link_length=l)
+    s2 = phys.handover_speed_squared(a, b, q, gravity=g_e, link_length=l, friction=f)
     periodic: dict[str, float | None] = {
         "handover_speed": None, "landing_speed": None,
         "contraction": float(phys.contraction(a, b, q)), "drop_per_stage": None,
+        "effective_mass": carry.felt_mass,
     }
-    if s2 <= 0.0:
+    if s2 <= 0.0 and f > 0.0 and b > a:
+        problems.append(f"the pivot friction torque ({scene.pivots.friction_torque:g} N m) takes "
+                        "more energy out of a carry than its drop gives: there is no periodic "
+                        "handover speed")
+    elif s2 <= 0.0:
         problems.append(f"beta = {b:g} rad is not beyond alpha = {a:g} rad: the carry gains no "
                         "height, so there is no periodic handover speed")
     else:
@@ -125,28 +173,37 @@ def _first_landing(scene, design, problems):
 
 def _stage_margins(scene, design, velocity, offset) -> dict[str, float]:
     """Margins of one stage: landing with `velocity` at `offset` from the palm centre, then the
-    carry to beta."""
+    carry to beta (with links or pivot friction, the speed-dependent slip and tipping of the
+    carry are judged at its two ends, as the lift-off is)."""
     g, l = scene.gravity, design.link_length
-    a, b, q = design.alpha, design.beta, design.mass_ratio
+    a, b = design.alpha, design.beta
+    carry = carry_terms(scene, design)
+    q, g_e, f = carry.q, carry.gravity, carry.friction
     body, palm = scene.body, scene.palm
     vx, vy = velocity
     u = float(phys.landing_speed(vx, vy, a, q))
     px, py = (float(p) for p in phys.landing_impulse(vx, vy, a, q))
-    v_beta2 = float(phys.carry_speed_squared(u, a, b, gravity=g, link_length=l))
+    v_beta2 = float(phys.carry_speed_squared(u, a, b, gravity=g_e, link_length=l, friction=f))
     support = _support(body.width, palm.width, offset)
     half_h = body.height / 2
+    ends = ((-a, u * u), (b, v_beta2))
+    along = [None if carry.plain else float(phys.carry_along(
+        th, gravity=g, carry_gravity=g_e, friction=f)) for th, _ in ends]
+    ratio = [None if A is None else float(phys.carry_force_ratio(
+        th, v2, gravity=g, link_length=l, along=A)) for (th, v2), A in zip(ends, along)]
+    demand = (float(phys.friction_demand(max(a, b))) if carry.plain
+              else max(float(phys.friction_demand(th, r)) for (th, _), r in zip(ends, ratio)))
 
     out = {
-        "over_the_top": margin(u**2 if u > 0 else 0.0,
-                               float(phys.top_speed_squared_needed(a, gravity=g, link_length=l))),
-        "lift_off": min(
-            margin(float(phys.lift_off_capacity(a, gravity=g, link_length=l)), u**2),
-            margin(float(phys.lift_off_capacity(b, gravity=g, link_length=l)), v_beta2),
-        ),
-        "slip_carry": margin(palm.friction, float(phys.friction_demand(max(a, b)))),
+        "over_the_top": margin(u**2 if u > 0 else 0.0, float(phys.top_speed_squared_needed(
+            a, gravity=g_e, link_length=l, friction=f))),
+        "lift_off": min(margin(float(phys.lift_off_capacity(th, gravity=g, link_length=l,
+                                                            along=A)), v2)
+                        for (th, v2), A in zip(ends, along)),
+        "slip_carry": margin(palm.friction, demand),
         "tip_carry": min(
-            _tip_margin(support, float(phys.carry_force_point(-a, body.height))),
-            _tip_margin(support, float(phys.carry_force_point(b, body.height))),
+            _tip_margin(support, float(phys.carry_force_point(-a, body.height, ratio[0]))),
+            _tip_margin(support, float(phys.carry_force_point(b, body.height, ratio[1]))),
         ),
     }
     if py > 0.0:
@@ -174,13 +231,16 @@ def _tip_margin(support, force_point):
 def _predicted_handover_speeds(scene, design, velocity, stages=APPROACH_STAGES):
     """Handover speeds of the first stages by the closed-form map (nominal geometry), up to the
     first carry that cannot pass the top (sim.manipulators.handover_map is nan there too)."""
-    g, l = scene.gravity, design.link_length
-    a, b, q = design.alpha, design.beta, design.mass_ratio
-    top = float(phys.top_speed_squared_needed(a, gravity=g, link_length=l))
+    l = design.link_length
+    a, b = design.alpha, design.beta
+    q, g_e, f = carry_terms(scene, design)[:3]
+    top = float(phys.top_speed_squared_needed(a, gravity=g_e, link_length=l, friction=f))
     u = float(phys.landing_speed(*velocity, a, q))
     speeds = []
     while len(speeds) < stages and u > 0.0 and u * u >= top:
-        speeds.append(math.sqrt(float(phys.carry_speed_squared(u, a, b, gravity=g,
-                                                               link_length=l))))
+        v2 = float(phys.carry_speed_squared(u, a, b, gravity=g_e, link_length=l, friction=f))
+        if v2 <= 0.0:  # pivot friction stops the palm before the handover
+            break
+        speeds.append(math.sqrt(v2))
         u = float(phys.momentum_fraction(q)) * speeds[-1] * math.cos(a + b)
     return speeds

@@ -165,16 +165,23 @@ class _Model:
         self.a, self.b = values["alpha"], values["beta"]
         self.l, self.q = values["link_length"], values["mass_ratio"]
         self.pivot = (values["first_pivot_x"], values["first_pivot_y"])
-        a, b, l, q, g = self.a, self.b, self.l, self.q, self.g
+        # links and pivot friction (physics.carry_terms): effective mass ratio and gravity of
+        # the carry, friction per carried mass; q and g themselves on the paper's device
+        self.q, self.gc, self.f = phys.carry_terms(
+            self.q, object_mass=scene.body.mass, gravity=self.g, link_length=self.l,
+            **scene.mechanism())
+        self.plain = scene.plain_mechanism
+        a, b, l, q, gc = self.a, self.b, self.l, self.q, self.gc
         self.k = phys.momentum_fraction(q)
         self.c = phys.contraction(a, b, q)
-        self.D = phys.energy_gain_squared(a, b, gravity=g, link_length=l)
+        self.D = phys.energy_gain_squared(a, b, gravity=gc, link_length=l, friction=self.f)
         self.pitch_x, self.pitch_y = phys.pitch(a, b, l)
         px1, py1 = phys.palm_centre(self.pivot[0], self.pivot[1], -a, l)
         (x0, y0), (self.vx0, self.vy0) = scene.initial.position, scene.initial.velocity
         self.H = y0 - py1  # fall height onto palm 1 (nominal)
         self.C0 = x0 - px1  # object ahead of palm 1's centre at the start
-        self.top_needed = phys.top_speed_squared_needed(a, gravity=g, link_length=l)
+        self.top_needed = phys.top_speed_squared_needed(a, gravity=gc, link_length=l,
+                                                        friction=self.f)
 
     # -- pieces --------------------------------------------------------------------------------
     def fall_speed(self, dy):
@@ -189,13 +196,29 @@ class _Model:
 
     def next_speed(self, u, th):
         """Landing speed on the next palm after carrying at u from -alpha to the handover th."""
-        v = ca.sqrt(phys.carry_speed_squared(u, self.a, th, gravity=self.g, link_length=self.l))
+        v = ca.sqrt(self.carry_v2(u, th))
         return phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), self.a, self.q)
+
+    def carry_v2(self, u, th):
+        """v^2 at th on a carry that left -alpha at u."""
+        return phys.carry_speed_squared(u, self.a, th, gravity=self.gc, link_length=self.l,
+                                        friction=self.f)
+
+    def carry_ratios(self, ends):
+        """Friction / normal of the stuck object's contact force at each (th, v^2) of `ends`
+        (links or pivot friction: physics.carry_force_ratio, monotone in v^2)."""
+        out = []
+        for th, v2 in ends:
+            along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f)
+            out.append(phys.carry_force_ratio(th, v2, gravity=self.g, link_length=self.l,
+                                              along=along))
+        return out
 
     def aux_start(self):
         """Feasible auxiliaries at tau = 0: S from the fixed point, [u_lo, u_hi] spanning the
         first and the periodic landing speeds."""
-        S = phys.handover_speed_squared(self.a, self.b, self.q, gravity=self.g, link_length=self.l)
+        S = phys.handover_speed_squared(self.a, self.b, self.q, gravity=self.gc,
+                                        link_length=self.l, friction=self.f)
         u_star = self.k * ca.sqrt(ca.fmax(S, 0.0)) * ca.cos(self.a + self.b)
         u1 = self.first_speed(self.fall_speed(0.0))
         return [S, ca.fmax(ca.fmin(u1, u_star), 0.0), ca.fmax(u1, u_star)]
@@ -275,7 +298,11 @@ class _Model:
             # Curvature bound of ln F(u, th) on the whole interval, for every u (docs/optimizer.md):
             # d2 ln F / d th2 = -sec^2(a + th) + (y cos th - y^2 sin^2 th) / 2 with y = 2 g l / v^2
             # <= cot^2(th_lo) / 8 - sec^2(a + th_lo) =: M; M+ = smooth max(M, 0) >= max(M, 0).
-            curv = (ca.cos(th_lo) / ca.sin(th_lo)) ** 2 / 8 - 1 / ca.cos(a + th_lo) ** 2
+            # (with pivot friction f: cot th_lo becomes cos th_lo / (sin th_lo - f / (g l)),
+            # the same maximum over 1 / v^2 of g l cos th / v^2 - 2 (g l sin th - f)^2 / v^4)
+            lean = ca.sin(th_lo) if phys._is_zero(self.f) else (
+                ca.sin(th_lo) - self.f / (self.gc * l))
+            curv = (ca.cos(th_lo) / lean) ** 2 / 8 - 1 / ca.cos(a + th_lo) ** 2
             curv = (curv + ca.sqrt(curv**2 + 1e-12)) / 2
             # Low end: ln F >= chord - M+ (th - th_lo)(th_hi - th) / 2 >= min over the ends
             # - M+ (th_hi - th_lo)^2 / 8.
@@ -303,18 +330,39 @@ class _Model:
             kind=VALIDITY)
         add(("start_height",), "the object starts above palm 1",
             self.H - tau - START_CLEARANCE * l, scale=l, kind=VALIDITY)
+        if robust and not phys._is_zero(self.f):
+            add(("over_the_top",), "gravity beats the pivot friction at the handover",
+                self.gc * l * ca.sin(th_lo) - self.f, self.gc * l, kind=VALIDITY)
 
         # Carry conditions on every palm (the first included: u_lo <= u_1 <= u_hi).
         add(OVER_THE_TOP, "slowest landing on any palm",
             u_lo**2 - self.top_needed, u_lo**2)
-        held = phys.lift_off_capacity(a, gravity=g, link_length=l)
-        add(LIFT_OFF, "at the back stop, fastest landing",
-            held - u_hi**2, held)
-        v2 = phys.carry_speed_squared(u_hi, a, th_hi, gravity=g, link_length=l)
-        held = phys.lift_off_capacity(th_hi, gravity=g, link_length=l)
-        add(LIFT_OFF, "at the handover, fastest carry", held - v2, held)
-        add("slip_carry", "at the back stop", mu - phys.friction_demand(a), mu)
-        add("slip_carry", "at the largest handover angle", mu - phys.friction_demand(th_hi), mu)
+        v2 = self.carry_v2(u_hi, th_hi)
+        if self.plain:
+            held = phys.lift_off_capacity(a, gravity=g, link_length=l)
+            add(LIFT_OFF, "at the back stop, fastest landing",
+                held - u_hi**2, held)
+            held = phys.lift_off_capacity(th_hi, gravity=g, link_length=l)
+            add(LIFT_OFF, "at the handover, fastest carry", held - v2, held)
+            add("slip_carry", "at the back stop", mu - phys.friction_demand(a), mu)
+            add("slip_carry", "at the largest handover angle",
+                mu - phys.friction_demand(th_hi), mu)
+            fp_back = phys.carry_force_point(-a, h)
+            fp_front = -phys.carry_force_point(th_hi, h)
+        else:  # the contact force's tangential part depends on the speed: both ends of each
+            for where, th, speed2 in (("at the back stop, fastest landing", -a, u_hi**2),
+                                      ("at the handover, fastest carry", th_hi, v2)):
+                along = phys.carry_along(th, gravity=g, carry_gravity=self.gc, friction=self.f)
+                held = phys.lift_off_capacity(th, gravity=g, link_length=l, along=along)
+                add(LIFT_OFF, where, held - speed2, g * l)
+            back = self.carry_ratios([(-a, u_lo**2), (-a, u_hi**2)])
+            front = self.carry_ratios([(th, self.carry_v2(u, th)) for th in (th_lo, th_hi)
+                                       for u in (u_lo, u_hi)])
+            for i, r in enumerate(back + front):
+                add("slip_carry", _v("at the ends of the carry", i, back + front),
+                    mu - phys.friction_demand(None, r), mu)
+            fp_back = fmax_all([phys.carry_force_point(-a, h, r) for r in back])
+            fp_front = fmax_all([-phys.carry_force_point(None, h, r) for r in front])
         add("palm_clearance", "next palm below the object until the handover",
             self.pitch_y - 2 * tau, l, epigraph=False)
         if palm.front_stop < math.pi / 2:
@@ -341,12 +389,10 @@ class _Model:
             add("landing", _v("object furthest behind", i, o_lo), W / 2 + o - w / 2, W / 2)
         # Tipping during the carry: the force point within the support (ahead of the centre at
         # the back stop, behind it at the handover).
-        fp_back = phys.carry_force_point(-a, h)
         add("tip_carry", "at the back stop, object's front edge", w / 2 - fp_back, w / 2)
         for i, o in enumerate(o_hi):
             add("tip_carry", _v("at the back stop, palm's front edge", i, o_hi),
                 W / 2 - o - fp_back, W / 2 - o)
-        fp_front = -phys.carry_force_point(th_hi, h)
         add("tip_carry", "at the handover, object's rear edge", w / 2 - fp_front, w / 2)
         for i, o in enumerate(o_lo):
             add("tip_carry", _v("at the handover, palm's rear edge", i, o_lo),
