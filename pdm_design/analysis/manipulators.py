@@ -68,6 +68,11 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
     if palm.front_stop <= b:
         problems.append(f"the front stop at {palm.front_stop:g} rad stops the palm before the "
                         f"handover angle beta = {b:g} rad")
+    links = scene.links
+    if links.inertia is not None and links.inertia < links.mass * l * l / 4.0:
+        problems.append(f"links.inertia = {links.inertia:g} kg m^2 is below mass (l/2)^2 = "
+                        f"{links.mass * l * l / 4.0:g} kg m^2: no rigid link of length l = {l:g} m "
+                        "with its centre of mass at mid-length has it")
     if scene.pivots.damping > 0.0:
         problems.append("pivot damping has no closed form: these figures leave it out "
                         "(the simulator integrates it)")

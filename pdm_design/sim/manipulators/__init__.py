@@ -35,6 +35,7 @@ EVENT_KINDS = {
     "bounce": "the object bounces off a palm (restitution > 0)",
     "front_stop": "an empty palm reaches its front stop and is stopped",
     "back_stop": "an empty palm swings back onto its back stop",
+    "pivot_friction_stop": "an empty palm stops mid-swing where pivot friction holds it",
     "complete": "the last manipulator carried the object to its handover angle",
 }
 FAILURE_KINDS = {
