@@ -63,8 +63,7 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
     pitch_x, pitch_y = phys.pitch(a, b, l)
     geometry = {"pitch_x": float(pitch_x), "pitch_y": float(pitch_y),
                 "palm_mass": body.mass / design.mass_ratio}
-    if not scene.plain_mechanism:
-        geometry.update(_mechanism_report(scene, design))
+    geometry.update(_mechanism_report(scene, design))
     if palm.front_stop <= b:
         problems.append(f"the front stop at {palm.front_stop:g} rad stops the palm before the "
                         f"handover angle beta = {b:g} rad")
