@@ -27,6 +27,12 @@ class CarryTerms(NamedTuple):
     friction: float
     felt_mass: float
     plain: bool
+    damping: float = 0.0  # physics.damping_rate: 0, or the carry is integrated
+
+
+# Steps per radian of the integrated (damped) carry in the analysis: physics.carry_steps at a
+# relative error of 1e-13, far below what verification demands of the simulator.
+ANALYSIS_RTOL = 1e-13
 
 
 def carry_terms(scene, design) -> CarryTerms:
@@ -35,7 +41,35 @@ def carry_terms(scene, design) -> CarryTerms:
               link_length=design.link_length, **mech)
     q, g_e, f = phys.carry_terms(design.mass_ratio, **kw)
     felt = phys.palm_terms(design.mass_ratio, **kw)[0]
-    return CarryTerms(q, g_e, f, felt, scene.plain_mechanism)
+    delta = phys.damping_rate(q, object_mass=scene.body.mass, link_length=design.link_length,
+                              damping=scene.pivots.damping)
+    return CarryTerms(q, g_e, f, felt, scene.plain_mechanism, delta)
+
+
+def carry_v2(carry: CarryTerms, u, alpha, theta, link_length, lowest=False):
+    """v(theta)^2 of a carry from -alpha at u: the closed form, or with pivot damping the
+    integrated one (physics.integrated_carry_speed_squared; lowest: also the smallest v^2)."""
+    kw = dict(gravity=carry.gravity, link_length=link_length, friction=carry.friction)
+    if carry.damping == 0.0:
+        v2 = float(phys.carry_speed_squared(u, alpha, theta, **kw))
+        return (v2, None) if lowest else v2
+    steps = phys.carry_steps(ANALYSIS_RTOL, abs(theta + alpha))
+    out = phys.integrated_carry_speed_squared(u, alpha, theta, damping=carry.damping,
+                                              steps=steps, lowest=lowest, **kw)
+    return tuple(float(v) for v in out) if lowest else float(out)
+
+
+def _damped_handover_speed_squared(carry, a, b, l, start):
+    """Fixed point of the integrated stage map s -> v(beta) after landing at k s cos(a + b)
+    (pivot damping: no closed form), iterated from `start` (the map contracts); <= 0 when the
+    carry stops."""
+    k, s2 = float(phys.momentum_fraction(carry.q)), start
+    for _ in range(500):
+        v2 = carry_v2(carry, k * math.sqrt(max(s2, 0.0)) * math.cos(a + b), a, b, l)
+        if v2 <= 0.0 or abs(v2 - s2) <= 1e-16 * v2:
+            return v2
+        s2 = v2
+    return s2
 
 
 def _mechanism_report(scene, design) -> dict:
@@ -72,9 +106,6 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
         problems.append(f"links.inertia = {links.inertia:g} kg m^2 is below mass (l/2)^2 = "
                         f"{links.mass * l * l / 4.0:g} kg m^2: no rigid link of length l = {l:g} m "
                         "with its centre of mass at mid-length has it")
-    if scene.pivots.damping > 0.0:
-        problems.append("pivot damping has no closed form: these figures leave it out "
-                        "(the simulator integrates it)")
 
     # First approach: ballistic flight onto the first palm resting at -alpha.
     first = _first_landing(scene, design, problems)
@@ -85,15 +116,16 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
 
     # Periodic orbit: fixed point of the handover-speed map.
     s2 = phys.handover_speed_squared(a, b, q, gravity=g_e, link_length=l, friction=f)
+    if carry.damping and s2 > 0.0:
+        s2 = _damped_handover_speed_squared(carry, a, b, l, s2)
     periodic: dict[str, float | None] = {
         "handover_speed": None, "landing_speed": None,
         "contraction": float(phys.contraction(a, b, q)), "drop_per_stage": None,
         "effective_mass": carry.felt_mass,
     }
-    if s2 <= 0.0 and f > 0.0 and b > a:
-        problems.append(f"the pivot friction torque ({scene.pivots.friction_torque:g} N m) takes "
-                        "more energy out of a carry than its drop gives: there is no periodic "
-                        "handover speed")
+    if s2 <= 0.0 and (f > 0.0 or carry.damping > 0.0) and b > a:
+        problems.append("the pivot friction and damping take more energy out of a carry than "
+                        "its drop gives: there is no periodic handover speed")
     elif s2 <= 0.0:
         problems.append(f"beta = {b:g} rad is not beyond alpha = {a:g} rad: the carry gains no "
                         "height, so there is no periodic handover speed")
@@ -187,7 +219,11 @@ def _stage_margins(scene, design, velocity, offset) -> dict[str, float]:
     vx, vy = velocity
     u = float(phys.landing_speed(vx, vy, a, q))
     px, py = (float(p) for p in phys.landing_impulse(vx, vy, a, q))
-    v_beta2 = float(phys.carry_speed_squared(u, a, b, gravity=g_e, link_length=l, friction=f))
+    v_beta2, lowest = carry_v2(carry, u, a, b, l, lowest=True)
+    if lowest is None:
+        top = float(phys.top_speed_squared_needed(a, gravity=g_e, link_length=l, friction=f))
+    else:  # damped: the squared speed the carry loses down to its slowest point
+        top = u * u - lowest
     support = _support(body.width, palm.width, offset)
     half_h = body.height / 2
     ends = ((-a, u * u), (b, v_beta2))
@@ -199,8 +235,7 @@ def _stage_margins(scene, design, velocity, offset) -> dict[str, float]:
               else max(float(phys.friction_demand(th, r)) for (th, _), r in zip(ends, ratio)))
 
     out = {
-        "over_the_top": margin(u**2 if u > 0 else 0.0, float(phys.top_speed_squared_needed(
-            a, gravity=g_e, link_length=l, friction=f))),
+        "over_the_top": margin(u**2 if u > 0 else 0.0, top),
         "lift_off": min(margin(float(phys.lift_off_capacity(th, gravity=g, link_length=l,
                                                             along=A)), v2)
                         for (th, v2), A in zip(ends, along)),
@@ -237,13 +272,14 @@ def _predicted_handover_speeds(scene, design, velocity, stages=APPROACH_STAGES):
     first carry that cannot pass the top (sim.manipulators.handover_map is nan there too)."""
     l = design.link_length
     a, b = design.alpha, design.beta
-    q, g_e, f = carry_terms(scene, design)[:3]
+    carry = carry_terms(scene, design)
+    q, g_e, f = carry.q, carry.gravity, carry.friction
     top = float(phys.top_speed_squared_needed(a, gravity=g_e, link_length=l, friction=f))
     u = float(phys.landing_speed(*velocity, a, q))
     speeds = []
-    while len(speeds) < stages and u > 0.0 and u * u >= top:
-        v2 = float(phys.carry_speed_squared(u, a, b, gravity=g_e, link_length=l, friction=f))
-        if v2 <= 0.0:  # pivot friction stops the palm before the handover
+    while len(speeds) < stages and u > 0.0 and (carry.damping or u * u >= top):
+        v2, lowest = carry_v2(carry, u, a, b, l, lowest=True)
+        if v2 <= 0.0 or (lowest is not None and lowest <= 0.0):  # the palm stops short
             break
         speeds.append(math.sqrt(v2))
         u = float(phys.momentum_fraction(q)) * speeds[-1] * math.cos(a + b)

@@ -40,6 +40,7 @@ import math
 
 import casadi as ca
 
+from ..errors import SpecError
 from ..physics import manipulators as phys
 from ..scenes import ManipulatorsDesign
 from .common import (
@@ -83,6 +84,7 @@ def build(spec):
     l_max = bounds["link_length"][1] if "link_length" in bounds else values["link_length"]
 
     m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages))
+    m.steps = integrated_steps(spec, robust, values, bounds)
     conditions = m.conditions(S, u_lo, u_hi, tau, robust)
     aux = [("periodic_speed_sq", S, 0.0, math.inf),
            ("landing_speed_lo", u_lo, 0.0, math.inf),
@@ -117,6 +119,23 @@ def build(spec):
         objective_scale=objective_scale(spec.objective, min(l_max, 1.0)),
     )
     return model, bounds, m
+
+
+def integrated_steps(spec, robust, values, bounds, force=False) -> int:
+    """Steps of the integrated carry (0: the closed form): with pivot damping, which has no
+    closed form, or when asked (force: results/bench_links.py measures the trade), as many as
+    the spec's accuracy asks over the widest carry alpha + beta the bounds allow
+    (physics.carry_steps). The robust rows'
+    bounds need the closed form: robust with damping is refused in words."""
+    if spec.scene.pivots.damping == 0.0 and not force:
+        return 0
+    if robust:
+        raise SpecError(spec.source or "<spec>", "scene.pivots.damping",
+                        "0 with objective.max_offset_tolerance (the robust tolerance rows bound "
+                        "the closed-form carry; damping has none)",
+                        found=repr(spec.scene.pivots.damping))
+    span = sum(bounds[k][1] if k in bounds else values[k] for k in ("alpha", "beta"))
+    return phys.carry_steps(spec.verification.accuracy.rtol, span=span)
 
 
 def parked_rows(scene, values, bounds, stages) -> int:
@@ -171,6 +190,10 @@ class _Model:
             self.q, object_mass=scene.body.mass, gravity=self.g, link_length=self.l,
             **scene.mechanism())
         self.plain = scene.plain_mechanism
+        # pivot damping: the carry is integrated (steps from the accuracy's rtol, set by build)
+        self.delta = phys.damping_rate(self.q, object_mass=scene.body.mass, link_length=self.l,
+                                       damping=scene.pivots.damping)
+        self.steps = 0
         a, b, l, q, gc = self.a, self.b, self.l, self.q, self.gc
         self.k = phys.momentum_fraction(q)
         self.c = phys.contraction(a, b, q)
@@ -199,10 +222,24 @@ class _Model:
         v = ca.sqrt(self.carry_v2(u, th))
         return phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), self.a, self.q)
 
-    def carry_v2(self, u, th):
-        """v^2 at th on a carry that left -alpha at u."""
-        return phys.carry_speed_squared(u, self.a, th, gravity=self.gc, link_length=self.l,
-                                        friction=self.f)
+    def carry_v2(self, u, th, lowest=False):
+        """v^2 at th on a carry that left -alpha at u: the closed form, or with pivot damping
+        (or integrated_steps set) fourth-order steps in the angle (lowest: also the smallest
+        v^2 on the way)."""
+        kw = dict(gravity=self.gc, link_length=self.l, friction=self.f)
+        if not self.steps:
+            v2 = phys.carry_speed_squared(u, self.a, th, **kw)
+            return (v2, None) if lowest else v2
+        return phys.integrated_carry_speed_squared(u, self.a, th, damping=self.delta,
+                                                   steps=self.steps, lowest=lowest, **kw)
+
+    def contact(self, th, v2):
+        """(lift-off capacity of v^2, friction demand, force point / height) of the stuck
+        object at th moving at v^2 on real links or pivots (physics.carry_force_ratio)."""
+        along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f)
+        ratio = phys.carry_force_ratio(th, v2, gravity=self.g, link_length=self.l, along=along)
+        held = phys.lift_off_capacity(th, gravity=self.g, link_length=self.l, along=along)
+        return held, phys.friction_demand(th, ratio), phys.carry_force_point(th, 1.0, ratio)
 
     def carry_ratios(self, ends):
         """Friction / normal of the stuck object's contact force at each (th, v^2) of `ends`
@@ -285,8 +322,13 @@ class _Model:
         Q_hi = Qs[-1][1]
 
         # Model: the periodic fixed point and the invariant interval of landing speeds.
-        add((), "periodic handover speed: S (1 - c) = D", S * (1 - self.c) - self.D,
-            kind=MODEL, equality=True)
+        if self.steps:  # integrated: S is v(b)^2 after landing at k sqrt(S) cos(a + b)
+            u_star = self.k * ca.sqrt(ca.fmax(S, 0.0)) * ca.cos(a + b)
+            add((), "periodic handover speed: S = v(beta)^2 (integrated)",
+                self.carry_v2(u_star, b) - S, kind=MODEL, equality=True)
+        else:
+            add((), "periodic handover speed: S (1 - c) = D", S * (1 - self.c) - self.D,
+                kind=MODEL, equality=True)
         u1_lo, u1_hi = self.first_speed(Q_hi), self.first_speed(Qs[0][1])
         # The interval rows keep the backoff in speed units (sqrt(g l)): without it, an
         # interval met only to IPOPT's tolerance let the first landing stall 1e-4 rad short of
@@ -335,8 +377,12 @@ class _Model:
                 self.gc * l * ca.sin(th_lo) - self.f, self.gc * l, kind=VALIDITY)
 
         # Carry conditions on every palm (the first included: u_lo <= u_1 <= u_hi).
-        add(OVER_THE_TOP, "slowest landing on any palm",
-            u_lo**2 - self.top_needed, u_lo**2)
+        if self.steps:  # integrated: the slowest point of the slowest carry is still moving
+            add(OVER_THE_TOP, "slowest landing on any palm, slowest point (integrated)",
+                self.carry_v2(u_lo, b, lowest=True)[1], u_lo**2)
+        else:
+            add(OVER_THE_TOP, "slowest landing on any palm",
+                u_lo**2 - self.top_needed, u_lo**2)
         v2 = self.carry_v2(u_hi, th_hi)
         if self.plain:
             held = phys.lift_off_capacity(a, gravity=g, link_length=l)
@@ -352,9 +398,7 @@ class _Model:
         else:  # the contact force's tangential part depends on the speed: both ends of each
             for where, th, speed2 in (("at the back stop, fastest landing", -a, u_hi**2),
                                       ("at the handover, fastest carry", th_hi, v2)):
-                along = phys.carry_along(th, gravity=g, carry_gravity=self.gc, friction=self.f)
-                held = phys.lift_off_capacity(th, gravity=g, link_length=l, along=along)
-                add(LIFT_OFF, where, held - speed2, g * l)
+                add(LIFT_OFF, where, self.contact(th, speed2)[0] - speed2, g * l)
             back = self.carry_ratios([(-a, u_lo**2), (-a, u_hi**2)])
             front = self.carry_ratios([(th, self.carry_v2(u, th)) for th in (th_lo, th_hi)
                                        for u in (u_lo, u_hi)])

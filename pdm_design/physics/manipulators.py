@@ -262,3 +262,49 @@ def _sine_of_height(ratio, *, lower):
     c = fmin(fmax(ratio, 0.0), 1.0)
     tiny = 1e-12
     return sqrt(1.0 - c * c + tiny) - (sqrt(tiny) if lower else 0.0)
+
+
+# ---------------------------------------------------------------- viscous damping: integrated
+
+def damping_rate(effective_mass_ratio, *, object_mass, link_length, damping):
+    """delta = c / (l (m + M + J)) (m/s): viscous pivot damping c takes 2 delta v off v^2 per
+    radian of the carry (q_e: carry_terms' effective mass ratio)."""
+    if _is_zero(damping):
+        return 0.0
+    return (damping / (object_mass * link_length)) * momentum_fraction(effective_mass_ratio)
+
+
+def carry_steps(rtol, span=1.0):
+    """Fourth-order steps for an integrated carry over `span` rad whose relative error is about
+    rtol: the step h = 2 rtol^(1/4) (results/bench_links.md measures the error; at least 4)."""
+    import math
+
+    return max(4, math.ceil(span / (2.0 * rtol**0.25)))
+
+
+def integrated_carry_speed_squared(u, alpha, theta, *, gravity, link_length, friction=0.0,
+                                   damping=0.0, steps=64, lowest=False):
+    """v(theta)^2 after leaving -alpha at speed u, by classical Runge-Kutta in the angle on
+    y = v^2:  dy/dth = 2 g l sin th - 2 friction - 2 damping sqrt(y)  (the energy balance of
+    carry_speed_squared with the viscous torque's work; damping = damping_rate). No closed form
+    exists with damping; with damping = 0 this is the closed form to the method's error. y is
+    clipped at 1e-200 inside the square root (a swing that stops has no further meaning; the
+    over-the-top condition looks at the smallest y). lowest=True: (y(theta), smallest y at the
+    steps). Works on floats, numpy arrays and CasADi symbols (a fixed number of steps)."""
+    gl2, f2 = 2.0 * gravity * link_length, 2.0 * friction
+    h = (theta + alpha) / steps
+
+    def slope(th, y):
+        # floored at 1e-200, not 0: a finite slope of the root where an NLP steps to y <= 0
+        return gl2 * sin(th) - f2 - 2.0 * damping * sqrt(fmax(y, 1e-200))
+
+    y, th, low = u * u, -alpha, u * u
+    for _ in range(steps):
+        k1 = slope(th, y)
+        k2 = slope(th + 0.5 * h, y + 0.5 * h * k1)
+        k3 = slope(th + 0.5 * h, y + 0.5 * h * k2)
+        k4 = slope(th + h, y + h * k3)
+        y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        th = th + h
+        low = fmin(low, y)
+    return (y, low) if lowest else y
