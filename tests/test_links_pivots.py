@@ -306,3 +306,20 @@ def test_the_nlp_integrated_rows_agree_with_the_simulator_to_the_preset(preset):
     for _ in range(200):  # the NLP's periodic row: S = v(beta)^2 after landing at k sqrt(S)
         s2 = float(m.carry_v2(m.k * math.sqrt(s2) * math.cos(m.a + m.b), m.b))
     assert math.sqrt(s2) == pytest.approx(result.stages[-2]["handover_speed"], rel=tol)
+
+
+def test_damped_fixed_point_and_contraction_are_the_simulated_ones():
+    """With damping the analysis's fixed point and slope of the integrated stage map are those
+    the simulated handover speeds converge to, and by which their errors shrink."""
+    spec = load_spec(PAPER)
+    scene = scene_with(spec, link_mass=0.5, torque=0.3, damping=0.4, mu=1.5)
+    design = spec.design_at()
+    periodic = analyse_manipulators(scene, design).periodic
+    run = simulate_manipulators(scene, design, stages=30, accuracy="precise")
+    speeds = [st["handover_speed"] for st in run.stages[:-1]]
+    star2 = periodic["handover_speed"] ** 2
+    assert speeds[-1] == pytest.approx(periodic["handover_speed"], rel=1e-11)
+    ratio = (speeds[5] ** 2 - star2) / (speeds[4] ** 2 - star2)
+    assert ratio == pytest.approx(periodic["contraction"], rel=1e-4)
+    undamped = analyse_manipulators(scene_with(spec, link_mass=0.5, torque=0.3, mu=1.5), design)
+    assert periodic["handover_speed"] < undamped.periodic["handover_speed"]

@@ -59,6 +59,16 @@ def carry_v2(carry: CarryTerms, u, alpha, theta, link_length, lowest=False):
     return tuple(float(v) for v in out) if lowest else float(out)
 
 
+def _damped_contraction(carry, a, b, l, s2):
+    """d s'^2 / d s^2 of the integrated stage map at its fixed point s2 (central difference)."""
+    k, h = float(phys.momentum_fraction(carry.q)), 1e-4
+
+    def next_s2(x):
+        return carry_v2(carry, k * math.sqrt(x) * math.cos(a + b), a, b, l)
+
+    return (next_s2(s2 * (1 + h)) - next_s2(s2 * (1 - h))) / (2 * h * s2)
+
+
 def _damped_handover_speed_squared(carry, a, b, l, start):
     """Fixed point of the integrated stage map s -> v(beta) after landing at k s cos(a + b)
     (pivot damping: no closed form), iterated from `start` (the map contracts); <= 0 when the
@@ -123,6 +133,8 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
         "contraction": float(phys.contraction(a, b, q)), "drop_per_stage": None,
         "effective_mass": carry.felt_mass,
     }
+    if carry.damping and s2 > 0.0:  # the integrated map's slope at its fixed point
+        periodic["contraction"] = _damped_contraction(carry, a, b, l, s2)
     if s2 <= 0.0 and (f > 0.0 or carry.damping > 0.0) and b > a:
         problems.append("the pivot friction and damping take more energy out of a carry than "
                         "its drop gives: there is no periodic handover speed")
