@@ -323,3 +323,19 @@ def test_damped_fixed_point_and_contraction_are_the_simulated_ones():
     assert ratio == pytest.approx(periodic["contraction"], rel=1e-4)
     undamped = analyse_manipulators(scene_with(spec, link_mass=0.5, torque=0.3, mu=1.5), design)
     assert periodic["handover_speed"] < undamped.periodic["handover_speed"]
+
+
+def test_vectorised_handover_map_with_carry_terms_is_the_simulated_map():
+    from pdm_design.sim.manipulators import handover_map
+
+    spec = load_spec(PAPER)
+    scene = scene_with(spec, link_mass=0.5, torque=0.2, mu=1.5)
+    design = spec.design_at()
+    q_e, g_e, f = phys.carry_terms(design.mass_ratio, object_mass=scene.body.mass,
+                                   gravity=scene.gravity, link_length=design.link_length,
+                                   **scene.mechanism())
+    run = simulate_manipulators(scene, design, stages=5, accuracy="precise")
+    speeds = np.array([st["handover_speed"] for st in run.stages[:4]])
+    mapped = handover_map(speeds[:-1], design.alpha, design.beta, q_e, g_e,
+                          design.link_length, friction=f)
+    assert np.allclose(mapped, speeds[1:], rtol=1e-9, atol=0.0)
