@@ -243,7 +243,13 @@ def test_friction_that_stops_the_palm_is_a_stall_where_the_closed_form_says():
         else:
             failure = result.outcome.failure
             assert failure.kind == "stall" and failure.stage == 1
-            assert "stops" in failure.detail
+            # it stops just short of the balance angle past the top, where friction holds it
+            assert "pivot friction holds it there" in failure.detail
+            _, g_e, f = phys.carry_terms(design.mass_ratio, object_mass=spec.scene.body.mass,
+                                         gravity=spec.scene.gravity,
+                                         link_length=design.link_length, friction_torque=torque)
+            star = phys.friction_balance_angle(f, gravity=g_e, link_length=design.link_length)
+            assert 0.0 < star - failure.before["theta"] < 2e-3
 
 
 def test_bad_links_and_pivots_keys_are_refused_in_words(tmp_path):
@@ -339,3 +345,28 @@ def test_vectorised_handover_map_with_carry_terms_is_the_simulated_map():
     mapped = handover_map(speeds[:-1], design.alpha, design.beta, q_e, g_e,
                           design.link_length, friction=f)
     assert np.allclose(mapped, speeds[1:], rtol=1e-9, atol=0.0)
+
+
+def test_an_empty_palm_that_friction_stops_mid_swing_rests_where_the_energy_runs_out():
+    """An empty palm swinging back with pivot friction stops where v^2 = w0^2 + 2 g_p l
+    (cos th0 - cos th) - 2 f_p (th0 - th) = 0 (the palm-alone terms, physics.palm_terms), and
+    stays there when its weight's torque is within the friction (pivot_friction_stop)."""
+    from scipy.optimize import brentq
+
+    spec = load_spec(PAPER)
+    scene = scene_with(spec, link_mass=0.5, torque=2.0)
+    design = spec.design_at()
+    run = Run(scene, design, 3, (), accuracy("precise"), False)
+    L = design.link_length
+    felt, g_p, _ = phys.palm_terms(design.mass_ratio, object_mass=scene.body.mass,
+                                   gravity=scene.gravity, link_length=L, **scene.mechanism())
+    f_p = 2.0 / felt
+    th0, w0 = -0.05, -0.3
+    dt, stop, speed = run._free_swing_arrival(th0, w0)
+
+    def v2(th):
+        return w0**2 + 2 * g_p * L * (math.cos(th0) - math.cos(th)) - 2 * f_p * (th0 - th)
+
+    expected = brentq(v2, th0 - 0.2, th0 - 1e-9, xtol=1e-15)
+    assert stop == pytest.approx(expected, abs=1e-9) and speed == 0.0 and 0.0 < dt < 1.0
+    assert (0.1 + 0.5) * scene.gravity * L * abs(math.sin(stop)) <= 2.0  # friction holds it

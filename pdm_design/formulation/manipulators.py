@@ -343,7 +343,7 @@ class _Model:
             # <= cot^2(th_lo) / 8 - sec^2(a + th_lo) =: M; M+ = smooth max(M, 0) >= max(M, 0).
             # (with pivot friction f: cot th_lo becomes cos th_lo / (sin th_lo - f / (g l)),
             # the same maximum over 1 / v^2 of g l cos th / v^2 - 2 (g l sin th - f)^2 / v^4)
-            lean = ca.sin(th_lo) if phys._is_zero(self.f) else (
+            lean = ca.sin(th_lo) if phys.is_exact_zero(self.f) else (
                 ca.sin(th_lo) - self.f / (self.gc * l))
             curv = (ca.cos(th_lo) / lean) ** 2 / 8 - 1 / ca.cos(a + th_lo) ** 2
             curv = (curv + ca.sqrt(curv**2 + 1e-12)) / 2
@@ -373,7 +373,7 @@ class _Model:
             kind=VALIDITY)
         add(("start_height",), "the object starts above palm 1",
             self.H - tau - START_CLEARANCE * l, scale=l, kind=VALIDITY)
-        if robust and not phys._is_zero(self.f):
+        if robust and not phys.is_exact_zero(self.f):
             add(("over_the_top",), "gravity beats the pivot friction at the handover",
                 self.gc * l * ca.sin(th_lo) - self.f, self.gc * l, kind=VALIDITY)
 

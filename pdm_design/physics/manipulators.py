@@ -22,6 +22,8 @@ Derivations (docs/physics.md has them in full):
 
 from __future__ import annotations
 
+import math
+
 from .ops import asin, cos, fabs, fmax, fmin, sin, sqrt, tan
 
 
@@ -62,7 +64,7 @@ def top_speed_squared_needed(alpha, *, gravity, link_length, friction=0.0):
     sin th* = friction / (g l) past the top (friction_balance_angle), so the speed must stay
     positive up to th*: u^2 > 2 g l (cos th* - cos a) + 2 friction (a + th*)."""
     need = 4.0 * gravity * link_length * sin(0.5 * alpha) ** 2
-    if _is_zero(friction):
+    if is_exact_zero(friction):
         return need
     star = friction_balance_angle(friction, gravity=gravity, link_length=link_length)
     return (need - 4.0 * gravity * link_length * sin(0.5 * star) ** 2
@@ -181,12 +183,12 @@ def carry_terms(mass_ratio, *, object_mass, gravity, link_length, link_mass=0.0,
     q, m = mass_ratio, object_mass
     j = links_inertia_mass(link_mass=link_mass, link_length=link_length,
                            link_inertia=link_inertia)
-    if _is_zero(j) and _is_zero(link_mass):  # the same values, without 0 * symbol in an NLP
+    if is_exact_zero(j) and is_exact_zero(link_mass):  # the same values, without 0 * symbol in an NLP
         q_e, g_e = q, gravity
     else:
         q_e = q / (1.0 + q * (j / m))
         g_e = gravity * (1.0 + q + q * (0.5 * link_mass / m)) / (1.0 + q + q * (j / m))
-    f = 0.0 if _is_zero(friction_torque) else (friction_torque / m) * momentum_fraction(q_e)
+    f = 0.0 if is_exact_zero(friction_torque) else (friction_torque / m) * momentum_fraction(q_e)
     return q_e, g_e, f
 
 
@@ -215,7 +217,7 @@ def carry_force_ratio(theta, v2, *, gravity, link_length, along):
     return tan(theta) + along / (cos(theta) * normal)
 
 
-def _is_zero(value) -> bool:
+def is_exact_zero(value) -> bool:
     """A plain number that is exactly zero (a symbol never is)."""
     return isinstance(value, (int, float)) and value == 0.0
 
@@ -269,7 +271,7 @@ def _sine_of_height(ratio, *, lower):
 def damping_rate(effective_mass_ratio, *, object_mass, link_length, damping):
     """delta = c / (l (m + M + J)) (m/s): viscous pivot damping c takes 2 delta v off v^2 per
     radian of the carry (q_e: carry_terms' effective mass ratio)."""
-    if _is_zero(damping):
+    if is_exact_zero(damping):
         return 0.0
     return (damping / (object_mass * link_length)) * momentum_fraction(effective_mass_ratio)
 
@@ -278,8 +280,6 @@ def carry_steps(rtol, span=1.0):
     """Fourth-order steps for an integrated carry over `span` rad whose relative error is at most
     about rtol: the step h = 2 rtol^(1/4) (the error is C h^4 with C measured from 5e-5 to
     0.03 on damped carries; results/bench_links.md; at least 4 steps)."""
-    import math
-
     return max(4, math.ceil(span / (2.0 * rtol**0.25)))
 
 

@@ -246,10 +246,9 @@ class OdePhases:
         friction holds it (a turning point where its weight's torque is within the friction)."""
         sw, l, t, theta, omega = self.swing_alone, self.l, 0.0, theta0, w0 / self.l
         for _ in range(50):  # turning points of a swing that friction and damping slow down
-            if omega == 0.0:
+            if omega == 0.0:  # at rest: held, or it starts down the way gravity pulls
                 if ph.held_by_friction(theta, sw):
                     return t, theta, 0.0
-                omega = 0.0
                 direction = 1.0 if theta > 0.0 else -1.0
             else:
                 direction = math.copysign(1.0, omega)
