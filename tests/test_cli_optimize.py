@@ -91,7 +91,8 @@ def test_beta_not_beyond_alpha_is_infeasible(tmp_path):
     assert doc["status"] == "infeasible"
     # every quantity of the missing orbit is null, and it has no margins (docs/json-schema.md)
     periodic = doc["periodic"]
-    assert set(periodic) == {"handover_speed", "landing_speed", "contraction", "drop_per_stage"}
+    assert set(periodic) == {"handover_speed", "landing_speed", "contraction", "drop_per_stage",
+                             "effective_mass"}
     assert [k for k, v in periodic.items() if v is None] == [
         "handover_speed", "landing_speed", "drop_per_stage"]
     assert "over_the_top" not in doc["margins"] and "first_over_the_top" in doc["margins"]

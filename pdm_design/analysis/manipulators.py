@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 from ..physics import manipulators as phys
 from ..scenes import ManipulatorsDesign, ManipulatorsScene
@@ -11,6 +12,84 @@ from .result import Analysis, margin
 APPROACH_STAGES = 6
 # Margins that depend on the landing velocity (the others are the same at every stage).
 _SPEED_DEPENDENT = ("over_the_top", "lift_off", "slip_impact", "tip_impact")
+# With links or pivot friction the carry's contact force has a tangential part beyond gravity's,
+# so the friction it needs and where it acts depend on the speed too.
+_MECHANISM_SPEED_DEPENDENT = ("slip_carry", "tip_carry")
+
+
+class CarryTerms(NamedTuple):
+    """The carry of palm + links + stuck object (physics.manipulators.carry_terms): effective
+    mass ratio, effective gravity, pivot friction per carried mass, the palm-plus-links mass felt
+    along the swing (kg), and whether these are the paper's (massless links, no friction)."""
+
+    q: float
+    gravity: float
+    friction: float
+    felt_mass: float
+    plain: bool
+    damping: float = 0.0  # physics.damping_rate: 0, or the carry is integrated
+
+
+# Relative error of the integrated (damped) carry in the analysis (physics.carry_steps): far
+# below what verification demands of the simulator (measured 1e-13 against it).
+ANALYSIS_RTOL = 1e-12
+
+
+def carry_terms(scene, design) -> CarryTerms:
+    mech = scene.mechanism()
+    kw = dict(object_mass=scene.body.mass, gravity=scene.gravity,
+              link_length=design.link_length, **mech)
+    q, g_e, f = phys.carry_terms(design.mass_ratio, **kw)
+    felt = phys.palm_terms(design.mass_ratio, **kw)[0]
+    delta = phys.damping_rate(q, object_mass=scene.body.mass, link_length=design.link_length,
+                              damping=scene.pivots.damping)
+    return CarryTerms(q, g_e, f, felt, scene.plain_mechanism, delta)
+
+
+def carry_v2(carry: CarryTerms, u, alpha, theta, link_length, lowest=False):
+    """v(theta)^2 of a carry from -alpha at u: the closed form, or with pivot damping the
+    integrated one (physics.integrated_carry_speed_squared; lowest: also the smallest v^2)."""
+    kw = dict(gravity=carry.gravity, link_length=link_length, friction=carry.friction)
+    if carry.damping == 0.0:
+        v2 = float(phys.carry_speed_squared(u, alpha, theta, **kw))
+        return (v2, None) if lowest else v2
+    steps = phys.carry_steps(ANALYSIS_RTOL, abs(theta + alpha))
+    out = phys.integrated_carry_speed_squared(u, alpha, theta, damping=carry.damping,
+                                              steps=steps, lowest=lowest, **kw)
+    return tuple(float(v) for v in out) if lowest else float(out)
+
+
+def _damped_contraction(carry, a, b, l, s2):
+    """d s'^2 / d s^2 of the integrated stage map at its fixed point s2 (central difference)."""
+    k, h = float(phys.momentum_fraction(carry.q)), 1e-4
+
+    def next_s2(x):
+        return carry_v2(carry, k * math.sqrt(x) * math.cos(a + b), a, b, l)
+
+    return (next_s2(s2 * (1 + h)) - next_s2(s2 * (1 - h))) / (2 * h * s2)
+
+
+def _damped_handover_speed_squared(carry, a, b, l, start):
+    """Fixed point of the integrated stage map s -> v(beta) after landing at k s cos(a + b)
+    (pivot damping: no closed form), iterated from `start` (the map contracts); <= 0 when the
+    carry stops."""
+    k, s2 = float(phys.momentum_fraction(carry.q)), start
+    for _ in range(500):
+        v2 = carry_v2(carry, k * math.sqrt(max(s2, 0.0)) * math.cos(a + b), a, b, l)
+        if v2 <= 0.0 or abs(v2 - s2) <= 1e-16 * v2:
+            return v2
+        s2 = v2
+    return s2
+
+
+def _mechanism_report(scene, design) -> dict:
+    """The links and pivots as the analysis used them: each link's mass and inertia about its
+    pivot, how many, and the pivots' friction torque and damping (all joints together)."""
+    links, l = scene.links, design.link_length
+    inertia = links.mass * l * l / 3.0 if links.inertia is None else links.inertia
+    return {"link_mass": links.mass, "link_inertia": inertia, "link_count": links.count,
+            "pivot_friction_torque": scene.pivots.friction_torque,
+            "pivot_damping": scene.pivots.damping}
 
 
 def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
@@ -18,16 +97,25 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
     """stages: manipulators in the row (default APPROACH_STAGES); palms parked behind the
     carrying one are checked as far back as the row has them."""
     g, l = scene.gravity, design.link_length
-    a, b, q = design.alpha, design.beta, design.mass_ratio
+    a, b = design.alpha, design.beta
     body, palm = scene.body, scene.palm
+    carry = carry_terms(scene, design)
+    q, g_e, f = carry.q, carry.gravity, carry.friction
     problems: list[str] = []
     margins: dict[str, float] = {}
 
     pitch_x, pitch_y = phys.pitch(a, b, l)
-    geometry = {"pitch_x": float(pitch_x), "pitch_y": float(pitch_y), "palm_mass": body.mass / q}
+    geometry = {"pitch_x": float(pitch_x), "pitch_y": float(pitch_y),
+                "palm_mass": body.mass / design.mass_ratio}
+    geometry.update(_mechanism_report(scene, design))
     if palm.front_stop <= b:
         problems.append(f"the front stop at {palm.front_stop:g} rad stops the palm before the "
                         f"handover angle beta = {b:g} rad")
+    links = scene.links
+    if links.inertia is not None and links.inertia < links.mass * l * l / 4.0:
+        problems.append(f"links.inertia = {links.inertia:g} kg m^2 is below mass (l/2)^2 = "
+                        f"{links.mass * l * l / 4.0:g} kg m^2: no rigid link of length l = {l:g} m "
+                        "with its centre of mass at mid-length has it")
 
     # First approach: ballistic flight onto the first palm resting at -alpha.
     first = _first_landing(scene, design, problems)
@@ -37,12 +125,20 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
         margins["landing"] = margin(palm.width / 2, abs(offset) + body.width / 2)
 
     # Periodic orbit: fixed point of the handover-speed map.
-    s2 = phys.handover_speed_squared(a, b, q, gravity=g, link_length=l)
+    s2 = phys.handover_speed_squared(a, b, q, gravity=g_e, link_length=l, friction=f)
+    if carry.damping and s2 > 0.0:
+        s2 = _damped_handover_speed_squared(carry, a, b, l, s2)
     periodic: dict[str, float | None] = {
         "handover_speed": None, "landing_speed": None,
         "contraction": float(phys.contraction(a, b, q)), "drop_per_stage": None,
+        "effective_mass": carry.felt_mass,
     }
-    if s2 <= 0.0:
+    if carry.damping and s2 > 0.0:  # the integrated map's slope at its fixed point
+        periodic["contraction"] = _damped_contraction(carry, a, b, l, s2)
+    if s2 <= 0.0 and (f > 0.0 or carry.damping > 0.0) and b > a:
+        problems.append("the pivot friction and damping take more energy out of a carry than "
+                        "its drop gives: there is no periodic handover speed")
+    elif s2 <= 0.0:
         problems.append(f"beta = {b:g} rad is not beyond alpha = {a:g} rad: the carry gains no "
                         "height, so there is no periodic handover speed")
     else:
@@ -125,28 +221,40 @@ def _first_landing(scene, design, problems):
 
 def _stage_margins(scene, design, velocity, offset) -> dict[str, float]:
     """Margins of one stage: landing with `velocity` at `offset` from the palm centre, then the
-    carry to beta."""
+    carry to beta (with links or pivot friction, the speed-dependent slip and tipping of the
+    carry are judged at its two ends, as the lift-off is)."""
     g, l = scene.gravity, design.link_length
-    a, b, q = design.alpha, design.beta, design.mass_ratio
+    a, b = design.alpha, design.beta
+    carry = carry_terms(scene, design)
+    q, g_e, f = carry.q, carry.gravity, carry.friction
     body, palm = scene.body, scene.palm
     vx, vy = velocity
     u = float(phys.landing_speed(vx, vy, a, q))
     px, py = (float(p) for p in phys.landing_impulse(vx, vy, a, q))
-    v_beta2 = float(phys.carry_speed_squared(u, a, b, gravity=g, link_length=l))
+    v_beta2, lowest = carry_v2(carry, u, a, b, l, lowest=True)
+    if lowest is None:
+        top = float(phys.top_speed_squared_needed(a, gravity=g_e, link_length=l, friction=f))
+    else:  # damped: the squared speed the carry loses down to its slowest point
+        top = u * u - lowest
     support = _support(body.width, palm.width, offset)
     half_h = body.height / 2
+    ends = ((-a, u * u), (b, v_beta2))
+    along = [None if carry.plain else float(phys.carry_along(
+        th, gravity=g, carry_gravity=g_e, friction=f)) for th, _ in ends]
+    ratio = [None if A is None else float(phys.carry_force_ratio(
+        th, v2, gravity=g, link_length=l, along=A)) for (th, v2), A in zip(ends, along)]
+    demand = (float(phys.friction_demand(max(a, b))) if carry.plain
+              else max(float(phys.friction_demand(th, r)) for (th, _), r in zip(ends, ratio)))
 
     out = {
-        "over_the_top": margin(u**2 if u > 0 else 0.0,
-                               float(phys.top_speed_squared_needed(a, gravity=g, link_length=l))),
-        "lift_off": min(
-            margin(float(phys.lift_off_capacity(a, gravity=g, link_length=l)), u**2),
-            margin(float(phys.lift_off_capacity(b, gravity=g, link_length=l)), v_beta2),
-        ),
-        "slip_carry": margin(palm.friction, float(phys.friction_demand(max(a, b)))),
+        "over_the_top": margin(u**2 if u > 0 else 0.0, top),
+        "lift_off": min(margin(float(phys.lift_off_capacity(th, gravity=g, link_length=l,
+                                                            along=A)), v2)
+                        for (th, v2), A in zip(ends, along)),
+        "slip_carry": margin(palm.friction, demand),
         "tip_carry": min(
-            _tip_margin(support, float(phys.carry_force_point(-a, body.height))),
-            _tip_margin(support, float(phys.carry_force_point(b, body.height))),
+            _tip_margin(support, float(phys.carry_force_point(-a, body.height, ratio[0]))),
+            _tip_margin(support, float(phys.carry_force_point(b, body.height, ratio[1]))),
         ),
     }
     if py > 0.0:
@@ -174,13 +282,17 @@ def _tip_margin(support, force_point):
 def _predicted_handover_speeds(scene, design, velocity, stages=APPROACH_STAGES):
     """Handover speeds of the first stages by the closed-form map (nominal geometry), up to the
     first carry that cannot pass the top (sim.manipulators.handover_map is nan there too)."""
-    g, l = scene.gravity, design.link_length
-    a, b, q = design.alpha, design.beta, design.mass_ratio
-    top = float(phys.top_speed_squared_needed(a, gravity=g, link_length=l))
+    l = design.link_length
+    a, b = design.alpha, design.beta
+    carry = carry_terms(scene, design)
+    q, g_e, f = carry.q, carry.gravity, carry.friction
+    top = float(phys.top_speed_squared_needed(a, gravity=g_e, link_length=l, friction=f))
     u = float(phys.landing_speed(*velocity, a, q))
     speeds = []
-    while len(speeds) < stages and u > 0.0 and u * u >= top:
-        speeds.append(math.sqrt(float(phys.carry_speed_squared(u, a, b, gravity=g,
-                                                               link_length=l))))
+    while len(speeds) < stages and u > 0.0 and (carry.damping or u * u >= top):
+        v2, lowest = carry_v2(carry, u, a, b, l, lowest=True)
+        if v2 <= 0.0 or (lowest is not None and lowest <= 0.0):  # the palm stops short
+            break
+        speeds.append(math.sqrt(v2))
         u = float(phys.momentum_fraction(q)) * speeds[-1] * math.cos(a + b)
     return speeds

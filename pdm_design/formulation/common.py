@@ -401,8 +401,11 @@ def spec_key(spec) -> str:
     design = sorted((k, repr(v)) for k, v in spec.design.items())
     objective = sorted((k, float(v)) for k, v in spec.objective.items())
     required = requires_rows(spec)
+    pivots = getattr(spec.scene, "pivots", None)  # damping: the carry's steps follow accuracy
+    steps = (spec.verification.accuracy.agreement if pivots is not None and pivots.damping
+             else None)
     return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages,
-                 required))
+                 required, steps))
 
 
 # objective terms measured in metres (the others are pure numbers)

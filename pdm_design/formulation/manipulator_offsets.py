@@ -52,10 +52,18 @@ def scenario(spec, model, m) -> Scenario:
         where = f"palm {K}"
         add("landing", f"{where}, ahead", W / 2 - o - w / 2, W / 2)
         add("landing", f"{where}, behind", W / 2 + o - w / 2, W / 2)
-        add(f"{first}over_the_top", where, u**2 - m.top_needed, u**2)
-        held = phys.lift_off_capacity(a, gravity=g, link_length=l)
+        if m.steps:  # pivot damping: the integrated carry's slowest point
+            add(f"{first}over_the_top", where, m.carry_v2(u, b, lowest=True)[1], u**2)
+        else:
+            add(f"{first}over_the_top", where, u**2 - m.top_needed, u**2)
+        if m.plain:
+            held = phys.lift_off_capacity(a, gravity=g, link_length=l)
+            demand = phys.friction_demand(a)
+        else:  # links or pivots: the contact force depends on the speed (docs/physics.md 2.1)
+            held, demand, fp_back = m.contact(-a, u**2)
+            fp_back = fp_back * h
         add(f"{first}lift_off", f"{where}, back stop", held - u**2, held)
-        add("slip_carry", f"{where}, back stop", mu - phys.friction_demand(a), mu)
+        add("slip_carry", f"{where}, back stop", mu - demand, mu)
         add("tip_carry", f"{where}, back stop, object's front edge", w / 2 - fp_back, w / 2)
         add("tip_carry", f"{where}, back stop, palm's front edge", W / 2 - o - fp_back, W / 2 - o)
         delta = dy[K] - dy[K - 1]
@@ -69,11 +77,16 @@ def scenario(spec, model, m) -> Scenario:
                 n * m.pitch_y + (dy[K - n - 1] - dy[K - 1]), o, a, l), l)
         if palm.front_stop < ca.pi / 2:
             add("front_stop", where, palm.front_stop - th, palm.front_stop)
-        v2 = phys.carry_speed_squared(u, a, th, gravity=g, link_length=l)
-        held = g * l * cth  # lift_off_capacity(th), without cos(acos(.))
+        v2 = m.carry_v2(u, th)
+        if m.plain:
+            held = g * l * cth  # lift_off_capacity(th), without cos(acos(.))
+            demand = phys.friction_demand(th)
+            fp_front = -phys.carry_force_point(th, h)  # behind the centre
+        else:
+            held, demand, fp_front = m.contact(th, v2)
+            fp_front = -fp_front * h
         add(f"{first}lift_off", f"{where}, handover", held - v2, held)
-        add("slip_carry", f"{where}, handover", mu - phys.friction_demand(th), mu)
-        fp_front = -phys.carry_force_point(th, h)  # behind the centre
+        add("slip_carry", f"{where}, handover", mu - demand, mu)
         add("tip_carry", f"{where}, handover, object's rear edge", w / 2 - fp_front, w / 2)
         add("tip_carry", f"{where}, handover, palm's rear edge", W / 2 + o - fp_front, W / 2 + o)
         if K == N:

@@ -40,6 +40,7 @@ import math
 
 import casadi as ca
 
+from ..errors import SpecError
 from ..physics import manipulators as phys
 from ..scenes import ManipulatorsDesign
 from .common import (
@@ -84,6 +85,7 @@ def build(spec):
     l_max = bounds["link_length"][1] if "link_length" in bounds else values["link_length"]
 
     m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages))
+    m.steps = integrated_steps(spec, robust, values, bounds)
     conditions = m.conditions(S, u_lo, u_hi, tau, robust)
     aux = [("periodic_speed_sq", S, 0.0, math.inf),
            ("landing_speed_lo", u_lo, 0.0, math.inf),
@@ -118,6 +120,24 @@ def build(spec):
         objective_scale=objective_scale(spec.objective, min(l_max, 1.0)),
     )
     return model, bounds, m
+
+
+def integrated_steps(spec, robust, values, bounds, force=False) -> int:
+    """Steps of the integrated carry (0: the closed form): with pivot damping, which has no
+    closed form, or when asked (force: results/bench_links.py measures the trade), enough for
+    a tenth of the accuracy's agreement over the widest carry alpha + beta the bounds allow
+    (physics.carry_steps). The robust rows'
+    bounds need the closed form: robust with damping is refused in words."""
+    if spec.scene.pivots.damping == 0.0 and not force:
+        return 0
+    if robust:
+        raise SpecError(spec.source or "<spec>", "scene.pivots.damping",
+                        "0 with objective.max_offset_tolerance (the robust tolerance rows bound "
+                        "the closed-form carry; damping has none)",
+                        found=repr(spec.scene.pivots.damping))
+    span = sum(bounds[k][1] if k in bounds else values[k] for k in ("alpha", "beta"))
+    # a tenth of the agreement verification demands of the simulator (results/bench_links.md)
+    return phys.carry_steps(spec.verification.accuracy.agreement / 10.0, span=span)
 
 
 def parked_rows(scene, values, bounds, stages) -> int:
@@ -166,16 +186,27 @@ class _Model:
         self.a, self.b = values["alpha"], values["beta"]
         self.l, self.q = values["link_length"], values["mass_ratio"]
         self.pivot = (values["first_pivot_x"], values["first_pivot_y"])
-        a, b, l, q, g = self.a, self.b, self.l, self.q, self.g
+        # links and pivot friction (physics.carry_terms): effective mass ratio and gravity of
+        # the carry, friction per carried mass; q and g themselves on the paper's device
+        self.q, self.gc, self.f = phys.carry_terms(
+            self.q, object_mass=scene.body.mass, gravity=self.g, link_length=self.l,
+            **scene.mechanism())
+        self.plain = scene.plain_mechanism
+        # pivot damping: the carry is integrated (steps from the accuracy's rtol, set by build)
+        self.delta = phys.damping_rate(self.q, object_mass=scene.body.mass, link_length=self.l,
+                                       damping=scene.pivots.damping)
+        self.steps = 0
+        a, b, l, q, gc = self.a, self.b, self.l, self.q, self.gc
         self.k = phys.momentum_fraction(q)
         self.c = phys.contraction(a, b, q)
-        self.D = phys.energy_gain_squared(a, b, gravity=g, link_length=l)
+        self.D = phys.energy_gain_squared(a, b, gravity=gc, link_length=l, friction=self.f)
         self.pitch_x, self.pitch_y = phys.pitch(a, b, l)
         px1, py1 = phys.palm_centre(self.pivot[0], self.pivot[1], -a, l)
         (x0, y0), (self.vx0, self.vy0) = scene.initial.position, scene.initial.velocity
         self.H = y0 - py1  # fall height onto palm 1 (nominal)
         self.C0 = x0 - px1  # object ahead of palm 1's centre at the start
-        self.top_needed = phys.top_speed_squared_needed(a, gravity=g, link_length=l)
+        self.top_needed = phys.top_speed_squared_needed(a, gravity=gc, link_length=l,
+                                                        friction=self.f)
 
     # -- pieces --------------------------------------------------------------------------------
     def fall_speed(self, dy):
@@ -193,13 +224,43 @@ class _Model:
 
     def next_speed(self, u, th):
         """Landing speed on the next palm after carrying at u from -alpha to the handover th."""
-        v = ca.sqrt(phys.carry_speed_squared(u, self.a, th, gravity=self.g, link_length=self.l))
+        v = ca.sqrt(self.carry_v2(u, th))
         return phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), self.a, self.q)
+
+    def carry_v2(self, u, th, lowest=False):
+        """v^2 at th on a carry that left -alpha at u: the closed form, or with pivot damping
+        (or integrated_steps set) fourth-order steps in the angle (lowest: also the smallest
+        v^2 on the way)."""
+        kw = dict(gravity=self.gc, link_length=self.l, friction=self.f)
+        if not self.steps:
+            v2 = phys.carry_speed_squared(u, self.a, th, **kw)
+            return (v2, None) if lowest else v2
+        return phys.integrated_carry_speed_squared(u, self.a, th, damping=self.delta,
+                                                   steps=self.steps, lowest=lowest, **kw)
+
+    def contact(self, th, v2):
+        """(lift-off capacity of v^2, friction demand, force point / height) of the stuck
+        object at th moving at v^2 on real links or pivots (physics.carry_force_ratio)."""
+        along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f)
+        ratio = phys.carry_force_ratio(th, v2, gravity=self.g, link_length=self.l, along=along)
+        held = phys.lift_off_capacity(th, gravity=self.g, link_length=self.l, along=along)
+        return held, phys.friction_demand(th, ratio), phys.carry_force_point(th, 1.0, ratio)
+
+    def carry_ratios(self, ends):
+        """Friction / normal of the stuck object's contact force at each (th, v^2) of `ends`
+        (links or pivot friction: physics.carry_force_ratio, monotone in v^2)."""
+        out = []
+        for th, v2 in ends:
+            along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f)
+            out.append(phys.carry_force_ratio(th, v2, gravity=self.g, link_length=self.l,
+                                              along=along))
+        return out
 
     def aux_start(self):
         """Feasible auxiliaries at tau = 0: S from the fixed point, [u_lo, u_hi] spanning the
         first and the periodic landing speeds."""
-        S = phys.handover_speed_squared(self.a, self.b, self.q, gravity=self.g, link_length=self.l)
+        S = phys.handover_speed_squared(self.a, self.b, self.q, gravity=self.gc,
+                                        link_length=self.l, friction=self.f)
         u_star = self.k * ca.sqrt(ca.fmax(S, 0.0)) * ca.cos(self.a + self.b)
         u1 = self.first_speed(self.fall_speed(0.0))
         return [S, ca.fmax(ca.fmin(u1, u_star), 0.0), ca.fmax(u1, u_star)]
@@ -266,8 +327,13 @@ class _Model:
         Q_hi = Qs[-1][1]
 
         # Model: the periodic fixed point and the invariant interval of landing speeds.
-        add((), "periodic handover speed: S (1 - c) = D", S * (1 - self.c) - self.D,
-            kind=MODEL, equality=True)
+        if self.steps:  # integrated: S is v(b)^2 after landing at k sqrt(S) cos(a + b)
+            u_star = self.k * ca.sqrt(ca.fmax(S, 0.0)) * ca.cos(a + b)
+            add((), "periodic handover speed: S = v(beta)^2 (integrated)",
+                self.carry_v2(u_star, b) - S, kind=MODEL, equality=True)
+        else:
+            add((), "periodic handover speed: S (1 - c) = D", S * (1 - self.c) - self.D,
+                kind=MODEL, equality=True)
         u1_lo, u1_hi = self.first_speed(Q_hi), self.first_speed(Qs[0][1])
         # The interval rows keep the backoff in speed units (sqrt(g l)): without it, an
         # interval met only to IPOPT's tolerance let the first landing stall 1e-4 rad short of
@@ -279,7 +345,11 @@ class _Model:
             # Curvature bound of ln F(u, th) on the whole interval, for every u (docs/optimizer.md):
             # d2 ln F / d th2 = -sec^2(a + th) + (y cos th - y^2 sin^2 th) / 2 with y = 2 g l / v^2
             # <= cot^2(th_lo) / 8 - sec^2(a + th_lo) =: M; M+ = smooth max(M, 0) >= max(M, 0).
-            curv = (ca.cos(th_lo) / ca.sin(th_lo)) ** 2 / 8 - 1 / ca.cos(a + th_lo) ** 2
+            # (with pivot friction f: cot th_lo becomes cos th_lo / (sin th_lo - f / (g l)),
+            # the same maximum over 1 / v^2 of g l cos th / v^2 - 2 (g l sin th - f)^2 / v^4)
+            lean = ca.sin(th_lo) if phys.is_exact_zero(self.f) else (
+                ca.sin(th_lo) - self.f / (self.gc * l))
+            curv = (ca.cos(th_lo) / lean) ** 2 / 8 - 1 / ca.cos(a + th_lo) ** 2
             curv = (curv + ca.sqrt(curv**2 + 1e-12)) / 2
             # Low end: ln F >= chord - M+ (th - th_lo)(th_hi - th) / 2 >= min over the ends
             # - M+ (th_hi - th_lo)^2 / 8.
@@ -307,18 +377,41 @@ class _Model:
             kind=VALIDITY)
         add(("start_height",), "",
             self.H - tau - START_CLEARANCE * l, scale=l, kind=VALIDITY)
+        if robust and not phys.is_exact_zero(self.f):
+            add(("over_the_top",), "gravity beats the pivot friction at the handover",
+                self.gc * l * ca.sin(th_lo) - self.f, self.gc * l, kind=VALIDITY)
 
         # Carry conditions on every palm (the first included: u_lo <= u_1 <= u_hi).
-        add(OVER_THE_TOP, "slowest landing on any palm",
-            u_lo**2 - self.top_needed, u_lo**2)
-        held = phys.lift_off_capacity(a, gravity=g, link_length=l)
-        add(LIFT_OFF, "at the back stop, fastest landing",
-            held - u_hi**2, held)
-        v2 = phys.carry_speed_squared(u_hi, a, th_hi, gravity=g, link_length=l)
-        held = phys.lift_off_capacity(th_hi, gravity=g, link_length=l)
-        add(LIFT_OFF, "at the handover, fastest carry", held - v2, held)
-        add("slip_carry", "at the back stop", mu - phys.friction_demand(a), mu)
-        add("slip_carry", "at the largest handover angle", mu - phys.friction_demand(th_hi), mu)
+        if self.steps:  # integrated: the slowest point of the slowest carry is still moving
+            add(OVER_THE_TOP, "slowest landing on any palm, slowest point (integrated)",
+                self.carry_v2(u_lo, b, lowest=True)[1], u_lo**2)
+        else:
+            add(OVER_THE_TOP, "slowest landing on any palm",
+                u_lo**2 - self.top_needed, u_lo**2)
+        v2 = self.carry_v2(u_hi, th_hi)
+        if self.plain:
+            held = phys.lift_off_capacity(a, gravity=g, link_length=l)
+            add(LIFT_OFF, "at the back stop, fastest landing",
+                held - u_hi**2, held)
+            held = phys.lift_off_capacity(th_hi, gravity=g, link_length=l)
+            add(LIFT_OFF, "at the handover, fastest carry", held - v2, held)
+            add("slip_carry", "at the back stop", mu - phys.friction_demand(a), mu)
+            add("slip_carry", "at the largest handover angle",
+                mu - phys.friction_demand(th_hi), mu)
+            fp_back = phys.carry_force_point(-a, h)
+            fp_front = -phys.carry_force_point(th_hi, h)
+        else:  # the contact force's tangential part depends on the speed: both ends of each
+            for where, th, speed2 in (("at the back stop, fastest landing", -a, u_hi**2),
+                                      ("at the handover, fastest carry", th_hi, v2)):
+                add(LIFT_OFF, where, self.contact(th, speed2)[0] - speed2, g * l)
+            back = self.carry_ratios([(-a, u_lo**2), (-a, u_hi**2)])
+            front = self.carry_ratios([(th, self.carry_v2(u, th)) for th in (th_lo, th_hi)
+                                       for u in (u_lo, u_hi)])
+            for i, r in enumerate(back + front):
+                add("slip_carry", _v("at the ends of the carry", i, back + front),
+                    mu - phys.friction_demand(None, r), mu)
+            fp_back = fmax_all([phys.carry_force_point(-a, h, r) for r in back])
+            fp_front = fmax_all([-phys.carry_force_point(None, h, r) for r in front])
         add("palm_clearance", "next palm below the object until the handover",
             self.pitch_y - 2 * tau, l, epigraph=False)
         if palm.front_stop < math.pi / 2:
@@ -345,12 +438,10 @@ class _Model:
             add("landing", _v("object furthest behind", i, o_lo), W / 2 + o - w / 2, W / 2)
         # Tipping during the carry: the force point within the support (ahead of the centre at
         # the back stop, behind it at the handover).
-        fp_back = phys.carry_force_point(-a, h)
         add("tip_carry", "at the back stop, object's front edge", w / 2 - fp_back, w / 2)
         for i, o in enumerate(o_hi):
             add("tip_carry", _v("at the back stop, palm's front edge", i, o_hi),
                 W / 2 - o - fp_back, W / 2 - o)
-        fp_front = -phys.carry_force_point(th_hi, h)
         add("tip_carry", "at the handover, object's rear edge", w / 2 - fp_front, w / 2)
         for i, o in enumerate(o_lo):
             add("tip_carry", _v("at the handover, palm's rear edge", i, o_lo),

@@ -53,6 +53,10 @@ def acos(x):
     return _casadi().acos(x) if is_symbolic(x) else np.arccos(x)
 
 
+def asin(x):
+    return _casadi().asin(x) if is_symbolic(x) else np.arcsin(x)
+
+
 def sinh(x):
     return _casadi().sinh(x) if is_symbolic(x) else np.sinh(x)
 

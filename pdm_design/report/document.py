@@ -16,9 +16,12 @@ SCHEMA = "pdm-design/optimize/1"
 
 # The keys of each object, by scene where they differ (docs/json-schema.md).
 DESIGN = {"manipulators": ManipulatorsDesign.VARIABLES, "stairs": StairsDesign.VARIABLES}
-GEOMETRY = {"manipulators": ("pitch_x", "pitch_y", "palm_mass", "landing_offset"),
+GEOMETRY = {"manipulators": ("pitch_x", "pitch_y", "palm_mass", "link_mass", "link_inertia",
+                             "link_count", "pivot_friction_torque", "pivot_damping",
+                             "landing_offset"),
             "stairs": ("rise", "tread", "landing_offset", "nose_clearance")}
-PERIODIC = {"manipulators": ("handover_speed", "landing_speed", "contraction", "drop_per_stage"),
+PERIODIC = {"manipulators": ("handover_speed", "landing_speed", "contraction", "drop_per_stage",
+                             "effective_mass"),
             "stairs": ("impact_speed", "vertical_impact_speed", "horizontal_speed", "spin",
                        "flight_time", "drift_per_bounce")}
 APPROACH = {"manipulators": ("landing_point", "landing_velocity", "handover_speeds"),

@@ -13,6 +13,8 @@ _UNITS = {
     "nose_clearance": "m", "handover_speed": "m/s", "landing_speed": "m/s", "contraction": "",
     "drop_per_stage": "m", "impact_speed": "m/s", "vertical_impact_speed": "m/s",
     "horizontal_speed": "m/s", "spin": "rad/s", "flight_time": "s", "drift_per_bounce": "m",
+    "effective_mass": "kg", "link_mass": "kg", "link_inertia": "kg m^2", "link_count": "",
+    "pivot_friction_torque": "N m", "pivot_damping": "N m s/rad",
 }
 
 

@@ -1,7 +1,15 @@
 """Scenes: frozen, self-validating descriptions of what the designer does not choose,
 and design points (what the designer chooses)."""
 
-from .manipulators import Body, ManipulatorsDesign, ManipulatorsInitial, ManipulatorsScene, Palm
+from .manipulators import (
+    Body,
+    Links,
+    ManipulatorsDesign,
+    ManipulatorsInitial,
+    ManipulatorsScene,
+    Palm,
+    Pivots,
+)
 from .stairs import Ball, StairsDesign, StairsInitial, StairsScene
 
 Scene = StairsScene | ManipulatorsScene
@@ -9,5 +17,5 @@ Design = StairsDesign | ManipulatorsDesign
 
 __all__ = [
     "Ball", "Body", "Design", "ManipulatorsDesign", "ManipulatorsInitial", "ManipulatorsScene",
-    "Palm", "Scene", "StairsDesign", "StairsInitial", "StairsScene",
+    "Links", "Palm", "Pivots", "Scene", "StairsDesign", "StairsInitial", "StairsScene",
 ]

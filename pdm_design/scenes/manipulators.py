@@ -50,6 +50,27 @@ class Palm:
 
 
 @dataclass(frozen=True, config=CONFIG)
+class Links:
+    """The parallelogram's links (docs/physics.md, section 2.1): mass of each link (kg), its
+    moment of inertia about its pivot (kg m^2; None: a uniform rod of the link length l,
+    mass l^2 / 3) and how many links move with the palm. Each link's centre of mass is at
+    half its length (a link symmetric end to end). mass = 0: massless links (the paper's)."""
+
+    mass: NonNegative = 0.0
+    inertia: NonNegative | None = None
+    count: Annotated[int, Strict(), Field(ge=1, le=1000)] = 2
+
+
+@dataclass(frozen=True, config=CONFIG)
+class Pivots:
+    """The joints of a manipulator, all together: a Coulomb friction torque (N m, opposing the
+    swing) and a viscous damping coefficient (N m s / rad). Zero: frictionless (the paper's)."""
+
+    friction_torque: NonNegative = 0.0
+    damping: NonNegative = 0.0
+
+
+@dataclass(frozen=True, config=CONFIG)
 class ManipulatorsInitial:
     """Start of the object's flight: bottom-centre position (m) and velocity (m/s), in the frame
     whose origin is the first manipulator's pivot, x along the row, y up."""
@@ -66,8 +87,24 @@ class ManipulatorsScene:
     palm: Palm
     initial: ManipulatorsInitial
     gravity: Positive = STANDARD_GRAVITY
+    links: Links = Links()
+    pivots: Pivots = Pivots()
 
     kind = "manipulators"
+
+    def mechanism(self) -> dict:
+        """Keyword arguments of physics.manipulators.carry_terms and palm_terms: the links' and
+        the pivots' totals (all links together)."""
+        links = self.links
+        inertia = None if links.inertia is None else links.count * links.inertia
+        return {"link_mass": links.count * links.mass, "link_inertia": inertia,
+                "friction_torque": self.pivots.friction_torque}
+
+    @property
+    def plain_mechanism(self) -> bool:
+        """Massless links and frictionless, undamped pivots: the paper's device."""
+        return (self.links.mass == 0.0 and not self.links.inertia
+                and self.pivots.friction_torque == 0.0 and self.pivots.damping == 0.0)
 
 
 @dataclass(frozen=True, config=CONFIG)

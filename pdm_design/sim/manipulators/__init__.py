@@ -37,6 +37,7 @@ EVENT_KINDS = {
     "bounce": "the object bounces off a palm (restitution > 0)",
     "front_stop": "an empty palm reaches its front stop and is stopped",
     "back_stop": "an empty palm swings back onto its back stop",
+    "pivot_friction_stop": "an empty palm stops mid-swing where pivot friction holds it",
     "complete": "the last manipulator carried the object to its handover angle",
     "lift_off": "the palm's normal force vanished (v^2 >= g l cos th): the object flies on and "
                 "the empty palm swings alone",
@@ -45,6 +46,8 @@ FAILURE_KINDS = {
     "blocked": "the object hits the side or underside of a palm (outside the model)",
     "fell_clear": "the object fell past the row",
     "missed": "the object lifted off and fell past the row without landing on a palm",
+    "lift_off_on_links": "the object lifts off a palm on real links or pivots: the flight after it"
+                         " is not modelled there (outside the model)",
     "tip": "the contact force leaves the object's supported base: it tips (outside the model)",
     "stall": "the carry stops before the top: the palm swings back to its back stop",
     "slid_off": "the object's centre slid off the end of its palm",
@@ -100,7 +103,7 @@ def handover_angle(beta, rise, link_length):
 
 
 def handover_map(speeds, alpha, beta, mass_ratio, g, l, *, arrival_angle=None,
-                 departure_angle=None):
+                 departure_angle=None, friction=0.0):
     """Stick-regime stage map, vectorised: the speed at which a palm hands the object over, given
     the speed `speeds` at which the object was handed onto it.
 
@@ -108,15 +111,17 @@ def handover_map(speeds, alpha, beta, mass_ratio, g, l, *, arrival_angle=None,
     plastically on the palm resting at -alpha (u = m/(m+M) s cos(alpha + arrival_angle)) and is
     carried stuck to departure_angle (default beta): s'^2 = u^2 + 2 g l (cos alpha - cos dep).
     With the defaults this is s'^2 = c s^2 + D, physics.manipulators.next_handover_speed.
-    nan where the carry cannot pass the top (u^2 < 2 g l (1 - cos alpha) or u < 0)."""
+    nan where the carry cannot pass the top (u^2 < 2 g l (1 - cos alpha) or u < 0).
+    Links and pivot friction: pass physics.manipulators.carry_terms' (q_e, g_e, f) as
+    mass_ratio, g and friction."""
     s = np.asarray(speeds, dtype=float)
     arr = beta if arrival_angle is None else np.asarray(arrival_angle, dtype=float)
     dep = beta if departure_angle is None else np.asarray(departure_angle, dtype=float)
     # the physics closed forms: cos a - cos dep and 1 - cos a without cancellation (at
     # alpha = 1e-6 the plain differences lost 11 of 16 digits of the fixed point)
     u = phys.momentum_fraction(mass_ratio) * s * np.cos(alpha + arr)
-    v2 = phys.carry_speed_squared(u, alpha, dep, gravity=g, link_length=l)
-    passes = (u >= 0.0) & (u * u >= phys.top_speed_squared_needed(alpha, gravity=g,
-                                                                     link_length=l))
+    v2 = phys.carry_speed_squared(u, alpha, dep, gravity=g, link_length=l, friction=friction)
+    passes = (u >= 0.0) & (u * u >= phys.top_speed_squared_needed(
+        alpha, gravity=g, link_length=l, friction=friction))
     with np.errstate(invalid="ignore"):
         return np.where(passes & (v2 >= 0.0), np.sqrt(np.maximum(v2, 0.0)), np.nan)

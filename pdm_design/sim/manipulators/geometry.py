@@ -49,6 +49,12 @@ class Row:
     back_stops: tuple[float, ...] = ()
     palm_masses: tuple[float, ...] = ()
 
+    @property
+    def parts_vary(self) -> bool:
+        """Some manipulator has its own link length, back stop or palm mass."""
+        return (any(v != self.link_length for v in self.link_lengths)
+                or any(v != self.alpha for v in self.back_stops) or bool(self.palm_masses))
+
     def __len__(self) -> int:
         return len(self.pivots)
 

@@ -156,6 +156,10 @@ class LiftOffPhases:
         while ph.lift_off_guard(theta0, theta0, v0, gravity=g, link_length=l) < 0.0:
             v0 = max(math.nextafter(v0, math.inf), math.sqrt(g * l * math.cos(theta0)))
         state = self._on_palm(k, theta0, v0 / l, s, sd)
+        if not self.plain:  # the empty palm's swing below assumes massless links, free pivots
+            return self._fail(t0, "lift_off_on_links", k + 1, state,
+                              f"{detail}; the flight after a lift-off is modelled for massless "
+                              "links and free pivots only")
         self._log(t0, "lift_off", k + 1, state, state, detail)
         planned = len(self.palm_events)
         self._release(k, t0, theta0, v0)

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from . import phases as ph
-from .geometry import face_guards, support_words
+from .geometry import Arc, face_guards, first_contact, support_words
 
 SLIP_START_ATOLS = 100.0  # initial slip speed of a slip from relative rest, in units of atol
 
@@ -61,10 +61,10 @@ class OdePhases:
     # ------------------------------------------------------------ sliding carry
     def _sliding(self, t0, k, theta0, omega0, s0, sd0):
         """Object sliding on palm k, state (th, th', s, s'): phases.slide_accelerations."""
-        M, l = self.Ms[k], self.ls[k]
-        base = ph.SlideParams(self.m, M, self.mu, self.g, l, 1.0)
+        l = self.ls[k]
+        base = self._slide_params(1.0, k)
         sgn = math.copysign(1.0, sd0) if sd0 != 0.0 else ph.slide_direction(theta0, omega0, base)
-        p = ph.SlideParams(self.m, M, self.mu, self.g, l, sgn)
+        p = self._slide_params(sgn, k)
         if sd0 == 0.0:
             # A slip from relative rest starts with zero relative acceleration (tan th = mu), so
             # integration noise would cross s' = 0 at once. Start strictly inside the slip-stop
@@ -121,7 +121,7 @@ class OdePhases:
             return self._fail(te, "blocked", k + 1, state,
                               f"the sliding object hits the side of palm {j + 1}")
         if kind == "slip_stop":
-            if abs(math.tan(theta)) <= self.mu and self.g * math.cos(theta) > l * omega ** 2:
+            if self._sticks(theta, omega, k):
                 self._log(te, "stick", k + 1, state, state, f"sticks again at th = {theta:.6g}")
                 return lambda: self._stuck(te, k, theta, l * omega, s)
             self._log(te, "slip", k + 1, state, state, "the slip reverses")
@@ -144,6 +144,16 @@ class OdePhases:
         }
         return self._fail(te, kind, k + 1, state, details[kind])
 
+    def _sticks(self, theta, omega, k):
+        """The object at rest on palm k at (th, th') stays stuck: the contact force the stuck
+        carry needs is a push within the friction cone."""
+        if self.plain:
+            return (abs(math.tan(theta)) <= self.mu
+                    and self.g * math.cos(theta) > self.ls[k] * omega ** 2)
+        thdd = ph.swing_acceleration(theta, omega, self.swing_loaded, direction=1.0)
+        fx, fn = ph.stuck_contact_force(theta, omega, thdd, gravity=self.g, link_length=self.l)
+        return fn > 0.0 and abs(fx) <= self.mu * fn
+
     def _jam(self, t, k, theta, omega, s, sd):
         """The sliding contact cannot continue (M + m c sin th <= 0): a tangential impact."""
         st = self._on_palm(k, theta, omega, s, sd)
@@ -156,6 +166,112 @@ class OdePhases:
                   "tangential impact: the contact sticks")
         return lambda: self._stuck(t, k, theta, imp.w, s)
 
+    # ------------------------------------------------------------ stuck carry on real links
+    def _stuck_integrated(self, t0, k, theta0, omega0, s):
+        """Object stuck on palm k whose links have mass or whose pivots have friction or
+        damping: state (th, th'), phases.swing_acceleration with the object's mass added.
+        Guards: the contact force m (A t + B r) (phases.stuck_contact_force) keeps a positive
+        normal (lift_off), stays within the friction cone (slip) and crosses the base within
+        the support (tip); th' -> 0 (stall: the palm stops short and swings back, or pivot
+        friction holds it); front stop, beta on the last manipulator, and the first contact
+        of the object's arc with a resting palm (closed form in th, geometry.first_contact)."""
+        sw, g, l, mu = self.swing_loaded, self.g, self.l, self.mu
+        lo, hi = self.row.support(s)
+        half_h = 0.5 * self.h
+
+        def force(z):
+            thdd = ph.swing_acceleration(z[0], z[1], sw, direction=1.0)
+            return ph.stuck_contact_force(z[0], z[1], thdd, gravity=g, link_length=l)
+
+        physics = [
+            (lambda t, z: force(z)[1], "lift_off"),
+            (lambda t, z: hi * force(z)[1] + half_h * force(z)[0], "tip"),
+            (lambda t, z: -lo * force(z)[1] - half_h * force(z)[0], "tip"),
+            (lambda t, z: mu * force(z)[1] - force(z)[0], "slip"),
+            (lambda t, z: mu * force(z)[1] + force(z)[0], "slip"),
+            (lambda t, z: z[1], "stall"),
+            (lambda t, z: self.fs - z[0], "stranded"),
+        ]
+        theta_end = self.fs
+        if k == self.n - 1 and theta0 < self.beta:
+            physics.append((lambda t, z: self.beta - z[0], "complete"))
+            theta_end = self.beta
+        px, py = self.row.pivots[k]
+        entry = first_contact(Arc(px + s, py, l), self._obstacles(t0, k, near=px), theta0,
+                              theta_end)
+        if entry is not None:
+            kind = ("handover", entry.palm) if entry.kind == "top" else ("blocked", entry.palm)
+            physics.append((lambda t, z: entry.tau - z[0], kind))
+        t_split = self._next_arrival(t0, k)  # a palm at rest from then on is an obstacle
+        te, z, kind, sol = self._integrate(lambda t, y: [y[1], ph.swing_acceleration(
+            y[0], y[1], sw, direction=1.0)], t0, [theta0, omega0], physics, [], t_end=t_split)
+        if self.record and sol is not None:
+            for t in np.linspace(t0, te, 40):
+                zz = sol.sol(t)
+                st = self._on_palm(k, zz[0], zz[1], s)
+                self._rec(t, st["x"], st["y"], st["vx"], st["vy"], zz[0], k + 1)
+        theta, omega = float(z[0]), float(z[1])
+        if isinstance(kind, tuple):
+            theta = entry.tau  # the contact angle is closed form: the event only finds its time
+        state = self._on_palm(k, theta, omega, s)
+        if kind is None and t_split is not None and te >= t_split:
+            return lambda: self._stuck_integrated(te, k, theta, omega, s)
+        if kind is None:
+            return self._fail(te, "timeout", k + 1, state, f"carry on palm {k + 1}: no event")
+        if isinstance(kind, tuple):
+            if kind[0] == "handover":
+                return self._handover(te, k, theta, omega, s, 0.0, kind[1])
+            return self._fail(te, "blocked", k + 1, state,
+                              f"the carried object hits the side of palm {kind[1] + 1}")
+        if kind == "complete":
+            return self._complete(te, k, theta, omega, s)
+        if kind == "stranded":
+            return self._stop_with_object(te, k, omega, s, 0.0)
+        if kind == "slip":
+            fx, fn = force(z)
+            self._log(te, "slip", k + 1, state, state,
+                      f"friction / normal = {abs(fx / fn):.6g} reaches mu = {mu:g}")
+            return lambda: self._sliding(te, k, theta, omega, s, 0.0)
+        fx, fn = force(z)
+        held = ph.held_by_friction(theta, sw)
+        details = {
+            "lift_off": f"the normal force vanishes at th = {theta:.6g} rad",
+            "tip": f"the contact force crosses the base at {-half_h * fx / fn:+.4g} m, outside "
+                   f"the support [{lo:+.4g}, {hi:+.4g}] m, th = {theta:.6g} rad",
+            "stall": (f"the palm stops at th = {theta:.6g} rad "
+                      + ("and pivot friction holds it there" if held else
+                         "before the top and swings back" if theta < 0.0 else
+                         "and swings back")),
+        }
+        return self._fail(te, kind, k + 1, state, details[kind])
+
+    def _free_swing_arrival(self, theta0, w0):
+        """(dt, stop angle, speed there) of an empty palm on real links and pivots swinging from
+        (th0, tangential speed w0): integrated to its front or back stop, or to where pivot
+        friction holds it (a turning point where its weight's torque is within the friction)."""
+        sw, l, t, theta, omega = self.swing_alone, self.l, 0.0, theta0, w0 / self.l
+        for _ in range(50):  # turning points of a swing that friction and damping slow down
+            if omega == 0.0:  # at rest: held, or it starts down the way gravity pulls
+                if ph.held_by_friction(theta, sw):
+                    return t, theta, 0.0
+                direction = 1.0 if theta > 0.0 else -1.0
+            else:
+                direction = math.copysign(1.0, omega)
+            physics = [(lambda t_, z: z[0] + self.alpha, "back_stop"),
+                       (lambda t_, z: self.fs - z[0], "front_stop"),
+                       (lambda t_, z: direction * z[1], "turn")]
+            te, z, kind, _ = self._integrate(
+                lambda t_, y: [y[1], ph.swing_acceleration(y[0], y[1], sw, direction)],
+                t, [theta, omega], physics, [])
+            theta, omega, t = float(z[0]), float(z[1]), te
+            if kind in ("back_stop", "front_stop"):
+                stop = -self.alpha if kind == "back_stop" else self.fs
+                return t, stop, abs(omega) * l
+            if kind != "turn":
+                return math.inf, theta, 0.0
+            omega = 0.0
+        return t, theta, 0.0
+
     # ------------------------------------------------------------ bouncing (restitution > 0)
     def _bouncing(self, t0, k, x, y, vx, vy, theta, omega, leaving=True):
         """Object in flight above its palm k, which swings freely (l th'' = g sin th); leaving:
@@ -163,6 +279,9 @@ class OdePhases:
         g, l = self.g, self.ls[k]
 
         def rhs(t, z):
+            if not self.plain:  # the palm on real links and pivots
+                return [z[2], z[3], 0.0, -g, z[5], ph.swing_acceleration(z[4], z[5],
+                                                                       self.swing_alone)]
             return [z[2], z[3], 0.0, -g, z[5], g * math.sin(z[4]) / l]
 
         def point(z):

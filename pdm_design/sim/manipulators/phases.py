@@ -11,7 +11,7 @@ radial force. docs/manipulators_model.md derives everything here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..numerics import carlson_rf
 
@@ -322,11 +322,14 @@ def stuck_crossings(theta0, v0, cap, *, gravity, link_length, height, support, m
 @dataclass(frozen=True)
 class SlideParams:
     m: float
-    M: float
+    M: float  # the palm's mass felt along the swing (palm plus links: physics.palm_terms)
     mu: float
     gravity: float
     link_length: float
     sgn: float  # sign of the slip velocity s' (friction on the object is -mu N sgn)
+    weight: float | None = None  # the mass whose weight turns the palm (M + links / 2; None: M)
+    torque: float = 0.0  # Coulomb pivot friction torque (N m), against a forward swing
+    damping: float = 0.0  # viscous pivot damping (N m s / rad)
 
 
 def slide_accelerations(theta, omega, p: SlideParams):
@@ -335,6 +338,9 @@ def slide_accelerations(theta, omega, p: SlideParams):
     Object: m (l th'' t - l th'^2 r + s'' i) = (-f, N - m g), f = mu N sgn.
     Palm along t: M l th'' = f cos th + N sin th + M g sin th. With c = mu sgn cos th + sin th:
       th'' = [m c (g - l th'^2 cos th) + M g sin th] / (l (M + m c sin th))
+    (with links and pivots: M is the palm-plus-links mass felt along the swing, M g becomes the
+    weight that turns the palm, and (tau + d th') / l is taken off the numerator: the phase
+    moves forward, th' >= 0)
       N    = m (g - l th'' sin th - l th'^2 cos th)
       s''  = -mu sgn N / m - l th'' cos th + l th'^2 sin th
     Returns (th'', N, s'', D) with D = M + m c sin th (the sliding contact is consistent iff D > 0).
@@ -344,7 +350,9 @@ def slide_accelerations(theta, omega, p: SlideParams):
     c = mu * p.sgn * cs + sn
     d = M + m * c * sn
     w2 = omega * omega
-    thdd = (m * c * (g - l * w2 * cs) + M * g * sn) / (l * d)
+    weight = M if p.weight is None else p.weight
+    pivot = (p.torque + p.damping * omega) / l
+    thdd = (m * c * (g - l * w2 * cs) + weight * g * sn - pivot) / (l * d)
     normal = m * (g - l * thdd * sn - l * w2 * cs)
     sdd = -mu * p.sgn * normal / m - l * thdd * cs + l * w2 * sn
     return thdd, normal, sdd, d
@@ -363,7 +371,7 @@ def slide_rhs(p: SlideParams):
 def slide_direction(theta, omega, p: SlideParams) -> float:
     """Direction a slip starting from s' = 0 takes: the sgn whose s'' agrees with it."""
     for sgn in (1.0, -1.0):
-        q = SlideParams(p.m, p.M, p.mu, p.gravity, p.link_length, sgn)
+        q = replace(p, sgn=sgn)
         _, _, sdd, _ = slide_accelerations(theta, omega, q)
         if sgn * sdd > 0.0:
             return sgn
@@ -381,3 +389,53 @@ def object_state_on_palm(pivot, theta, omega, s, sd, link_length):
     x = pivot[0] + l * math.sin(theta) + s
     y = pivot[1] + l * math.cos(theta)
     return x, y, l * omega * math.cos(theta) + sd, -l * omega * math.sin(theta)
+
+
+# ---------------------------------------------------------------- links and pivots
+
+@dataclass(frozen=True)
+class Swing:
+    """A palm on real links and pivots swinging with `load` kg stuck on it (0: alone):
+    inertia = load + M + J (kg along the swing), weight = load + M + W (kg whose weight turns it),
+    torque (N m, Coulomb) and damping (N m s / rad) at the pivots (physics.palm_terms)."""
+
+    inertia: float
+    weight: float
+    torque: float
+    damping: float
+    gravity: float
+    link_length: float
+
+
+def swing_acceleration(theta, omega, sw: Swing, direction=None):
+    """th'' of Lagrange's equation (m + M + J) l^2 th'' = (m + M + W) g l sin th - tau sgn - d th'
+    (docs/physics.md, section 2.1). direction: the sign the Coulomb torque opposes (default
+    the sign of th'; at th' = 0 pass the direction the palm starts to move)."""
+    sgn = math.copysign(1.0, omega) if direction is None else direction
+    l = sw.link_length
+    torque = sw.weight * sw.gravity * l * math.sin(theta) - sw.torque * sgn - sw.damping * omega
+    return torque / (sw.inertia * l * l)
+
+
+def swing_rhs(sw: Swing):
+    """Vector field of (th, th') for the swing."""
+
+    def rhs(t, y):
+        return [y[1], swing_acceleration(y[0], y[1], sw)]
+
+    return rhs
+
+
+def held_by_friction(theta, sw: Swing) -> bool:
+    """A palm at rest at theta stays there: its weight's torque is within the Coulomb torque."""
+    return abs(sw.weight * sw.gravity * sw.link_length * math.sin(theta)) <= sw.torque
+
+
+def stuck_contact_force(theta, omega, thdd, *, gravity, link_length):
+    """(friction, normal) per object mass of the palm's force on the stuck object:
+    m (A t + B r) with A = l th'' - g sin th, B = g cos th - l th'^2, so
+    friction = A cos th + B sin th (along x), normal = B cos th - A sin th."""
+    sn, cs = math.sin(theta), math.cos(theta)
+    along = link_length * thdd - gravity * sn
+    radial = gravity * cs - link_length * omega * omega
+    return along * cs + radial * sn, radial * cs - along * sn

@@ -13,11 +13,12 @@ import math
 import numpy as np
 
 from . import phases as ph
-from ..core import Event, Outcome, SimulationResult
+from ..core import Event, Outcome, SimulationRefused, SimulationResult
 from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
 from ..numerics import brentq
+from ...physics import manipulators as phys
 
 FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object is given up
 ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact
@@ -35,6 +36,14 @@ class Run(OdePhases, LiftOffPhases):
         self.m = scene.body.mass
         self.M = scene.body.mass / design.mass_ratio
         self.q = design.mass_ratio
+        self.plain = scene.plain_mechanism
+        if not self.plain:  # links and pivots (docs/physics.md, section 2.1)
+            if self.row.parts_vary:
+                raise SimulationRefused(
+                    "every manipulator's own link length, back stop or palm mass on real links "
+                    "and pivots is not modelled yet: vary the pivots only, or leave out "
+                    "[scene.links] and [scene.pivots]")
+            self._mechanism(scene, design)
         self.mu, self.eps = scene.palm.friction, scene.palm.restitution
         self.alpha, self.beta, self.fs = design.alpha, design.beta, scene.palm.front_stop
         self.h = scene.body.height
@@ -62,6 +71,28 @@ class Run(OdePhases, LiftOffPhases):
         self.traj = {k: [] for k in ("time", "x", "y", "vx", "vy", "theta", "manipulator")}
         self.zeno_speed = ZENO_FRACTION * math.sqrt(self.g * self.l)
         self.phase_time = PHASE_TIME * math.sqrt(self.l / self.g)
+
+    def _mechanism(self, scene, design):
+        """Links and pivots: the impacts see the palm-plus-links mass felt along the swing
+        (mass ratio m / (M + J)), the swings their inertia, weight and pivot torques."""
+        kw = dict(object_mass=self.m, gravity=self.g, link_length=self.l, **scene.mechanism())
+        felt, g_p, _ = phys.palm_terms(design.mass_ratio, **kw)
+        self.q = phys.carry_terms(design.mass_ratio, **kw)[0]
+        weight = felt * g_p / self.g
+        piv = scene.pivots
+        self.swing_alone = ph.Swing(felt, weight, piv.friction_torque, piv.damping, self.g,
+                                    self.l)
+        self.swing_loaded = ph.Swing(felt + self.m, weight + self.m, piv.friction_torque,
+                                     piv.damping, self.g, self.l)
+        self.M = felt
+
+    def _slide_params(self, sgn, k):
+        """The sliding carry's parameters (phases.SlideParams) on palm k, slip direction sgn."""
+        if self.plain:
+            return ph.SlideParams(self.m, self.Ms[k], self.mu, self.g, self.ls[k], sgn)
+        sw = self.swing_alone
+        return ph.SlideParams(self.m, self.M, self.mu, self.g, self.l, sgn, sw.weight,
+                              sw.torque, sw.damping)
 
     # ------------------------------------------------------------ driver and bookkeeping
     def run(self) -> SimulationResult:
@@ -136,14 +167,20 @@ class Run(OdePhases, LiftOffPhases):
     def _release(self, k, t, theta, w):
         """Palm k, now empty, swings on alone from (theta, w) to one of its stops; it is an
         obstacle again once it is there."""
-        dt, stop, speed = ph.free_palm_arrival(theta, w, gravity=self.g, link_length=self.ls[k],
-                                               back_stop=-self.alphas[k], front_stop=self.fs)
+        if self.plain:
+            dt, stop, speed = ph.free_palm_arrival(theta, w, gravity=self.g,
+                                                   link_length=self.ls[k],
+                                                   back_stop=-self.alphas[k],
+                                                   front_stop=self.fs)
+        else:
+            dt, stop, speed = self._free_swing_arrival(theta, w)
         self.rest_angle[k], self.rest_since[k] = stop, t + dt
         if len(self.swinging) > 2:  # palms at rest by now are dropped now and then
             self.swinging = [j for j in self.swinging if self.rest_since[j] > t]
         self.swinging.append(k)
         if math.isfinite(dt):
-            kind = "front_stop" if stop == self.fs else "back_stop"
+            kind = ("front_stop" if stop == self.fs else "back_stop" if stop == -self.alphas[k]
+                    else "pivot_friction_stop")
             self.palm_events.append(Event(
                 float(t + dt), kind, k + 1, {"theta": float(stop), "omega": speed / self.ls[k]},
                 {"theta": float(stop), "omega": 0.0}, f"empty palm {k + 1} stopped"))
@@ -341,7 +378,7 @@ class Run(OdePhases, LiftOffPhases):
             return self._fail(t, stuck_kind, j + 1, state, f"the object rests on {where}")
         sgn = math.copysign(1.0, sd)
         if at_back:
-            p = ph.SlideParams(self.m, self.Ms[j], self.mu, self.g, self.ls[j], sgn)
+            p = self._slide_params(sgn, j)
             if ph.slide_accelerations(theta, 0.0, p)[0] > 0.0:  # friction drags the palm along
                 self.rest_since[j] = math.inf
                 return lambda: self._sliding(t, j, theta, 0.0, s, sd)
@@ -401,6 +438,8 @@ class Run(OdePhases, LiftOffPhases):
         if v0 <= 0.0:
             return self._fail(t0, "stall", k + 1, self._on_palm(k, theta0, v0 / l, s),
                               "the palm is not moving forward")
+        if not self.plain:  # links and pivots: integrated (ode.py)
+            return self._stuck_integrated(t0, k, theta0, v0 / l, s)
         turn = ph.turning_angle(theta0, v0, gravity=g, link_length=l)
         ends = [(self.fs, "stranded")]
         if turn is not None:
