@@ -83,7 +83,7 @@ def optimize_text(outcome: DesignOutcome) -> str:
             f"{name} ({side} {spec.design[name].min if side == 'min' else spec.design[name].max:g}"
             f"{(' ' + _UNITS[name]) if _UNITS.get(name) else ''})"
             for name, side in outcome.at_bounds.items()))
-    lines += ["", "geometry:", *_rows(analysis.geometry)]
+    lines += ["", "geometry:", *_rows(_built_parts(analysis.geometry))]
     lines += ["", "periodic orbit:", *_rows(analysis.periodic)]
     lines += ["", "margins (>= 0 holds; 1 - demand/capacity):"]
     width = max((len(k) for k in analysis.margins), default=0)
@@ -112,3 +112,14 @@ def optimize_text(outcome: DesignOutcome) -> str:
     if outcome.violations:
         lines += ["", "why it does not work:", *(f"  - {v}" for v in outcome.violations)]
     return "\n".join(lines) + "\n"
+
+
+MECHANISM = ("link_mass", "link_inertia", "link_count", "pivot_friction_torque", "pivot_damping")
+
+
+def _built_parts(geometry: dict) -> dict:
+    """The geometry to print: the links' and pivots' lines only where the scene has links or
+    pivots (massless links and free pivots print none; the JSON keeps every key)."""
+    if any(geometry.get(k) for k in MECHANISM if k != "link_count"):
+        return geometry
+    return {k: v for k, v in geometry.items() if k not in MECHANISM}
