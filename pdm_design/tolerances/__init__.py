@@ -11,7 +11,8 @@ sensitivity
 
 from __future__ import annotations
 
-from .model import QUANTITIES, BuildOutcome, Tolerance, Tolerances
+from .model import QUANTITIES, Tolerance, Tolerances
+from .outcome import BuildOutcome
 
 
 def run_builds(scene, design, deviations: dict, stages: int) -> BuildOutcome:

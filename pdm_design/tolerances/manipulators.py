@@ -34,7 +34,7 @@ import math
 import numpy as np
 
 from ..physics import manipulators as phys
-from .model import BuildOutcome
+from .outcome import BuildOutcome
 
 PARKED_CAP = 16  # palms parked behind the carrying one checked, at most
 

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-DISTRIBUTIONS = ("normal", "uniform")
-APPLIES_TO = ("each", "lot")
+from .model import APPLIES_TO, DISTRIBUTIONS
+
 OUTPUTS = ("min_margin", "pass")
 
 
@@ -130,18 +130,13 @@ def _table(values: dict) -> list[dict]:
     return sorted(rows, key=lambda row: -row["index"])
 
 
-def plot_sensitivity(indices: list[dict], path, *, title: str | None = None,
-                     dpi: int = 120) -> Path:
-    """Bar chart of the indices (`sobol_indices`' list) into a PNG at `path`: total-order
-    index with its confidence interval, first-order beside it, largest on top."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
+def sensitivity_figure(indices: list[dict], *, title: str | None = None):
+    """Bar chart of the indices (`sobol_indices`' list): total-order index with its confidence
+    interval, first-order beside it, largest on top (a matplotlib Figure)."""
     from matplotlib.figure import Figure
-
-    from ..io import atomic_path
 
     rows = list(reversed(indices))
     fig = Figure(figsize=(7, 1.2 + 0.45 * max(len(rows), 1)), layout="constrained")
-    FigureCanvasAgg(fig)
     ax = fig.subplots()
     y = np.arange(len(rows))
     ax.barh(y + 0.2, [r["index"] for r in rows], height=0.4, xerr=[r["confidence"] for r in rows],
@@ -149,11 +144,20 @@ def plot_sensitivity(indices: list[dict], path, *, title: str | None = None,
     ax.barh(y - 0.2, [r["first"] for r in rows], height=0.4, color="tab:orange",
             label="first order (S1)")
     ax.set_yticks(y, [r["quantity"] for r in rows])
-    ax.set(xlabel="share of the output's variance", xlim=(0.0, 1.05),
+    right = max([1.0] + [r["index"] + r["confidence"] for r in rows]) + 0.05
+    ax.set(xlabel="share of the output's variance", xlim=(0.0, right),
            title=title or "which tolerance matters most (Sobol' indices)")
     ax.grid(axis="x", alpha=0.3)
     ax.legend(loc="lower right", fontsize=8)
+    return fig
+
+
+def plot_sensitivity(indices: list[dict], path, *, title: str | None = None,
+                     dpi: int = 120) -> Path:
+    """`sensitivity_figure` as a PNG at `path`, whole or not at all."""
+    from ..io import write_atomic
+    from ..report.render import render_figure
+
     path = Path(path)
-    with atomic_path(path) as tmp:  # the file is whole or absent, never half written
-        fig.savefig(tmp, dpi=dpi)
+    write_atomic(path, render_figure(sensitivity_figure(indices, title=title), "png", dpi=dpi))
     return path
