@@ -167,6 +167,26 @@ def test_vectorised_map_and_event_simulator_agree_build_by_build(paper):
         assert (out.min_margin[i] < 0) == (name != "")
 
 
+def test_the_maps_parked_palm_clearance_is_the_analysis_margin():
+    # nominal geometry: every landing at the analysis' offset, every carry ending at beta, so
+    # the clearance to the palms parked behind is analysis' parked_palms margin (its own loop
+    # over the palms behind); a bound (the palm staying behind the object) stands in for it
+    # only where it cannot be the build's smallest margin (here: smallest so far 0.6)
+    from pdm_design.analysis.manipulators import analyse_manipulators
+    from pdm_design.tolerances.manipulators import _Builds
+
+    spec = load_spec(PROBLEMS / "manipulators_long_row.toml")
+    scene, design = spec.scene, spec.design_at()
+    analysis = analyse_manipulators(scene, design, 100)
+    offset = np.full(1, analysis.geometry["landing_offset"])
+    builds = _Builds(scene, design, {"friction": np.zeros(1)}, 100)
+    builds.worst[:] = 0.6
+    for k in (10, 60):
+        gaps = builds.parked_palms(k, np.full(1, design.beta), offset, scene.body.width)
+        assert min(g[1][0] for g in gaps) == pytest.approx(analysis.margins["parked_palms"],
+                                                           abs=1e-12)
+
+
 def test_one_longer_link_moves_the_handover_as_the_geometry_says(paper):
     # Link 2 is 0.1 m longer: palm 1 hands over where the object's base comes down to palm
     # 2's raised top, cos th = (l2 cos a - pitch_y) / l1 (pivot 2 at -pitch_y).

@@ -353,3 +353,31 @@ def test_stairs_yield_end_to_end_and_a_failing_build_reproduced(tmp_path):
         outcome = json.loads(run.stdout)["outcome"]
         assert (outcome["stages_passed"], outcome["failure"]["event"]) == (
             build["stages_passed"], build["failure"])
+
+
+def test_a_friction_tolerance_on_a_point_ball_is_refused_at_its_key(tmp_path):
+    from pathlib import Path
+
+    from click.testing import CliRunner
+
+    from pdm_design.cli import main
+
+    text = (Path(__file__).resolve().parents[1] / "problems" / "stairs_yield.toml").read_text()
+    text = text.replace("radius = 0.05 ", "radius = 0.0 ").replace(
+        "[tolerances]\n", "[tolerances]\nfriction = { value = 0.01, applies_to = \"lot\" }\n")
+    spec = tmp_path / "point.toml"
+    spec.write_text(text)
+    result = CliRunner().invoke(main, ["yield", str(spec)])
+    assert result.exit_code == 2
+    assert f"{spec}: tolerances.friction: expected no friction tolerance" in result.stderr
+
+
+def test_too_many_parts_for_the_sobol_sample_say_so_in_words():
+    # 2 quantities of each of 6000 steps: 12 000 variables, beyond the Sobol' sequence's
+    # 21 201 dimensions of Saltelli's two matrices
+    from pdm_design.tolerances import Tolerance, Tolerances
+    from pdm_design.tolerances.yield_ import yield_of
+
+    tols = Tolerances((Tolerance("rise", "each", 1e-6), Tolerance("tread", "each", 1e-6)))
+    r = yield_of(scene_of(), ROBUST, tols, builds=4, stages=6000, confirm=0, scales=())
+    assert r.sensitivity == () and "12000 varying parts" in r.sensitivity_note

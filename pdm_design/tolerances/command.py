@@ -21,6 +21,10 @@ def spec_tolerances(spec, source: str):
         if tol.value is None:
             raise SpecError(source, f"tolerances.{tol.quantity}.value", "a value (+-, SI) for "
                             "a yield: allocate = true asks the optimizer for one", "allocate = true")
+        if spec.kind == "stairs" and tol.quantity == "friction" and spec.scene.ball.radius == 0:
+            raise SpecError(source, "tolerances.friction", "no friction tolerance for a point "
+                            "ball (a ball of radius 0 cannot roll: give scene.ball a radius)",
+                            "scene.ball.radius = 0")
     return spec.tolerances
 
 
@@ -129,7 +133,7 @@ def yield_text(result: YieldResult, name: str) -> str:
                  f"the closed forms; {c['left_closed_form']} builds outside the closed forms "
                  "simulated")
     if r.sensitivity:
-        lines.append("sensitivity (Sobol total index): " + ", ".join(
+        lines.append("sensitivity (Sobol' total index of the smallest margin): " + ", ".join(
             f"{s['quantity']} {s['index']:.3g}" for s in r.sensitivity))
     elif r.sensitivity_note:
         lines.append(f"sensitivity: {r.sensitivity_note}")

@@ -64,8 +64,9 @@ def sobol_indices(run: Callable, tolerances: Iterable, *, stages: int, parts: in
         raise ValueError("the build map returned a non-finite output: no variance to split")
     if np.ptp(y) == 0.0:
         return _table(zero)
+    # SALib's analysis seeds its bootstrap only with a true seed (0 would leave it unseeded)
     si = analyze.analyze(problem, y, calc_second_order=False, num_resamples=resamples,
-                         seed=seed)
+                         seed=seed + 1)
     found = {t[0]: (float(si["ST"][i]), float(si["S1"][i]), float(si["ST_conf"][i]))
              for i, t in enumerate(active)}
     return _table({**zero, **found})

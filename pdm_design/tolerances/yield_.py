@@ -9,7 +9,8 @@ The yield is the fraction of builds that pass every one of the K stages, with a 
 score interval; the survival curve is the fraction still going after each stage (each with
 its Wilson interval), and the mean number of stages before failure is the mean of the
 stages passed over all builds, a build that passes all counting K (the area under the
-survival curve).
+survival curve). The sensitivity is the Sobol' indices of the builds' smallest margin
+(tolerances.sensitivity), the same closed-form map as the model.
 """
 
 from __future__ import annotations
