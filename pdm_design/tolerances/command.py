@@ -20,7 +20,8 @@ def spec_tolerances(spec, source: str):
     for tol in spec.tolerances:
         if tol.value is None:
             raise SpecError(source, f"tolerances.{tol.quantity}.value", "a value (+-, SI) for "
-                            "a yield: allocate = true asks the optimizer for one", "allocate = true")
+                            "a yield: allocate = true asks the optimizer for one",
+                            "allocate = true")
         if spec.kind == "stairs" and tol.quantity == "friction" and spec.scene.ball.radius == 0:
             raise SpecError(source, "tolerances.friction", "no friction tolerance for a point "
                             "ball (a ball of radius 0 cannot roll: give scene.ball a radius)",
