@@ -454,14 +454,16 @@ def sheet(source, out, count, no_tolerance, no_drawing):
 @click.option("--seed", type=_Count(0, 2**63 - 1), default=None,
               help="Random seed of the builds (default: the spec's tolerances.seed).")
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Also write yield.json, survival.png and yield_scale.png to this folder.")
+              help="Also write yield.json, survival.png, yield_scale.png and sensitivity.png "
+              "to this folder.")
 @ACCURACY
 @FORMAT
 @_guarded
 def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
     """Monte Carlo yield of SPEC's design under its [tolerances]: the fraction of builds that
-    pass every stage (95 % interval), survival by stage, failures by name, each failing build
-    as one `simulate --build` command; the event simulator confirms a sample."""
+    pass every stage (95 % interval), survival by stage, failures by name, the tolerances'
+    Sobol' indices, each failing build as one `simulate --build` command; the event simulator
+    confirms a sample."""
     from .spec import load_spec
     from .tolerances.command import run_yield, write_outputs, yield_json, yield_text
 

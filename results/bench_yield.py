@@ -6,7 +6,9 @@
    `pdm-design yield` runs them (chunks of tolerances.yield_.CHUNK_ENTRIES). Target <= 10 s.
 2. `pdm-design yield problems/manipulators_long_row.toml` end to end (a fresh process: start-up,
    10^4 builds, the event simulator on the confirmation sample and on every build outside the
-   closed forms, the yield-against-scale curve). Target <= 30 s.
+   closed forms, the yield-against-scale curve, the Sobol' sensitivity). Target <= 30 s.
+3. The Sobol' sensitivity alone (tolerances.yield_.SOBOL_SAMPLES base samples, SALib's sampling
+   and analysis, the map on base x (quantities + 2) builds), on one core: its share of 2.
 Each is the best of REPEATS runs; the machine's load average is recorded beside it.
 
     python results/bench_yield.py
@@ -48,6 +50,26 @@ def bench_map() -> dict:
     return best
 
 
+def bench_sobol() -> dict:
+    from pdm_design.spec import load_spec
+    from pdm_design.tolerances.yield_ import SOBOL_SAMPLES, _sensitivity
+
+    spec = load_spec(ROOT / SPEC)
+    tolerances = spec.tolerances
+    best = None
+    for _ in range(REPEATS):
+        wall = time.perf_counter()
+        rows, _note = _sensitivity(spec.scene, spec.design_at(), tolerances, STAGES,
+                                   tolerances.seed, SOBOL_SAMPLES)
+        wall = time.perf_counter() - wall
+        if best is None or wall < best["wall"]:
+            best = {"wall": wall, "load": os.getloadavg()[0], "rows": rows}
+    parts = sum(STAGES if t.applies_to == "each" else 1 for t in tolerances)
+    best["builds"] = SOBOL_SAMPLES * (len(tolerances) + 2)
+    best["parts"] = parts
+    return best
+
+
 def bench_cli() -> dict:
     exe = Path(sys.executable).with_name("pdm-design")
     command = [str(exe), "yield", SPEC]
@@ -77,6 +99,7 @@ def main() -> None:
     start = time.perf_counter()
     cli = bench_cli()  # first, before this process pins itself to one core
     mapped = bench_map()
+    sobol = bench_sobol()
     rate = BUILDS * STAGES / mapped["wall"]
     lines = [
         "# Yield benchmarks",
@@ -93,11 +116,21 @@ def main() -> None:
         f"load {mapped['load']:.1f}) | {_verdict(mapped)} |",
         f"| `pdm-design yield {SPEC}` <= 30 s end to end | {cli['wall']:.2f} s wall (load "
         f"{cli['load']:.1f}) | {'met' if cli['wall'] <= 30 else 'not met'} |",
+        f"| (part of the above) the Sobol' sensitivity, {sobol['builds']} builds over "
+        f"{sobol['parts']} varying parts, on one core | {sobol['wall']:.2f} s wall (load "
+        f"{sobol['load']:.1f}) | - |",
         "",
         f"The map's verdict on the 10^5 builds: {100 * mapped['yield']:.3f} % pass all 100 "
         f"stages before the simulator is asked; {mapped['open']} builds leave the closed-form "
         "regime (a slip, a lift-off, a miss, a parked palm within reach) and would go to the "
         "event simulator.",
+        "",
+        "Sobol' indices of the smallest margin (the end-to-end run's):",
+        "",
+        "| quantity | total order ST | first order S1 | ST 95 % half width |",
+        "|---|---|---|---|",
+        *(f"| {r['quantity']} | {r['index']:.3f} | {r['first']:.3f} | {r['confidence']:.3f} |"
+          for r in sobol["rows"]),
         "",
         "The end-to-end run's report:",
         "",

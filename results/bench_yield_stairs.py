@@ -1,6 +1,8 @@
 """Speed of the stairs build map (not a test): 10^5 builds x 100 bounces on one core, with the
 event simulator's confirmation of a random subset and the Sobol' indices, on the design and
-tolerances of problems/stairs_yield.toml. Writes results/bench_yield_stairs.md.
+tolerances of problems/stairs_yield.toml (drawn as `pdm-design yield` draws them), and the
+command `pdm-design yield problems/stairs_yield.toml` end to end. Writes
+results/bench_yield_stairs.md.
 
     python results/bench_yield_stairs.py            # about half a minute
     python results/bench_yield_stairs.py --quick    # 10^4 builds
@@ -14,6 +16,7 @@ import argparse
 import os
 import platform
 import resource
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -25,23 +28,28 @@ import numpy as np  # noqa: E402
 
 from pdm_design.io import write_atomic  # noqa: E402
 from pdm_design.physics import stairs as phys  # noqa: E402
-from pdm_design.scenes import Ball, StairsDesign, StairsInitial, StairsScene  # noqa: E402
 from pdm_design.sim.stairs import bounce_sequence, stairs_geometry  # noqa: E402
+from pdm_design.spec import load_spec  # noqa: E402
+from pdm_design.tolerances.draw import draw as draw_builds  # noqa: E402
 from pdm_design.tolerances.sensitivity import sobol_indices  # noqa: E402
 from pdm_design.tolerances.stairs import run_builds, simulate_build  # noqa: E402
 
-# problems/stairs_yield.toml: stairs_design's optimum, rise and tread per step, restitution and
-# launch speed per lot, normal with sigma = t / 3
-SCENE = StairsScene(initial=StairsInitial(drop_height=1.0), ball=Ball(radius=0.05))
-DESIGN = StairsDesign(restitution=0.8, launch_speed=3.0, landing_offset=1.38)
-TOLERANCES = [("rise", "each", 0.005, "normal"), ("tread", "each", 0.005, "normal"),
-              ("restitution", "lot", 0.0015, "normal"), ("launch_speed", "lot", 0.015, "normal")]
+SPEC_PATH = "problems/stairs_yield.toml"
+SPEC = load_spec(ROOT / SPEC_PATH)
+SCENE, DESIGN, TOLERANCES = SPEC.scene, SPEC.design_at(), SPEC.tolerances
 
 
 def draw(n, stages, seed):
-    rng = np.random.default_rng(seed)
-    return {q: rng.normal(0.0, t / 3, (n, stages) if each == "each" else n)
-            for q, each, t, _ in TOLERANCES}
+    return draw_builds(TOLERANCES, n, stages, seed)
+
+
+def end_to_end() -> tuple[float, str]:
+    """`pdm-design yield` on the spec in a fresh process: wall time and its report."""
+    exe = Path(sys.executable).with_name("pdm-design")
+    tic = time.perf_counter()
+    done = subprocess.run([str(exe), "yield", SPEC_PATH], cwd=ROOT, capture_output=True,
+                          text=True, check=True)
+    return time.perf_counter() - tic, done.stdout
 
 
 def timed(fn, repeats):
@@ -57,9 +65,10 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true")
     args = parser.parse_args()
+    t_cli, report = end_to_end()  # before this process pins itself to one core
     os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})  # one core
     n, stages, confirm = (10_000 if args.quick else 100_000), 100, 300
-    t_draw, dev = timed(lambda: draw(n, stages, 1), 1)
+    t_draw, dev = timed(lambda: draw(n, stages, TOLERANCES.seed), 1)
     t_map, out = timed(lambda: run_builds(SCENE, DESIGN, dev, stages), 3)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
@@ -82,14 +91,14 @@ def main():
 
     tic = time.perf_counter()
     rows = sobol_indices(lambda d, s: run_builds(SCENE, DESIGN, d, s), TOLERANCES,
-                         stages=stages, samples=1024, seed=1)
+                         stages=stages, samples=1024, seed=TOLERANCES.seed)
     t_sobol = time.perf_counter() - tic
     write(args, n, stages, t_draw, t_map, peak, t_uniform, t_sim, confirm, agreed, out, rows,
-          t_sobol)
+          t_sobol, t_cli, report)
 
 
 def write(args, n, stages, t_draw, t_map, peak, t_uniform, t_sim, confirm, agreed, out, rows,
-          t_sobol):
+          t_sobol, t_cli, report):
     bounces = int(out.stages_passed.sum())
     counts = {k or "passed": int((out.failure == k).sum()) for k in sorted(set(out.failure))}
     verdict = "met" if t_map <= 10.0 else "NOT met"
@@ -101,7 +110,8 @@ def write(args, n, stages, t_draw, t_map, peak, t_uniform, t_sim, confirm, agree
         f"{os.cpu_count()}, {platform.machine()}, Python {platform.python_version()}, "
         f"numpy {np.__version__}. Design and tolerances of `problems/stairs_yield.toml` "
         "(stairs_design's optimum; rise and tread +-5 mm per step, restitution +-0.0015 and "
-        "launch speed +-0.015 m/s per lot, normal, sigma = t/3). Best of 3.",
+        "launch speed +-0.015 m/s per lot, normal, sigma = t/3), drawn as `pdm-design yield` "
+        "draws them (seed 0). Best of 3.",
         "",
         "| target | measured | baseline (same run) | verdict |",
         "|---|---|---|---|",
@@ -128,6 +138,15 @@ def write(args, n, stages, t_draw, t_map, peak, t_uniform, t_sim, confirm, agree
         "|---|---|---|---|",
         *(f"| {r['quantity']} | {r['index']:.3f} | {r['first']:.3f} | {r['confidence']:.3f} |"
           for r in rows),
+        "",
+        f"`pdm-design yield {SPEC_PATH}` end to end ({TOLERANCES.builds:,} builds, the scale "
+        f"curve, the sensitivity; a fresh process, not pinned): {t_cli:.1f} s wall (load "
+        f"{os.getloadavg()[0]:.1f}).",
+        "",
+        "```",
+        f"$ pdm-design yield {SPEC_PATH}",
+        report.rstrip(),
+        "```",
         "",
     ]
     write_atomic(ROOT / "results" / "bench_yield_stairs.md", "\n".join(lines))

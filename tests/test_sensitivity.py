@@ -125,3 +125,10 @@ def test_the_bar_chart_is_a_png(tmp_path):
     path = plot_sensitivity(rows, tmp_path / "sensitivity.png")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert [p.name for p in tmp_path.iterdir()] == ["sensitivity.png"]
+
+
+def test_the_same_seed_gives_the_same_intervals_seed_0_too():
+    for seed in (0, 5):
+        a, b = (sobol_indices(additive(WEIGHTS), TOLERANCES, stages=3, samples=64, seed=seed)
+                for _ in range(2))
+        assert a == b

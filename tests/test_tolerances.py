@@ -124,6 +124,23 @@ def test_yield_of_a_one_quantity_interval_is_its_exact_probability(paper, distri
     assert set(r.failures) == {"tip"}
 
 
+@pytest.mark.parametrize("dominant, feed, link", [("feed_x", 0.3, 1e-5),
+                                                   ("link_length", 1e-4, 0.03)])
+def test_the_sensitivity_ranks_the_one_dominant_tolerance_of_a_row_first(paper, dominant, feed,
+                                                                          link):
+    # the feed's place (one per lot) moves every landing offset, every link's length moves
+    # its palm's top; beside the dominant one the other two are too small for a margin to feel
+    scene, design = paper
+    tols = Tolerances((Tolerance("palm_mass", "each", 1e-4), Tolerance("feed_x", "lot", feed),
+                       Tolerance("link_length", "each", link)))
+    r = yield_of(scene, design, tols, builds=200, stages=6, seed=1, confirm=0, scales=(),
+                 sensitivity_samples=256)
+    first, *rest = r.sensitivity
+    assert first["quantity"] == dominant and first["index"] > 0.9
+    assert all(s["index"] < 0.05 for s in rest) and r.sensitivity_note == ""
+    assert len(rest) == 2
+
+
 # ---------------------------------------------------------------------------- map vs sim
 
 ALL = Tolerances((
@@ -148,6 +165,26 @@ def test_vectorised_map_and_event_simulator_agree_build_by_build(paper):
         name = "" if sim.completed else sim.failure.kind
         assert (sim.stages_passed, name) == (out.stages_passed[i], out.failure[i]), i
         assert (out.min_margin[i] < 0) == (name != "")
+
+
+def test_the_maps_parked_palm_clearance_is_the_analysis_margin():
+    # nominal geometry: every landing at the analysis' offset, every carry ending at beta, so
+    # the clearance to the palms parked behind is analysis' parked_palms margin (its own loop
+    # over the palms behind); a bound (the palm staying behind the object) stands in for it
+    # only where it cannot be the build's smallest margin (here: smallest so far 0.6)
+    from pdm_design.analysis.manipulators import analyse_manipulators
+    from pdm_design.tolerances.manipulators import _Builds
+
+    spec = load_spec(PROBLEMS / "manipulators_long_row.toml")
+    scene, design = spec.scene, spec.design_at()
+    analysis = analyse_manipulators(scene, design, 100)
+    offset = np.full(1, analysis.geometry["landing_offset"])
+    builds = _Builds(scene, design, {"friction": np.zeros(1)}, 100)
+    builds.worst[:] = 0.6
+    for k in (10, 60):
+        gaps = builds.parked_palms(k, np.full(1, design.beta), offset, scene.body.width)
+        assert min(g[1][0] for g in gaps) == pytest.approx(analysis.margins["parked_palms"],
+                                                           abs=1e-12)
 
 
 def test_one_longer_link_moves_the_handover_as_the_geometry_says(paper):
@@ -252,7 +289,9 @@ def test_yield_json_and_every_failing_build_reproduced(tmp_path):
     assert doc["mean_stages_before_failure"] == pytest.approx(sum(survival))
     assert doc["confirmed"]["random"] == 5
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [
-        "survival.png", "yield.json", "yield_scale.png"]
+        "sensitivity.png", "survival.png", "yield.json", "yield_scale.png"]
+    assert [s["quantity"] for s in doc["sensitivity"]] != [] and doc["sensitivity_note"] == ""
+    assert doc["confirmed"]["simulated"] >= doc["confirmed"]["agreed"]
     for build in failing[:3]:
         args = build["command"].split()[2:]
         assert args[0] == path

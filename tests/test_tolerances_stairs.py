@@ -312,3 +312,72 @@ def test_bad_deviations_are_refused_in_words(deviations, words):
 def test_friction_on_a_point_ball_is_refused():
     with pytest.raises(ValueError, match="point ball cannot roll"):
         run_builds(scene_of(radius=0.0), ROBUST, {"friction": np.zeros(2)}, 3)
+
+
+# --- the yield command on a staircase, end to end -------------------------------------------------
+
+def test_stairs_yield_end_to_end_and_a_failing_build_reproduced(tmp_path):
+    # problems/stairs_yield.toml with 400 builds of 60 bounces and its tolerances doubled:
+    # nose hits late in the flight, each one rerun by `simulate --build` to the same verdict
+    import json
+    from pathlib import Path
+
+    from click.testing import CliRunner
+
+    from pdm_design.cli import main
+
+    text = (Path(__file__).resolve().parents[1] / "problems" / "stairs_yield.toml").read_text()
+    text = text.replace("stages = 100", "stages = 60").replace("min_yield = 0.95", "")
+    for old, new in (("0.005,", "0.01,"), ("0.0015,", "0.003,"), ("0.015,", "0.03,")):
+        text = text.replace(f"value = {old}", f"value = {new}")
+    text = text.replace('distribution = "normal"', 'distribution = "normal"\nbuilds = 400\n'
+                        'confirm = 10')
+    spec = tmp_path / "stairs.toml"
+    spec.write_text(text)
+    result = CliRunner().invoke(main, ["yield", str(spec), "--format", "json", "--out",
+                                       str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.stdout)
+    assert (doc["yield"]["builds"], doc["yield"]["stages"]) == (400, 60)
+    assert doc["survival"][-1] == doc["yield"]["estimate"] < 1.0
+    assert doc["confirmed"]["random"] == 10 == doc["confirmed"]["agreed"]
+    assert {s["quantity"] for s in doc["sensitivity"]} == {"rise", "tread", "restitution",
+                                                           "launch_speed"}
+    assert set(doc["failures"]) <= set(FAILURES)
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [
+        "sensitivity.png", "survival.png", "yield.json", "yield_scale.png"]
+    for build in doc["failing_builds"][:2]:
+        run = CliRunner().invoke(main, ["simulate", *build["command"].split()[2:],
+                                        "--format", "json"])
+        assert run.exit_code == 1, run.output
+        outcome = json.loads(run.stdout)["outcome"]
+        assert (outcome["stages_passed"], outcome["failure"]["event"]) == (
+            build["stages_passed"], build["failure"])
+
+
+def test_a_friction_tolerance_on_a_point_ball_is_refused_at_its_key(tmp_path):
+    from pathlib import Path
+
+    from click.testing import CliRunner
+
+    from pdm_design.cli import main
+
+    text = (Path(__file__).resolve().parents[1] / "problems" / "stairs_yield.toml").read_text()
+    text = text.replace("radius = 0.05 ", "radius = 0.0 ").replace(
+        "[tolerances]\n", "[tolerances]\nfriction = { value = 0.01, applies_to = \"lot\" }\n")
+    spec = tmp_path / "point.toml"
+    spec.write_text(text)
+    result = CliRunner().invoke(main, ["yield", str(spec)])
+    assert result.exit_code == 2
+    assert f"{spec}: tolerances.friction: expected no friction tolerance" in result.stderr
+
+
+def test_too_many_parts_for_the_sobol_sample_say_so_in_words():
+    # 2 quantities of each of 6000 steps: 12 000 variables, beyond the Sobol' sequence's
+    # 21 201 dimensions of Saltelli's two matrices
+    from pdm_design.tolerances import Tolerance, Tolerances
+    from pdm_design.tolerances.yield_ import yield_of
+
+    tols = Tolerances((Tolerance("rise", "each", 1e-6), Tolerance("tread", "each", 1e-6)))
+    r = yield_of(scene_of(), ROBUST, tols, builds=4, stages=6000, confirm=0, scales=())
+    assert r.sensitivity == () and "12000 varying parts" in r.sensitivity_note

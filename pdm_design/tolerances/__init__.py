@@ -1,17 +1,21 @@
 """Tolerances of a build, per part or per lot, and what they do to the yield.
 
-model     the typed tolerances (Tolerance, Tolerances, QUANTITIES, BuildOutcome)
+model     the typed tolerances (Tolerance, Tolerances, QUANTITIES)
+outcome   BuildOutcome: what a batch of builds did, whatever the scene
 draw      random builds, each reproducible from (seed, index, stages)
 manipulators, stairs
-          run_builds(scene, design, deviations, stages) -> BuildOutcome: many builds at once
-yield_    the Monte Carlo yield, its confidence interval and the simulator's confirmation
+          run_builds(scene, design, deviations, stages) -> BuildOutcome: many builds at once;
+          simulate_build: one build in the event simulator
+yield_    the Monte Carlo yield, its confidence interval, the simulator's confirmation and the
+          sensitivity
 sensitivity
-          variance-based (Sobol) indices of the tolerances (where present)
-"""
+          variance-based (Sobol') indices of the tolerances, and their bar chart
+command   `pdm-design yield` (text, JSON, figures, `check`'s min_yield) and `simulate --build`"""
 
 from __future__ import annotations
 
-from .model import QUANTITIES, BuildOutcome, Tolerance, Tolerances
+from .model import QUANTITIES, Tolerance, Tolerances
+from .outcome import BuildOutcome
 
 
 def run_builds(scene, design, deviations: dict, stages: int) -> BuildOutcome:
@@ -19,7 +23,7 @@ def run_builds(scene, design, deviations: dict, stages: int) -> BuildOutcome:
     if scene.kind == "manipulators":
         from .manipulators import run_builds as run
     else:
-        from .stairs import run_builds as run  # the stairs module may be absent: ImportError
+        from .stairs import run_builds as run
     return run(scene, design, deviations, stages)
 
 

@@ -20,7 +20,12 @@ def spec_tolerances(spec, source: str):
     for tol in spec.tolerances:
         if tol.value is None:
             raise SpecError(source, f"tolerances.{tol.quantity}.value", "a value (+-, SI) for "
-                            "a yield: allocate = true asks the optimizer for one", "allocate = true")
+                            "a yield: allocate = true asks the optimizer for one",
+                            "allocate = true")
+        if spec.kind == "stairs" and tol.quantity == "friction" and spec.scene.ball.radius == 0:
+            raise SpecError(source, "tolerances.friction", "no friction tolerance for a point "
+                            "ball (a ball of radius 0 cannot roll: give scene.ball a radius)",
+                            "scene.ball.radius = 0")
     return spec.tolerances
 
 
@@ -43,7 +48,6 @@ def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accurac
     from ..accuracy import accuracy as resolve
 
     tolerances = spec_tolerances(spec, source)
-    _check_kind(spec)
     point = design_point(spec, source)
     builds = builds or tolerances.builds
     stages = stages or spec.verification.stages
@@ -62,28 +66,17 @@ def unmet_min_yield(outcome) -> list[str]:
         return [f"expected a yield of at least {_pct(wanted)}, got none (no design: status "
                 f"{outcome.status.value})"]
     tolerances = spec_tolerances(spec, spec.source)
-    _check_kind(spec)
     point = spec.design_at(outcome.analysis.design)
     r = yield_of(spec.scene, point, tolerances, builds=tolerances.builds,
                  stages=spec.verification.stages, seed=tolerances.seed,
                  confirm=tolerances.confirm, accuracy=outcome.accuracy or "default",
-                 source=spec.source, scales=())
+                 source=spec.source, scales=(), sensitivity_samples=0)
     if r.ci_low >= wanted:
         return []
     return [f"yield {_pct(r.estimate)} (95 % interval from {_pct(r.ci_low)}) over "
             f"{r.stages} stages is not surely at least the expected {_pct(wanted)}"
             + (f"; failures: {', '.join(f'{k} {v}' for k, v in r.failures.items())}"
                if r.failures else f"; more builds than {r.builds} narrow the interval")]
-
-
-def _check_kind(spec) -> None:
-    if spec.kind == "manipulators":
-        return
-    try:
-        from . import stairs  # noqa: F401
-    except ImportError:
-        raise PdmError("the yield of a stairs spec is not available in this installation: "
-                       "its closed-form map (pdm_design.tolerances.stairs) is missing") from None
 
 
 def simulate_build_of_spec(spec, source, design, build: str, stages, *, accuracy,
@@ -95,7 +88,6 @@ def simulate_build_of_spec(spec, source, design, build: str, stages, *, accuracy
     seed, index = parse_build(build)
     accuracy = resolve(accuracy or spec.verification.accuracy)
     tolerances = spec_tolerances(spec, source)
-    _check_kind(spec)
     return simulate_one(spec.scene, design, tolerances, seed, index, stages,
                         accuracy=accuracy, record_trajectory=record_trajectory)
 
@@ -142,7 +134,7 @@ def yield_text(result: YieldResult, name: str) -> str:
                  f"the closed forms; {c['left_closed_form']} builds outside the closed forms "
                  "simulated")
     if r.sensitivity:
-        lines.append("sensitivity (Sobol total index): " + ", ".join(
+        lines.append("sensitivity (Sobol' total index of the smallest margin): " + ", ".join(
             f"{s['quantity']} {s['index']:.3g}" for s in r.sensitivity))
     elif r.sensitivity_note:
         lines.append(f"sensitivity: {r.sensitivity_note}")
@@ -154,8 +146,9 @@ def yield_text(result: YieldResult, name: str) -> str:
 
 
 def yield_figures(result: YieldResult) -> dict[str, bytes]:
-    """survival.png (fraction still going after each stage, with its 95 % band) and
-    yield_scale.png (yield against a common scale of every tolerance)."""
+    """survival.png (fraction still going after each stage, with its 95 % band),
+    yield_scale.png (yield against a common scale of every tolerance) and sensitivity.png
+    (the Sobol' indices as bars), each where the result has its data."""
     from matplotlib.figure import Figure
 
     from ..report.render import render_figure
@@ -183,6 +176,12 @@ def yield_figures(result: YieldResult) -> dict[str, bytes]:
         ax.set(xlabel="tolerance scale (1 = the spec's)", ylabel=f"yield over {r.stages} stages",
                title=f"yield against tolerance scale ({r.scale_curve[0]['builds']} builds a point)")
         out["yield_scale.png"] = render_figure(fig, "png")
+    if r.sensitivity:
+        from .sensitivity import sensitivity_figure
+
+        fig = sensitivity_figure(list(r.sensitivity), title="which tolerance matters most "
+                                 f"(smallest margin over {r.stages} stages)")
+        out["sensitivity.png"] = render_figure(fig, "png")
     return out
 
 

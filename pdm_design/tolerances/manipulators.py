@@ -22,9 +22,10 @@ per-stage logic of formulation/manipulator_offsets.py, extended to every part's 
   the last palm   carries the object to the design's beta: the run is complete.
 
 These are the simulator's own judgements in the regime it follows in closed form (plastic
-landings that stick, stuck carries; with a palm restitution > 0 no build is in it). A build that leaves it (a slip, a lift-off, a landing
-that drives the palm into its stop, a miss, a palm in the way) is marked closed_form = False
-with the failure the closed forms expect; the event simulator has the last word on it.
+landings that stick, stuck carries; with a palm restitution > 0 no build is in it). A build
+that leaves it (a slip, a lift-off, a landing that drives the palm into its stop, a miss, a
+palm in the way) is marked closed_form = False with the failure the closed forms expect; the
+event simulator has the last word on it.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ import math
 import numpy as np
 
 from ..physics import manipulators as phys
-from .model import BuildOutcome
+from .outcome import BuildOutcome
 
 PARKED_CAP = 16  # palms parked behind the carrying one checked, at most
 
@@ -241,9 +242,11 @@ class _Builds:
     def parked_palms(self, k, theta, offset, w):
         """Clearance, in link lengths, to the palms 1 .. parked places behind palm k, each at
         its front stop (taken as there from the handover on: conservative, so a failure here
-        is left to the simulator, which follows the timing). Computed in full only for the
-        builds where the palm is not behind the object from the start of the carry (the
-        clearance is at least that distance: physics.parked_palm_clearance's `behind`)."""
+        is left to the simulator, which follows the timing). The clearance is at least the
+        distance the palm stays behind the object from the start of the carry
+        (physics.parked_palm_clearance's `behind`), so it is computed in full only where that
+        bound, in link lengths, is under the build's smallest margin so far: elsewhere the
+        clearance cannot be the build's smallest margin, and the bound stands for it."""
         v = self.v
         l, a = v["link_length"][k], v["back_stop"][k]
         sf, cf = math.sin(self.fs), math.cos(self.fs)
@@ -256,7 +259,7 @@ class _Builds:
             # palm j's pivot and link as palm k's link and an effective pitch (exact)
             pitch_x = v["pivot_x"][k] - v["pivot_x"][j] + (l - lj) * sf
             behind = back - (l * sf - pitch_x + reach - offset)
-            near = np.flatnonzero(self.alive & (behind < 0.0))
+            near = np.flatnonzero(self.alive & (behind < l * self.worst))
             gap = behind
             if len(near):
                 pitch_y = v["pivot_y"][j] - v["pivot_y"][k] + (lj - l) * cf

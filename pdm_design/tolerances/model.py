@@ -19,11 +19,6 @@ the end of STREAM_ORDER so that earlier quantities keep their random streams.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:  # the spec loader reads this module: numpy is imported where arrays are made
-    import numpy as np
-
 DISTRIBUTIONS = ("normal", "uniform")
 APPLIES_TO = ("each", "lot")
 SIGMAS_PER_TOLERANCE = 3.0  # normal: sigma = t / 3
@@ -150,20 +145,3 @@ class Tolerances:
     def scaled(self, factor: float) -> Tolerances:
         return Tolerances(tuple(t.scaled(factor) for t in self.items), self.builds, self.seed,
                           self.confirm)
-
-
-@dataclass(frozen=True)
-class BuildOutcome:
-    """What happened to each of N builds (the same for every scene kind):
-    stages_passed (N,) int; failure (N,) object: the failure's name, "" for a build that
-    passed every stage; min_margin (N,) float: its smallest margin over the run (1 -
-    demand/capacity, < 0 at a failure); closed_form (N,) bool: False where the build left the
-    regime the closed forms follow (a slip, a lift-off, ...): the event simulator decides it."""
-
-    stages_passed: np.ndarray
-    failure: np.ndarray
-    min_margin: np.ndarray
-    closed_form: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.stages_passed)

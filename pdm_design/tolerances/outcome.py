@@ -1,11 +1,14 @@
 """What a batch of builds did, whatever the scene: the result every vectorised build map returns
-(stairs: `pdm_design.tolerances.stairs.run_builds`)."""
+(`pdm_design.tolerances.manipulators.run_builds`, `pdm_design.tolerances.stairs.run_builds`) and
+the input of the yield and of the sensitivity."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:  # the spec loader imports this package: numpy comes with the arrays
+    import numpy as np
 
 
 @dataclass(frozen=True)
@@ -18,8 +21,9 @@ class BuildOutcome:
     min_margin: the smallest margin over the run (the normalised slack of
         `pdm_design.analysis.result`: 1 - demand/capacity while a condition holds, 0 at its
         limit); < 0 exactly for the builds that failed, >= 0 for those that passed.
-    closed_form: False where a build left what the closed forms describe: its stages and
-        failure are the map's best account, to be decided by the event simulator.
+    closed_form: False where a build left what the closed forms describe (a slip, a lift-off,
+        a graze ...): its stages and failure are the map's best account, to be decided by the
+        event simulator.
     """
 
     stages_passed: np.ndarray
@@ -33,6 +37,9 @@ class BuildOutcome:
             if len(getattr(self, name)) != n:
                 raise ValueError(f"BuildOutcome: {name} has {len(getattr(self, name))} entries, "
                                  f"stages_passed {n}")
+
+    def __len__(self) -> int:
+        return len(self.stages_passed)
 
     @property
     def builds(self) -> int:

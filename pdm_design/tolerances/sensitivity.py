@@ -6,9 +6,10 @@ index S1 of a quantity is the share of Var(Y) its deviations explain alone, the 
 ST the share they take part in, interactions included (SALib: Saltelli's sampling on a scrambled
 Sobol' sequence, the estimators of Saltelli et al. 2010, bootstrap confidence intervals). A
 quantity toleranced per part (every step's rise, every manipulator's pivot) is one group: its
-index is that of all its parts together, which is what a workshop tightens. The build map is any callable run(deviations, stages) -> BuildOutcome
-(`pdm_design.tolerances.stairs.run_builds` with its scene and design bound), so the same code
-serves every scene.
+index is that of all its parts together, which is what a workshop tightens. The build map is
+any callable run(deviations, stages) -> BuildOutcome (`pdm_design.tolerances.run_builds` with
+its scene and design bound: the yield passes the manipulators' or the stairs' map), so the same
+code serves every scene.
 
 Distributions, as the tolerance convention states them: "normal" draws N(0, (t/3)^2), "uniform"
 draws U(-t, t). A quantity with tolerance 0 does not vary and its indices are 0.
@@ -22,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-DISTRIBUTIONS = ("normal", "uniform")
-APPLIES_TO = ("each", "lot")
+from .model import APPLIES_TO, DISTRIBUTIONS
+
 OUTPUTS = ("min_margin", "pass")
 
 
@@ -64,8 +65,9 @@ def sobol_indices(run: Callable, tolerances: Iterable, *, stages: int, parts: in
         raise ValueError("the build map returned a non-finite output: no variance to split")
     if np.ptp(y) == 0.0:
         return _table(zero)
+    # SALib's analysis seeds its bootstrap only with a true seed (0 would leave it unseeded)
     si = analyze.analyze(problem, y, calc_second_order=False, num_resamples=resamples,
-                         seed=seed)
+                         seed=seed + 1)
     found = {t[0]: (float(si["ST"][i]), float(si["S1"][i]), float(si["ST_conf"][i]))
              for i, t in enumerate(active)}
     return _table({**zero, **found})
@@ -130,18 +132,13 @@ def _table(values: dict) -> list[dict]:
     return sorted(rows, key=lambda row: -row["index"])
 
 
-def plot_sensitivity(indices: list[dict], path, *, title: str | None = None,
-                     dpi: int = 120) -> Path:
-    """Bar chart of the indices (`sobol_indices`' list) into a PNG at `path`: total-order
-    index with its confidence interval, first-order beside it, largest on top."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
+def sensitivity_figure(indices: list[dict], *, title: str | None = None):
+    """Bar chart of the indices (`sobol_indices`' list): total-order index with its confidence
+    interval, first-order beside it, largest on top (a matplotlib Figure)."""
     from matplotlib.figure import Figure
-
-    from ..io import atomic_path
 
     rows = list(reversed(indices))
     fig = Figure(figsize=(7, 1.2 + 0.45 * max(len(rows), 1)), layout="constrained")
-    FigureCanvasAgg(fig)
     ax = fig.subplots()
     y = np.arange(len(rows))
     ax.barh(y + 0.2, [r["index"] for r in rows], height=0.4, xerr=[r["confidence"] for r in rows],
@@ -149,11 +146,20 @@ def plot_sensitivity(indices: list[dict], path, *, title: str | None = None,
     ax.barh(y - 0.2, [r["first"] for r in rows], height=0.4, color="tab:orange",
             label="first order (S1)")
     ax.set_yticks(y, [r["quantity"] for r in rows])
-    ax.set(xlabel="share of the output's variance", xlim=(0.0, 1.05),
+    right = max([1.0] + [r["index"] + r["confidence"] for r in rows]) + 0.05
+    ax.set(xlabel="share of the output's variance", xlim=(0.0, right),
            title=title or "which tolerance matters most (Sobol' indices)")
     ax.grid(axis="x", alpha=0.3)
     ax.legend(loc="lower right", fontsize=8)
+    return fig
+
+
+def plot_sensitivity(indices: list[dict], path, *, title: str | None = None,
+                     dpi: int = 120) -> Path:
+    """`sensitivity_figure` as a PNG at `path`, whole or not at all."""
+    from ..io import write_atomic
+    from ..report.render import render_figure
+
     path = Path(path)
-    with atomic_path(path) as tmp:  # the file is whole or absent, never half written
-        fig.savefig(tmp, dpi=dpi)
+    write_atomic(path, render_figure(sensitivity_figure(indices, title=title), "png", dpi=dpi))
     return path

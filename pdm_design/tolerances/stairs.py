@@ -44,9 +44,10 @@ from ..sim.stairs import (
     simulate_stairs,
     stairs_geometry,
 )
+from .model import QUANTITIES as ALL_QUANTITIES
 from .outcome import BuildOutcome
 
-QUANTITIES = ("rise", "tread", "restitution", "friction", "launch_speed", "launch_x")
+QUANTITIES = tuple(ALL_QUANTITIES["stairs"])
 LOT_ONLY = ("launch_speed", "launch_x")
 UNBUILDABLE = "unbuildable_step"
 # failure codes of the map; names as the event simulator's (sim.stairs.FAILURE_KINDS), plus ours

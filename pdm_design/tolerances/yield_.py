@@ -9,7 +9,8 @@ The yield is the fraction of builds that pass every one of the K stages, with a 
 score interval; the survival curve is the fraction still going after each stage (each with
 its Wilson interval), and the mean number of stages before failure is the mean of the
 stages passed over all builds, a build that passes all counting K (the area under the
-survival curve).
+survival curve). The sensitivity is the Sobol' indices of the builds' smallest margin
+(tolerances.sensitivity), the same closed-form map as the model.
 """
 
 from __future__ import annotations
@@ -20,13 +21,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from .draw import draw
-from .model import BuildOutcome, Tolerances
+from .model import Tolerances
+from .outcome import BuildOutcome
 
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 CHUNK_ENTRIES = 2_000_000  # builds x stages drawn and mapped at once (memory: ~16 MB an array)
 SCALES = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0)  # tolerance scales of the yield curve
 SCALE_BUILDS = 500  # builds per point of that curve, at most
 SHOWN_COMMANDS = 100  # failing builds listed with their simulate command, at most
+# The Sobol' sensitivity: base sample of SALib's Saltelli scheme (a power of 2; the map runs
+# base x (quantities + 2) builds), shrunk so that the sample holds at most SOBOL_ENTRIES numbers;
+# the Sobol' sequence has at most 21201 dimensions, twice the variables.
+SOBOL_SAMPLES = 1024
+SOBOL_ENTRIES = 8_000_000
+SOBOL_MIN_SAMPLES = 64
+SOBOL_MAX_VARIABLES = 10_600
 
 
 def wilson(passed, total, z: float = Z95):
@@ -94,10 +103,12 @@ def simulate_one(scene, design, tolerances, seed, index, stages, *, accuracy="de
                  record_trajectory=False):
     """The event simulator on build `index` of a yield run with `seed` and `stages`."""
     deviations = one_build(tolerances, seed, index, stages)
-    if scene.kind == "manipulators":
+    if scene.kind == "manipulators":  # takes 1-row arrays
         from .manipulators import simulate_build
-    else:
-        from .stairs import simulate_build  # absent until the stairs module exists
+    else:  # takes one build's values: a number for a lot, K for each step
+        from .stairs import simulate_build
+
+        deviations = {q: d[0] for q, d in deviations.items()}
     return simulate_build(scene, design, deviations, stages, accuracy=accuracy,
                           record_trajectory=record_trajectory)
 
@@ -118,8 +129,11 @@ def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int) -
 
 def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int, seed: int = 0,
              confirm: int = 20, accuracy="default", source: str = "SPEC",
-             scales=SCALES, progress=None) -> YieldResult:
-    """Yield of `design` built with `tolerances` (every one with a value), K = `stages`."""
+             scales=SCALES, sensitivity_samples: int = SOBOL_SAMPLES,
+             progress=None) -> YieldResult:
+    """Yield of `design` built with `tolerances` (every one with a value), K = `stages`.
+    scales: the tolerance scales of the yield curve (() for none); sensitivity_samples: the
+    Sobol' base sample (0: no sensitivity)."""
     missing = [t.quantity for t in tolerances if t.value is None]
     if missing or not len(tolerances):
         raise ValueError("a yield needs tolerances with values" + (
@@ -137,7 +151,8 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     shown = tuple({"index": int(i), "stages_passed": int(passed[i]), "failure": failure[i],
                    "command": build_command(source, seed, int(i), stages)}
                   for i in failing[:SHOWN_COMMANDS])
-    sensitivity, note = _sensitivity(scene, design, tolerances, stages, seed)
+    sensitivity, note = _sensitivity(scene, design, tolerances, stages, seed,
+                                     sensitivity_samples)
     return YieldResult(
         kind=scene.kind, builds=builds, stages=stages, seed=seed,
         estimate=float(whole.mean()), ci_low=float(low), ci_high=float(high),
@@ -213,15 +228,25 @@ def _scale_curve(scene, design, tolerances, builds, stages, seed, scales, accura
     return out
 
 
-def _sensitivity(scene, design, tolerances, stages, seed) -> tuple[list, str]:
-    """Sobol indices from tolerances.sensitivity where that module exists."""
-    try:
-        from .sensitivity import sobol_indices
-    except ImportError:
-        return [], ("not computed: the variance-based sensitivity module "
-                    "(pdm_design.tolerances.sensitivity) is not part of this installation")
-    if len(tolerances) < 2:
-        return [], "not computed: one toleranced quantity has all the variance"
-    indices = sobol_indices(scene, design, tolerances, stages=stages, seed=seed)
-    return [{"quantity": q, "index": float(v)} for q, v in indices], ""
+def _sensitivity(scene, design, tolerances, stages, seed, samples) -> tuple[list, str]:
+    """Sobol' total-order indices of the builds' smallest margin (tolerances.sensitivity), the
+    closed-form map as the model; the base sample shrinks to SOBOL_ENTRIES (never below
+    SOBOL_MIN_SAMPLES: then not computed, in words)."""
+    if not samples:
+        return [], "not computed (no Sobol' samples asked)"
+    from . import run_builds
+    from .sensitivity import sobol_indices
 
+    variables = sum(stages if t.applies_to == "each" else 1 for t in tolerances)
+    fits = SOBOL_ENTRIES // (variables * (len(tolerances) + 2))
+    if variables > SOBOL_MAX_VARIABLES or fits < SOBOL_MIN_SAMPLES:
+        return [], (f"not computed: {variables} varying parts are more than the Sobol' sample "
+                    f"holds here (at most {SOBOL_MAX_VARIABLES}, and {SOBOL_ENTRIES} numbers "
+                    "drawn); fewer stages allow it")
+    base = min(samples, 1 << (fits.bit_length() - 1))
+
+    def run(deviations, k):
+        return run_builds(scene, design, deviations, k)
+
+    rows = sobol_indices(run, tolerances, stages=stages, samples=base, seed=seed)
+    return rows, ""
