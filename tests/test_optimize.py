@@ -249,7 +249,7 @@ def _robust_ok_raw(scene, a, b, tau, l, q, N):
 @pytest.fixture(scope="module")
 def robust():
     spec = load_spec(PROBLEMS / "manipulators_robust.toml")
-    return spec, optimize(spec)
+    return spec, optimize(spec, linearise=True)
 
 
 def test_robust_optimum_is_at_least_as_good_as_a_dense_grid(robust):
@@ -555,7 +555,7 @@ def _robust_manipulators(scale: float = 1.0, stages: int = 6):
 def test_the_linearised_sets_scale_with_the_device():
     """Dimensional analysis: ten times the size, ten times every half-width (cvxpy in metres
     failed at that size and the report silently lost the linearised sets)."""
-    one, ten = (optimize(_robust_manipulators(k), check_samples=0).linearised for k in (1, 10))
+    one, ten = (optimize(_robust_manipulators(k), check_samples=0, linearise=True).linearised for k in (1, 10))
     assert one.status == ten.status == "optimal"
     assert ten.square == pytest.approx(10 * one.square, rel=1e-6)
     for axis in ("dx", "dy"):
@@ -566,7 +566,7 @@ def test_the_linearised_sets_scale_with_the_device():
 
 def test_many_offsets_leave_the_robust_box_and_say_why_the_linearised_sets_are_missing():
     spec = _robust_manipulators(stages=130)  # dx1..dx130 and dy1..dy131
-    result = optimize(spec, check_samples=0)
+    result = optimize(spec, check_samples=0, linearise=True)
     assert result.status is Status.OPTIMAL and result.tolerance["dx"] > 0
     assert result.linearised.status.startswith("not computed: 261 offset coordinates")
 

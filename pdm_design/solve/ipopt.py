@@ -150,11 +150,11 @@ def _within(lo: float, hi: float, r: float) -> float:
 @functools.lru_cache(maxsize=64)
 def _sobol(dimension: int, count: int, seed: int) -> np.ndarray:
     """count scrambled-Sobol points in the unit cube (cached: drawing them took 0.4 ms, 4 % of
-    an 8-start optimize of problems/manipulators_robust.toml). scipy.stats is imported here:
-    it takes 0.4 s, and a fixed design or a single start never needs it."""
-    from scipy.stats import qmc
+    an 8-start optimize of problems/manipulators_robust.toml). solve/sobol.py draws scipy's
+    points without importing scipy.stats (0.4 s)."""
+    from .sobol import sobol
 
-    points = qmc.Sobol(d=dimension, scramble=True, seed=seed).random(_pow2(count))[:count]
+    points = sobol(dimension, _pow2(count), seed)[:count]
     points.flags.writeable = False
     return points
 

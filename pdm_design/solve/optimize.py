@@ -13,12 +13,13 @@ from ..formulation.common import BACKOFF_FACTOR, MODEL, OBJECTIVE_SENSE
 from ..status import Status
 from . import check, elastic
 from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
-from .result import OptimizeResult, Solution, SolverStats
+from .result import LinearisedTolerance, OptimizeResult, Solution, SolverStats
 from .stacked import groups, solve_stacked, stacked_solver_for
-from .tolerance import linearised_tolerance
 from .words import bounds_hint, normalised_margin, summarise
 
 FEASIBILITY_TOL = 1e-7
+NOT_ASKED = ("not computed: not asked for (`optimize --linearised`, linearise=True in the API); "
+             "the robust box is the answer")
 
 
 def optimize(
@@ -32,7 +33,7 @@ def optimize(
     requirements: dict[str, float] | None = None,
     warm_start: OptimizeResult | None = None,
     diagnose: bool = True,
-    linearise: bool = True,
+    linearise: bool = False,
     check_samples: int = 256,
 ) -> OptimizeResult:
     """Best design of `spec` (see docs/optimizer.md).
@@ -43,7 +44,9 @@ def optimize(
     warm_start: a previous result of the same spec: one extra run from its solution and
         multipliers (IPOPT warm start), tried first.
     diagnose: when no start succeeds, solve the elastic problem and report what cannot be met.
-    linearise: compute the cvxpy box / ellipsoid in the linearised safe set.
+    linearise: compute the cvxpy box / ellipsoid in the linearised safe set (an informative
+        extra that costs more than the answer: off unless asked; a robust answer then carries
+        a `linearised` whose status says it was not computed).
     check_samples: offsets sampled inside the robust box for the independent check (0: skip).
     bound_relax_factor: IPOPT's bound relaxation; 0 puts the optimum on its bounds exactly.
     """
@@ -121,9 +124,13 @@ def optimize(
             form, x, p, float(x[form.tolerance_index]), samples=check_samples, seed=seed)
 
     linearised = None
-    if linearise and answered and form.scenario is not None:
+    if linearise and answered and robust:
+        from .tolerance import linearised_tolerance  # cvxpy: only when asked
+
         size = _length_scale(spec, design)  # offsets in units of the device's size: the same
         linearised = linearised_tolerance(form, x, p, cap=10.0 * size, length=size)  # at any scale
+    elif answered and robust:
+        linearised = LinearisedTolerance(0.0, {}, {}, (), status=NOT_ASKED)
 
     if status in (Status.OPTIMAL, Status.ACCEPTABLE):
         failed = [k for k, v in checks.items() if isinstance(v, dict) and not v["passed"]]
