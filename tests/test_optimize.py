@@ -145,8 +145,10 @@ def test_warm_start_reaches_the_same_optimum_in_fewer_iterations():
     assert warm.objective == pytest.approx(cold.objective, abs=1e-8)
     # strictly fewer: the reported run is not the cold one, whose iterations repeat exactly
     assert warm.stats.iterations < cold.stats.iterations
-    # and it is the warm run: the two runs' iterations add up to the total
-    assert warm.stats.total_iterations == warm.stats.iterations + cold.stats.iterations
+    # and it is the warm run: the two runs' iterations (and the tie-break's) add up to the total
+    assert warm.stats.total_iterations == (warm.stats.iterations + cold.stats.total_iterations
+                                           - cold.stats.tie_break_iterations
+                                           + warm.stats.tie_break_iterations)
 
 
 # -- robust tolerance: independent grid --------------------------------------------------------

@@ -15,6 +15,7 @@ from . import check, elastic
 from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
 from .result import LinearisedTolerance, OptimizeResult, Solution, SolverStats
 from .stacked import groups, solve_stacked, stacked_solver_for
+from .tiebreak import nearest_optimum
 from .words import bounds_hint, normalised_margin, summarise
 
 FEASIBILITY_TOL = 1e-7
@@ -35,6 +36,8 @@ def optimize(
     diagnose: bool = True,
     linearise: bool = False,
     check_samples: int = 256,
+    start_from: dict[str, float] | None = None,
+    tie_break: bool = True,
 ) -> OptimizeResult:
     """Best design of `spec` (see docs/optimizer.md).
 
@@ -49,6 +52,10 @@ def optimize(
         a `linearised` whose status says it was not computed).
     check_samples: offsets sampled inside the robust box for the independent check (0: skip).
     bound_relax_factor: IPOPT's bound relaxation; 0 puts the optimum on its bounds exactly.
+    start_from: a design (free variables by name) to start from first, besides the others (a
+        table's neighbouring point): it may speed the solve, never move the spec's guess.
+    tie_break: of an optimal set, the design nearest the spec's guess (solve/tiebreak.py: the
+        same spec gives the same design whatever the starts found first).
     """
     tic = time.perf_counter()
     was_cached = _is_cached(spec)
@@ -73,6 +80,8 @@ def optimize(
     lows = [spec.design[n].min for n in names]
     highs = [spec.design[n].max for n in names]
     designs = start_designs(names, lows, highs, guess, max(starts, 1), seed)
+    if start_from:  # first, so that it is tried even with one start
+        designs = [{n: float(start_from.get(n, guess[n])) for n in names}] + designs
     x_starts = form.defined_starts(designs, guess, p)
 
     runs, calls, stacked_starts = _multistart(form, options, x_starts, p, ws)
@@ -87,9 +96,16 @@ def optimize(
         runs, more_calls, stacked_starts = _multistart(form, options, x_starts, p, None)
         calls += more_calls
         chosen = best(runs)
+    extra_iters, extra_time, tie_iters = 0, 0.0, -1
+    if chosen.status is Status.OPTIMAL and tie_break:
+        # one design for one spec: the optimal design nearest the spec's guess (tiebreak.py)
+        nearest = nearest_optimum(form, options, chosen, p, guess, lows, highs)
+        if nearest is not None:
+            tie_iters = extra_iters = nearest.iterations
+            extra_time = nearest.seconds
+            chosen = replace(chosen, x=nearest.x)
     status, x = chosen.status, chosen.x
     violations, at_bounds = (), ()
-    extra_iters, extra_time = 0, 0.0
     if status in (Status.INFEASIBLE, Status.SOLVER_ERROR) and diagnose:
         chosen, status, x, violations, at_bounds, extra_iters, extra_time = _diagnose(
             form, options, x_starts, p, chosen, runs, calls)
@@ -148,6 +164,7 @@ def optimize(
         build_time=build_time,
         wall_time=time.perf_counter() - tic,
         return_statuses=tuple(r.return_status for r in runs),
+        tie_break_iterations=tie_iters,
     )
     return OptimizeResult(
         status=status, design=design, objective=score, objectives=objectives,

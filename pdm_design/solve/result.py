@@ -40,6 +40,9 @@ class SolverStats:
     # starts solved in stacked runs, several per IPOPT run (0: one run per start); when the
     # reported run is one, iterations and solve_time are that whole run's
     stacked_starts: int = 0
+    # iterations of the tie-break run (solve/tiebreak.py; counted in total_iterations): the
+    # optimal design nearest the spec's guess; -1 when it did not run or its answer was not kept
+    tie_break_iterations: int = -1
 
     def to_json(self) -> dict:
         return {k: getattr(self, k) for k in self.__dataclass_fields__} | {
