@@ -25,8 +25,9 @@ from pdm_design.solve.sobol import sobol
 from pdm_design.spec import parse_spec
 from pdm_design.status import Status
 from pdm_design.sweep.run import run_sweep
+from pdm_design.verify.tolerance import verify_tolerance
 
-from test_optimize import propagate_offsets
+from test_optimize import propagate_offsets, robust_tolerance_grid
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 ROBUST = PROBLEMS / "manipulators_robust.toml"
@@ -97,6 +98,67 @@ def test_the_streamed_check_judges_as_an_independent_propagation(factor, passes)
     assert bool(independent >= -1e-9) is passes
 
 
+# -- the drift's closed form: a box at least the former one, sound in the simulator -------------
+
+def former_optimum(scene, stages):
+    """The former definition's box (the drift bound (N-1) min(r(2 tol), r(-2 tol))), maximised
+    over alpha and beta by the independent numpy grid of tests/test_optimize.py, refined twice
+    around its best cell."""
+    lo, hi = np.array([0.0, 0.2]), np.array([0.6, 1.2])  # the spec's bounds
+    for cells in (61, 21, 21):
+        alpha, beta = np.linspace(lo[0], hi[0], cells), np.linspace(lo[1], hi[1], cells)
+        grid = robust_tolerance_grid(scene, alpha, beta, link_length=2.0, mass_ratio=10.0,
+                                     stages=stages, iters=40)
+        i, j = np.unravel_index(np.argmax(grid), grid.shape)
+        step = np.array([alpha[1] - alpha[0], beta[1] - beta[0]])
+        centre = np.array([alpha[i], beta[j]])
+        lo, hi = np.maximum(centre - step, [0.0, 0.2]), np.minimum(centre + step, [0.6, 1.2])
+    return grid.max()
+
+
+@pytest.mark.parametrize("stages", [6, 20, 100])
+def test_the_box_is_at_least_the_former_definitions_optimum(stages):
+    spec = parse_spec(robust_data(stages))
+    result = optimize(spec, check_samples=0)
+    assert result.status is Status.OPTIMAL
+    former = former_optimum(spec.scene, stages)
+    assert result.tolerance["dx"] >= former - 1e-7
+    if stages > 6:  # the alternating drift bound is worth millimetres on longer rows
+        assert result.tolerance["dx"] >= former + 1e-3
+
+
+@pytest.mark.parametrize("stages", [20, 100])
+def test_the_box_is_sound_stage_by_stage_where_the_drift_binds(stages):
+    """The alternating patterns, which meet the drift bound, pass the independent numpy
+    propagation at the box and fail a little beyond it: the closed form is the drift's worst."""
+    spec = parse_spec(robust_data(stages))
+    result = optimize(spec, check_samples=0)
+    N = stages
+    alt = np.where(np.arange(N + 1) % 2 == 0, 1.0, -1.0)
+    signs_dy = np.vstack([alt, -alt, alt, -alt, np.ones(N + 1), -np.ones(N + 1)])
+    signs_dx = np.vstack([np.ones(N), np.ones(N), -np.ones(N), -np.ones(N), np.ones(N),
+                          -np.ones(N)])
+
+    def worst(factor):
+        tau = factor * result.tolerance["dx"]
+        return propagate_offsets(spec.scene, result.design, tau * signs_dx, tau * signs_dy,
+                                 N).min()
+
+    assert worst(1.0) >= -1e-9
+    assert worst(1.02) < 0
+
+
+def test_every_corner_pattern_of_a_row_of_100_passes_the_simulator():
+    spec = parse_spec(robust_data(100))
+    result = optimize(spec, check_samples=0)
+    point = spec.design_at({n: result.design[n] for n in spec.free_variables})
+    box = verify_tolerance(spec, point, result.tolerance, samples=0)
+    assert box["passed"] and box["samples"] == 12
+    # and the simulator's worst corners are near: 1.2 times the box fails one
+    bigger = {k: 1.2 * v for k, v in result.tolerance.items()}
+    assert not verify_tolerance(spec, point, bigger, samples=0)["passed"]
+
+
 # -- the row's limit ----------------------------------------------------------------------------
 
 def test_an_optimised_row_longer_than_the_limit_is_bad_input(tmp_path):
@@ -127,6 +189,7 @@ def test_a_flat_optimum_is_settled_nearest_the_guess():
     tied = optimize(spec, check_samples=0)
     loose = optimize(spec, check_samples=0, tie_break=False)
     assert tied.status is loose.status is Status.OPTIMAL
+    assert tied.stats.tie_break_kept
     assert tied.tolerance["dx"] == pytest.approx(loose.tolerance["dx"], rel=2e-6)
     # the set is flat: the ratio the starts found and the one the rule picks are 2x apart
     assert abs(tied.design["mass_ratio"] - loose.design["mass_ratio"]) > 1.0

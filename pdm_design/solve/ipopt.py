@@ -166,6 +166,17 @@ def _pow2(n: int) -> int:
     return k
 
 
+TIE = 1e-9  # objectives this close (relative) are one optimum
+
+
 def best(solves: list[Solve]) -> Solve:
-    """The best run: best status first (optimal < acceptable < ...), then least objective."""
-    return min(solves, key=lambda s: (_RANK[s.status], s.f if np.isfinite(s.f) else np.inf))
+    """The best run: best status first (optimal < acceptable < ...), then least objective; of
+    runs that reach the least objective to TIE, the first (a warm start's, else the spec's
+    guess'): which one IPOPT's last digits favour is noise (solve/tiebreak.py then settles a
+    flat optimum)."""
+    def f(s):
+        return s.f if np.isfinite(s.f) else np.inf
+
+    top = min(solves, key=lambda s: (_RANK[s.status], f(s)))
+    near = TIE * max(1.0, abs(f(top))) if np.isfinite(f(top)) else 0.0
+    return next(s for s in solves if s.status is top.status and f(s) <= f(top) + near)

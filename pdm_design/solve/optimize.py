@@ -96,13 +96,14 @@ def optimize(
         runs, more_calls, stacked_starts = _multistart(form, options, x_starts, p, None)
         calls += more_calls
         chosen = best(runs)
-    extra_iters, extra_time, tie_iters = 0, 0.0, -1
+    extra_iters, extra_time, tie_iters, kept = 0, 0.0, -1, False
     if chosen.status is Status.OPTIMAL and tie_break:
         # one design for one spec: the optimal design nearest the spec's guess (tiebreak.py)
-        nearest = nearest_optimum(form, options, chosen, p, guess, lows, highs)
+        nearest, kept = nearest_optimum(form, options, chosen, p, guess, lows, highs)
         if nearest is not None:
             tie_iters = extra_iters = nearest.iterations
             extra_time = nearest.seconds
+        if kept:
             chosen = replace(chosen, x=nearest.x)
     status, x = chosen.status, chosen.x
     violations, at_bounds = (), ()
@@ -165,6 +166,7 @@ def optimize(
         wall_time=time.perf_counter() - tic,
         return_statuses=tuple(r.return_status for r in runs),
         tie_break_iterations=tie_iters,
+        tie_break_kept=kept,
     )
     return OptimizeResult(
         status=status, design=design, objective=score, objectives=objectives,

@@ -15,8 +15,9 @@ point whichever start found f*, and `optimize`, `table` (whose warm starts are e
 never the guess) and `sheet` give the same design. It costs the optimum at most IPOPT's
 tolerance `tol` of its value (1e-8 by default: 1e-9 mm of an 83 mm box; a larger slack, 100 tol,
 moved a unique optimum, beta on its slip limit, by 1e-6 rad toward the guess), and the row
-f <= cap holds to IPOPT's tolerance (10 tol is accepted). When the second solve fails, the multistart's
-answer stands (and `stats` says so).
+f <= cap holds to IPOPT's tolerance (10 tol is accepted). An answer that moves no variable by more than FLAT of its
+bounds is a curved optimum's slide along the slack, not a flat set: the multistart's answer
+stands then, as it does when the second solve fails (`stats.tie_break_kept`).
 """
 
 from __future__ import annotations
@@ -31,6 +32,10 @@ from ..status import Status
 from .ipopt import solve_once, solver_for
 
 RELATIVE = 1.0  # times IPOPT's tol
+# A move smaller than this (of any variable's bounds) is no flat optimum: the objective's slack
+# lets a curved one slide ~ sqrt(tol) toward the guess (2e-5 rad of alpha on
+# problems/manipulators_robust.toml), noise that would differ between scales; it is not kept.
+FLAT = 1e-3
 ABSOLUTE = 1e-12  # the objective's size when the optimum is 0 (no objective: any design)
 _NLPS: dict[str, dict] = {}
 _LOCK = threading.Lock()
@@ -56,10 +61,12 @@ def tie_break_nlp(form) -> dict:
 
 
 def nearest_optimum(form, options, chosen, p, guess: dict[str, float], lows, highs):
-    """The design nearest `guess` among those within RELATIVE tol of the best objective (a Solve),
-    from the multistart's best run `chosen`; None when that solve does not succeed."""
+    """(the run, kept): the design nearest `guess` among those within RELATIVE tol of the best
+    objective, solved from the multistart's best run `chosen`; kept unless that solve does not
+    succeed or moves no variable by more than FLAT of its bounds (a curved optimum: `chosen` is
+    the one). (None, False) without free variables."""
     if form.n_design == 0:
-        return None
+        return None, False
     names = form.design_names
     lo, hi = np.asarray(lows, float), np.asarray(highs, float)
     span = np.where(hi > lo, hi - lo, 1.0)
@@ -75,11 +82,12 @@ def nearest_optimum(form, options, chosen, p, guess: dict[str, float], lows, hig
                      lam_x0=chosen.lam_x, lam_g0=np.append(chosen.lam_g, 0.0),
                      start=chosen.start)
     if run.status is not Status.OPTIMAL:
-        return None
+        return run, False
     f = float(form_objective(form)(run.x, p))
     if not f <= cap + 10.0 * options.tol * size:  # the row holds to IPOPT's tolerance
-        return None
-    return run
+        return run, False
+    moved = np.max(np.abs(run.x[:form.n_design] - chosen.x[:form.n_design]) / span)
+    return run, bool(moved > FLAT)
 
 
 _OBJECTIVES: dict[str, object] = {}
