@@ -8,10 +8,11 @@ import time
 from dataclasses import replace
 
 from ..analysis.result import required
+from ..lru import Bounded
 from . import manipulator_offsets, manipulators, stairs, stairs_errors
 from .common import Formulation, assemble, spec_key
 
-_CACHE: dict[str, Formulation] = {}
+_CACHE: Bounded = Bounded()  # the specs formulated last
 FULL = " +deferred rows"  # cache key suffix of a spec's NLP with its deferred rows
 _LOCK = threading.Lock()
 

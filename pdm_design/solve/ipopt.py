@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from ..lru import Bounded
 from ..status import Status
 
 _STATUS = {
@@ -89,7 +90,7 @@ class Solve:
                    np.zeros(rows), 0, seconds, start)
 
 
-_SOLVERS: dict[tuple, object] = {}
+_SOLVERS: Bounded = Bounded()
 _LOCK = threading.Lock()
 
 

@@ -28,6 +28,7 @@ from dataclasses import replace
 import casadi as ca
 import numpy as np
 
+from ..lru import Bounded
 from ..status import Status
 from .ipopt import solve_once, solver_for
 
@@ -37,7 +38,7 @@ RELATIVE = 1.0  # times IPOPT's tol
 # problems/manipulators_robust.toml), noise that would differ between scales; it is not kept.
 FLAT = 1e-3
 ABSOLUTE = 1e-12  # the objective's size when the optimum is 0 (no objective: any design)
-_NLPS: dict[str, dict] = {}
+_NLPS: Bounded = Bounded()
 _LOCK = threading.Lock()
 
 
@@ -90,13 +91,13 @@ def nearest_optimum(form, options, chosen, p, guess: dict[str, float], lows, hig
     return run, bool(moved > FLAT)
 
 
-_OBJECTIVES: dict[str, object] = {}
+_OBJECTIVES: Bounded = Bounded()
 
 
 def form_objective(form):
     """The NLP's objective as a Function (x, p) (cached per formulation)."""
     fn = _OBJECTIVES.get(form.key)
     if fn is None:
-        fn = _OBJECTIVES[form.key] = ca.Function("f", [form.nlp["x"], form.nlp["p"]],
-                                                 [form.nlp["f"]])
+        fn = ca.Function("f", [form.nlp["x"], form.nlp["p"]], [form.nlp["f"]])
+        _OBJECTIVES[form.key] = fn
     return fn
