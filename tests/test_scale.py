@@ -221,3 +221,21 @@ def test_optimize_table_and_sheet_give_one_design(tmp_path):
         assert float(row[name]) == pytest.approx(want, rel=1e-6), name
         assert sheet.design[name] == pytest.approx(want, rel=1e-6), name
     assert float(row["tolerance"]) == pytest.approx(alone.tolerance["dx"], rel=1e-7)
+
+
+# -- bounded caches -------------------------------------------------------------------------------
+
+def test_the_caches_keep_the_specs_used_last_only():
+    """A table's worker solves thousands of specs: the built NLPs and solvers of the last
+    ENTRIES are kept (a table of 400 points held 1.5 GB when every one was)."""
+    from pdm_design import lru
+    from pdm_design.formulation import build
+    from pdm_design.solve import ipopt
+
+    first = parse_spec(robust_data(mass_ratio=5.0))
+    optimize(first, check_samples=0, starts=1)
+    for k in range(lru.ENTRIES + 2):
+        optimize(parse_spec(robust_data(mass_ratio=6.0 + 0.1 * k)), check_samples=0, starts=1)
+    assert len(build._CACHE) == len(ipopt._SOLVERS) == lru.ENTRIES
+    again = optimize(first, check_samples=0, starts=1)
+    assert again.status is Status.OPTIMAL and again.stats.build_time > 0.0

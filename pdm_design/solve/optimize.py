@@ -84,7 +84,10 @@ def optimize(
         designs = [{n: float(start_from.get(n, guess[n])) for n in names}] + designs
     x_starts = form.defined_starts(designs, guess, p)
 
-    runs, calls, stacked_starts = _multistart(form, options, x_starts, p, ws)
+    # stacked only for an NLP solved before in this process: creating the stacked solver costs
+    # more than it saves in one solve (docs/optimizer.md section 5)
+    stack = was_cached and form.stack_starts
+    runs, calls, stacked_starts = _multistart(form, options, x_starts, p, ws, stack)
     chosen = best(runs)
     if chosen.status in (Status.OPTIMAL, Status.ACCEPTABLE) and form.deferred_broken(chosen.x, p):
         # The answer breaks a row left out of the NLP: solve every start again with every row
@@ -93,7 +96,8 @@ def optimize(
         was_cached = _is_cached(spec, full=True)
         form = formulate(spec, full=True)
         build_time += 0.0 if was_cached else form.build_time
-        runs, more_calls, stacked_starts = _multistart(form, options, x_starts, p, None)
+        runs, more_calls, stacked_starts = _multistart(form, options, x_starts, p, None,
+                                                       was_cached and form.stack_starts)
         calls += more_calls
         chosen = best(runs)
     extra_iters, extra_time, tie_iters, kept = 0, 0.0, -1, False
@@ -223,7 +227,7 @@ def _message(status, violations, at_bounds) -> str:
     return message
 
 
-def _multistart(form, options, x_starts, p, warm_solution):
+def _multistart(form, options, x_starts, p, warm_solution, stack):
     """(one Solve per start, the IPOPT runs made, how many starts shared a stacked run), the
     warm start's run first when it solved this NLP."""
     runs, calls = [], []  # one Solve per start; one per IPOPT run (stacked starts share one)
@@ -234,19 +238,20 @@ def _multistart(form, options, x_starts, p, warm_solution):
                                lam_x0=ws.lam_x, lam_g0=ws.lam_g, start=-1))
         calls.append(runs[-1])
     solver = solver_for(form.key, form.nlp, options)
-    from_starts, start_calls, stacked_starts = _solve_starts(form, options, solver, x_starts, p)
+    from_starts, start_calls, stacked_starts = _solve_starts(form, options, solver, x_starts, p,
+                                                             stack)
     return runs + from_starts, calls + start_calls, stacked_starts
 
 
-def _solve_starts(form, options, solver, x_starts, p):
+def _solve_starts(form, options, solver, x_starts, p, stack):
     """(one Solve per start, the IPOPT runs made, how many starts shared a stacked run). The
-    starts are solved together in groups (solve/stacked.py) where the NLP gains by it
-    (Formulation.stack_starts); a group whose stacked run does not succeed is solved one by one,
-    and its failed run still counts in the totals."""
+    starts are solved together in groups (solve/stacked.py) when `stack` (the NLP gains by it,
+    Formulation.stack_starts, and was solved before); a group whose stacked run does not succeed
+    is solved one by one, and its failed run still counts in the totals."""
     runs, calls, shared = [], [], 0
     for group in groups(len(x_starts)):
         starts = x_starts[group.start:group.stop]
-        if len(starts) > 1 and form.stack_starts:
+        if len(starts) > 1 and stack:
             stacked = stacked_solver_for(form.key, form.nlp, options, len(starts))
             together = solve_stacked(stacked, starts, p, form.lbx, form.ubx, form.lbg, form.ubg,
                                      first=group.start)
