@@ -19,7 +19,7 @@ Count = Annotated[int, Strict(), Field(ge=1, le=10_000_000)]
 MAX_MANIPULATOR_STAGES = 100_000
 MAX_OPTIMISED_BOUNCES = 200
 # An optimised row of manipulators is verified by the simulator at the nominal build and the
-# tolerance box's corners, and its box re-checked through every stage: 14 s at 10 000 stages
+# tolerance box's corners, and its box re-checked through every stage: 12 s at 10 000 stages
 # (results/bench_scale.md), so longer rows are evaluated as fixed designs only.
 MAX_OPTIMISED_MANIPULATORS = 10_000
 SampleCount = Annotated[int, Strict(), Field(ge=0, le=1_000_000)]
