@@ -23,6 +23,7 @@ pivots K - P .. K + 1, P the parked palms checked), each a small CasADi Function
 from __future__ import annotations
 
 import functools
+import threading
 
 import casadi as ca
 import numpy as np
@@ -42,6 +43,7 @@ class Stages:
         self._parked = _parked_clearance(spec, m)
         self._cache: dict[tuple, tuple] = {}
         self._maps: dict[tuple[int, int], object] = {}
+        self._lock = threading.Lock()  # stream's buffers are this object's: one stream at once
 
     def __call__(self) -> Scenario:
         """The whole row's scenario (Formulation.scenario builds it on first use)."""
@@ -168,6 +170,10 @@ class Stages:
         (`manipulators.parked_rows` at it; default the formulation's, for its whole box).
         Returns the worst excess, where (the row's label), at which stage and which sample;
         memory: the state and P + 2 offsets per sample, whatever the row's length."""
+        with self._lock:
+            return self._stream(x, required, offsets, samples, parked)
+
+    def _stream(self, x, required, offsets, samples, parked):
         N, P, S = self.N, self.P, samples
         xs = np.ascontiguousarray(np.broadcast_to(np.asarray(x, dtype=float).ravel(),
                                                   (S, self.x.numel())))
