@@ -76,12 +76,13 @@ def evaluate(spec: Spec, *, verify: bool = True,
                          verification=verification, accuracy=accuracy)
 
 
-def design(spec: Spec, *, verify: bool = True,
-           accuracy: AccuracySetting | None = None) -> DesignOutcome:
+def design(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | None = None,
+           linearise: bool = False, start_from: dict | None = None) -> DesignOutcome:
     """Solve the spec: evaluate a fixed design, or optimise the free variables; verify."""
     if not spec.free_variables:
         return evaluate(spec, verify=verify, accuracy=accuracy)
-    return optimize(spec, verify=verify, accuracy=accuracy)
+    return optimize(spec, verify=verify, accuracy=accuracy, linearise=linearise,
+                    start_from=start_from)
 
 
 # What each accuracy preset asks of the optimizer and of the verification depth: IPOPT's
@@ -94,19 +95,23 @@ SOLVE_PRESETS = {
 }
 
 
-def optimize(spec: Spec, *, verify: bool = True,
-             accuracy: AccuracySetting | None = None) -> DesignOutcome:
+def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | None = None,
+             linearise: bool = False, start_from: dict | None = None) -> DesignOutcome:
     """Choose the free design variables with IPOPT (multistart), then verify the answer and
     its claimed tolerance box in the simulator. accuracy (default: the spec's) sets the
     simulator's tolerances and, through its base preset, IPOPT's tolerance, the starts and how
-    many random builds are run."""
+    many random builds are run. linearise: also the cvxpy sets of a robust answer (docs/
+    optimizer.md section 8; not computed unless asked). start_from: a design to start from
+    besides the others (a table's neighbour); the answer is the same design without it
+    (solve/tiebreak.py)."""
     from .solve import optimize as solve
     from .solve.words import bounds_hint, summarise
 
     accuracy = resolve_accuracy(accuracy or spec.verification.accuracy)
     preset = SOLVE_PRESETS[accuracy.base]
     result = solve(spec, starts=preset["starts"], tol=preset["tol"],
-                   bound_relax_factor=preset["bound_relax_factor"])
+                   bound_relax_factor=preset["bound_relax_factor"], linearise=linearise,
+                   start_from=start_from)
     # IPOPT honours bounds only to its tolerance (e.g. -1e-8 for a bound at 0): clip to them.
     point = spec.design_at({name: min(max(result.design[name], spec.design[name].min),
                                       spec.design[name].max)

@@ -167,13 +167,16 @@ def init(kind, out):
 @FORMAT
 @ACCURACY
 @click.option("--no-verify", is_flag=True, help="Skip the simulator's verification.")
+@click.option("--linearised", is_flag=True, help="Also the largest boxes and ellipsoid in the "
+              "linearised safe set of offsets (cvxpy; first-order, beside the robust box).")
 @_guarded
-def optimize(spec, fmt, accuracy, no_verify):
+def optimize(spec, fmt, accuracy, no_verify, linearised):
     """Solve SPEC: choose the free design variables (or evaluate a fixed design), verify, report."""
     from .api import design
     from .spec import load_spec
 
-    outcome = design(load_spec(spec), verify=not no_verify, accuracy=accuracy)
+    outcome = design(load_spec(spec), verify=not no_verify, accuracy=accuracy,
+                     linearise=linearised)
     if fmt == "json":
         from .report.document import optimize_document
 

@@ -479,6 +479,7 @@ def test_deeply_nested_value_in_parsed_data():
 def test_long_array_is_validated():
     offsets = [{"manipulator": i, "dx": 0.001} for i in range(1, 100_001)]
     data = with_value(base("manipulators"), ("verification", "stages"), 100_000)
+    data = with_value(data, ("design", "alpha"), 0.2)  # a fixed design: rows up to 100 000
     spec = parse_spec(with_value(data, ("verification", "offsets"), offsets))
     assert len(spec.verification.offsets) == 100_000
 
@@ -494,6 +495,9 @@ def test_long_array_is_validated():
     # an NLP with rows for every bounce: free variables limit the bounces, a fixed design not
     ("stairs", {}, 201, {"min": 1.0, "max": 3.0}, "verification.stages",
      "an integer <= 200 when the design has free variables"),
+    # an optimised row (alpha free) is verified at every corner of its box: at most 10 000
+    ("manipulators", {}, 10_001, None, "verification.stages",
+     "an integer <= 10000 when the design has free variables"),
 ])
 def test_stages_limit_what_is_run_and_optimised(kind, table, stages, value, key, expected):
     data = with_value(base(kind), ("verification", "stages"), stages)

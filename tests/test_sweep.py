@@ -89,12 +89,22 @@ def test_sweeping_a_free_variable_fixes_it():
     assert spec.free_variables == ("beta",)
 
 
-def test_warm_start_sets_the_free_variables_initial_within_bounds():
-    data = point_data(raw(ROBUST), [("design", "link_length")], [2.5],
-                      warm={"alpha": 0.35, "beta": 5.0})
-    spec = parse_spec(data, "robust")
-    assert spec.design["alpha"].initial == 0.35
-    assert spec.design["beta"].initial == spec.design["beta"].max  # clipped to its bound
+def test_a_warm_start_is_an_extra_start_and_leaves_the_guess(monkeypatch):
+    # the spec's initial settles a flat optimum (solve/tiebreak.py): a warm start must not move it
+    from pdm_design.sweep import run as sweep_run
+
+    seen = {}
+
+    def fake_design(spec, **kw):
+        seen.update(initial=spec.design["alpha"].initial, start_from=kw.get("start_from"))
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr("pdm_design.api.design", fake_design)
+    task = sweep_run.PointTask(raw(ROBUST), "robust", (("design", "link_length"),), (2.5,),
+                               warm={"alpha": 0.35, "beta": 0.5})
+    assert sweep_run.solve_point(task)["status"] == "error"
+    assert seen == {"initial": raw(ROBUST)["design"]["alpha"]["initial"],
+                    "start_from": {"alpha": 0.35, "beta": 0.5}}
 
 
 # --------------------------------------------------------------------------- rows

@@ -2,15 +2,17 @@
 
 from __future__ import annotations
 
+import functools
 import threading
 import time
 from dataclasses import replace
 
 from ..analysis.result import required
+from ..lru import Bounded
 from . import manipulator_offsets, manipulators, stairs, stairs_errors
 from .common import Formulation, assemble, spec_key
 
-_CACHE: dict[str, Formulation] = {}
+_CACHE: Bounded = Bounded()  # the specs formulated last
 FULL = " +deferred rows"  # cache key suffix of a spec's NLP with its deferred rows
 _LOCK = threading.Lock()
 
@@ -29,10 +31,13 @@ def formulate(spec, *, cache: bool = True, full: bool = False) -> Formulation:
     start = time.perf_counter()
     module = stairs if spec.kind == "stairs" else manipulators
     model, bounds, closed_forms = module.build(spec)
+    # the explicit-offset scenario grows with the row: built when first asked for (the
+    # manipulators' stage maps also stream samples through the row: solve/check.py)
     if spec.kind == "stairs":
-        model = replace(model, scenario=stairs_errors.scenario(spec, model, closed_forms))
+        source = functools.partial(stairs_errors.scenario, spec, model, closed_forms)
     else:
-        model = replace(model, scenario=manipulator_offsets.scenario(spec, model, closed_forms))
+        source = manipulator_offsets.Stages(spec, model, closed_forms)
+    model = replace(model, scenario=source)
     form = assemble(spec, model, key=key, bounds=bounds, defer=not full)
     form = replace(form, build_time=time.perf_counter() - start)
     if cache:

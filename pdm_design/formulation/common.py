@@ -26,6 +26,7 @@ Condition kinds:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -120,7 +121,9 @@ class SceneModel:
     aux_init: object  # casadi Function design -> aux start values (aux order)
     derived: dict[str, object]  # named design quantities (SX) reported with the design
     tolerance_axes: tuple[str, ...]  # ("dx", "dy") or ("rise", "tread")
-    scenario: Scenario | None = None
+    # the Scenario, or a function of no arguments that builds it (built when first asked for:
+    # it grows with the row, 0.37 s at 100 manipulators, and only the linearised sets use it)
+    scenario: object = None
     # The NLP minimises f / objective_scale (the optimum is the same; the reported terms are in
     # natural units). IPOPT's dual and complementarity tolerances are absolute in f's units, so
     # f in metres on a centimetre scene stopped it short of the optimum (the stairs set it).
@@ -157,13 +160,19 @@ class Formulation:
     fixed: dict[str, float]  # design variables fixed by the spec
     derived_names: tuple[str, ...]
     norms: np.ndarray  # constant row normalisers of g
-    scenario: Scenario | None
+    scenario_source: object  # SceneModel.scenario: a Scenario, a builder of one, or None
     build_time: float = 0.0
     # rows left out of this NLP (Condition.deferred): Function (x, p) -> (slack, scale, row),
     # row >= 0 where the NLP's row would hold; None when every row is in the NLP
     deferred: object = None
     deferred_conditions: tuple[ConditionInfo, ...] = ()
     stack_starts: bool = True  # SceneModel.stack_starts
+
+    @functools.cached_property
+    def scenario(self) -> Scenario | None:
+        """The conditions as explicit functions of every offset (built on first use)."""
+        source = self.scenario_source
+        return source() if callable(source) else source
 
     def deferred_broken(self, x, p) -> bool:
         """Whether x breaks a row this NLP leaves out."""
@@ -360,7 +369,7 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
         objective_names=tuple(OBJECTIVE_SENSE), weights=weights, evaluate=evaluate,
         aux_init=model.aux_init, tolerance_axes=model.tolerance_axes,
         tolerance_index=tol_index, margin_index=m_index, fixed=fixed,
-        derived_names=derived_names, norms=norms, scenario=model.scenario,
+        derived_names=derived_names, norms=norms, scenario_source=model.scenario,
         deferred=deferred, deferred_conditions=deferred_infos, stack_starts=model.stack_starts,
     )
 

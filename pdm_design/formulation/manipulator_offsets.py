@@ -9,47 +9,92 @@ Stage by stage, with the closed forms of `physics.manipulators`:
                    speed v^2 = u_K^2 + 2 g l (cos a - cos th)
     landing on K+1 u_{K+1} = m/(m+M) v cos(a + th),
                    o_{K+1} = o_K + l (sin th - sin b) - (dx_{K+1} - dx_K)
-Used to linearise the safe set of offsets (solve/tolerance.py, cvxpy) and to check a robust box by
-sampling offsets inside it.
+
+The row is a chain of stage maps (banded: stage K reads the state (u_K, o_K) and the offsets of
+pivots K - P .. K + 1, P the parked palms checked), each a small CasADi Function written once:
+`Stages`. Two uses:
+* `scenario`: the whole row as one Function of d (the calls inlined), for the cvxpy linearisation
+  (solve/tolerance.py, built only when asked: it grows with the row);
+* `Stages.stream`: many offset samples pushed through the chain stage by stage in numpy (the
+  sampled check, solve/check.py), keeping only the state, the offset window and the worst row:
+  memory flat in the number of stages.
 """
 
 from __future__ import annotations
 
+import functools
+import threading
+
 import casadi as ca
+import numpy as np
 
 from ..physics import manipulators as phys
 from .common import MARGIN, VALIDITY, ConditionInfo, Scenario
 from .manipulators import impact_rows
 
 
-def scenario(spec, model, m) -> Scenario:
-    N = spec.verification.stages
-    dx = ca.SX.sym("dx", N)
-    dy = ca.SX.sym("dy", N + 1)
-    a, b, l, g, q = m.a, m.b, m.l, m.g, m.q
-    body, palm = spec.scene.body, spec.scene.palm
-    mu, W, w, h = palm.friction, palm.width, body.width, body.height
-    rows: list[tuple] = []  # (keys, where, slack, scale, kind)
+class Stages:
+    """The stage maps of one formulation's row (design symbols x as the formulation's)."""
 
-    def add(key, where, slack, scale=1.0, kind=MARGIN):
-        rows.append(((key,), where, slack, scale, kind))
+    def __init__(self, spec, model, m):
+        self.spec, self.m = spec, m
+        self.N, self.P = spec.verification.stages, m.parked
+        self.x = ca.vertcat(*model.design_symbols.values(), *(s for _, s, _, _ in model.aux))
+        self._parked = _parked_clearance(spec, m)
+        self._cache: dict[tuple, tuple] = {}
+        self._maps: dict[tuple[int, int], object] = {}
+        self._lock = threading.Lock()  # stream's buffers are this object's: one stream at once
 
-    def impact(prefix, stage, px, py, o):
-        impact_rows(add, spec.scene, f"{prefix}slip_impact", f"{prefix}tip_impact",
-                    f"palm {stage}", px, py, [o], [o])
+    def __call__(self) -> Scenario:
+        """The whole row's scenario (Formulation.scenario builds it on first use)."""
+        return self.scenario()
 
-    add("start_height", "palm 1", m.H - dy[0], l, VALIDITY)
-    Q = m.fall_speed(dy[0])
-    u = m.first_speed(Q)
-    add("forward_landing", "palm 1", u, m.k * ca.sqrt(m.vx0**2 + Q**2), VALIDITY)
-    o = m.C0 + m.vx0 * m.flight_time(dy[0]) - dx[0]
-    px, py = phys.landing_impulse(m.vx0, -Q, a, q)
-    impact("first_", 1, px, py, o)
-    fp_back = phys.carry_force_point(-a, h)  # ahead of the centre
-    parked = _parked_clearance(spec, m)
-    for K in range(1, N + 1):
-        first = "first_" if K == 1 else ""
-        where = f"palm {K}"
+    @functools.cached_property
+    def start(self):
+        return self._start()
+
+    # -- the maps -------------------------------------------------------------------------------
+    def _start(self):
+        """(Function (x, dx_1, dy_1) -> (rows, u_1, o_1), row templates): the first landing."""
+        m = self.m
+        dx1, dy1 = ca.SX.sym("dx1"), ca.SX.sym("dy1")
+        rows: list[tuple] = []
+        add = _adder(rows)
+        add("start_height", "palm 1", m.H - dy1, m.l, VALIDITY)
+        Q = m.fall_speed(dy1)
+        u = m.first_speed(Q)
+        add("forward_landing", "palm 1", u, m.k * ca.sqrt(m.vx0**2 + Q**2), VALIDITY)
+        o = m.C0 + m.vx0 * m.flight_time(dy1) - dx1
+        px, py = phys.landing_impulse(m.vx0, -Q, m.a, m.q)
+        impact_rows(add, self.spec.scene, "first_slip_impact", "first_tip_impact", "palm 1",
+                    px, py, [o], [o])
+        fn = ca.Function("first_landing", [self.x, dx1, dy1],
+                         [_stack(rows, 2), _stack(rows, 3), u, o])
+        return fn, rows
+
+    def stage(self, K: int, reach: int | None = None):
+        """(Function (x, u_K, o_K, dx window, dy window) -> (slack, scale, u_K+1, o_K+1), row
+        templates) of stage K: carry on palm K, handover to K+1, landing on it (none after the
+        last). Windows: pivots K - P .. K + 1 (P + 2 values; those before pivot 1 unused).
+        reach: the parked palms to check (at most P, the default)."""
+        n_parked = min(K - 1, self.P if reach is None else min(reach, self.P))
+        key = (K == 1, n_parked, K == self.N)
+        if key not in self._cache:
+            self._cache[key] = self._stage(*key)
+        return self._cache[key]
+
+    def _stage(self, first_stage: bool, n_parked: int, last: bool):
+        m, scene, P = self.m, self.spec.scene, self.P
+        a, b, l, g = m.a, m.b, m.l, m.g
+        body, palm = scene.body, scene.palm
+        mu, W, w, h = palm.friction, palm.width, body.width, body.height
+        u, o = ca.SX.sym("u"), ca.SX.sym("o")
+        wdx, wdy = ca.SX.sym("wdx", P + 2), ca.SX.sym("wdy", P + 2)
+        at = P  # window index of pivot K (pivot K + j at P + j)
+        rows: list[tuple] = []
+        add = _adder(rows)
+        first = "first_" if first_stage else ""
+        where = "palm {K}"
         add("landing", f"{where}, ahead", W / 2 - o - w / 2, W / 2)
         add("landing", f"{where}, behind", W / 2 + o - w / 2, W / 2)
         if m.steps:  # pivot damping: the integrated carry's slowest point
@@ -59,6 +104,7 @@ def scenario(spec, model, m) -> Scenario:
         if m.plain:
             held = phys.lift_off_capacity(a, gravity=g, link_length=l)
             demand = phys.friction_demand(a)
+            fp_back = phys.carry_force_point(-a, h)  # ahead of the centre
         else:  # links or pivots: the contact force depends on the speed (docs/physics.md 2.1)
             held, demand, fp_back = m.contact(-a, u**2)
             fp_back = fp_back * h
@@ -66,15 +112,15 @@ def scenario(spec, model, m) -> Scenario:
         add("slip_carry", f"{where}, back stop", mu - demand, mu)
         add("tip_carry", f"{where}, back stop, object's front edge", w / 2 - fp_back, w / 2)
         add("tip_carry", f"{where}, back stop, palm's front edge", W / 2 - o - fp_back, W / 2 - o)
-        delta = dy[K] - dy[K - 1]
+        delta = wdy[at + 1] - wdy[at]
         cth = ca.cos(b) + delta / l
         th = ca.acos(cth)
-        add("palm_clearance", f"palm {K + 1}", m.pitch_y - delta, l)
-        for n in range(1, min(K - 1, m.parked) + 1):  # palm K - n, parked at its front stop
+        add("palm_clearance", "palm {K1}", m.pitch_y - delta, l)
+        for n in range(1, n_parked + 1):  # palm K - n, parked at its front stop
             # pivot K - n from pivot K: n pitches back and up, plus the two offsets' difference
-            add("parked_palms", f"{where}, palm {K - n} parked", parked(
-                th, n * m.pitch_x - (dx[K - n - 1] - dx[K - 1]),
-                n * m.pitch_y + (dy[K - n - 1] - dy[K - 1]), o, a, l), l)
+            add("parked_palms", f"{where}, palm {{K_{n}}} parked", self._parked(
+                th, n * m.pitch_x - (wdx[at - n] - wdx[at]),
+                n * m.pitch_y + (wdy[at - n] - wdy[at]), o, a, l), l)
         if palm.front_stop < ca.pi / 2:
             add("front_stop", where, palm.front_stop - th, palm.front_stop)
         v2 = m.carry_v2(u, th)
@@ -89,22 +135,137 @@ def scenario(spec, model, m) -> Scenario:
         add("slip_carry", f"{where}, handover", mu - demand, mu)
         add("tip_carry", f"{where}, handover, object's rear edge", w / 2 - fp_front, w / 2)
         add("tip_carry", f"{where}, handover, palm's rear edge", W / 2 + o - fp_front, W / 2 + o)
-        if K == N:
-            break
-        v = ca.sqrt(v2)
-        u = phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), a, q)
-        add("forward_landing", f"palm {K + 1}", u / v, m.k, VALIDITY)
-        o = o + l * (ca.sin(th) - ca.sin(b)) - (dx[K] - dx[K - 1])
-        px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a, q)
-        impact("", K + 1, px, py, o)
+        u_next, o_next = u, o
+        if not last:
+            v = ca.sqrt(v2)
+            u_next = phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), a, m.q)
+            add("forward_landing", "palm {K1}", u_next / v, m.k, VALIDITY)
+            o_next = o + l * (ca.sin(th) - ca.sin(b)) - (wdx[at + 1] - wdx[at])
+            px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a, m.q)
+            impact_rows(add, scene, "slip_impact", "tip_impact", "palm {K1}", px, py,
+                        [o_next], [o_next])
+        fn = ca.Function("stage", [self.x, u, o, wdx, wdy],
+                         [_stack(rows, 2), _stack(rows, 3), u_next, o_next])
+        return fn, rows
 
-    x = ca.vertcat(*model.design_symbols.values(), *(s for _, s, _, _ in model.aux))
-    d = ca.vertcat(dx, dy)
-    fn = ca.Function("offsets", [x, d], [ca.vertcat(*[r[2] for r in rows]),
-                                         ca.vertcat(*[r[3] for r in rows])])
-    names = tuple(f"dx{K}" for K in range(1, N + 1)) + tuple(f"dy{K}" for K in range(1, N + 2))
-    infos = tuple(ConditionInfo(i, r[0][0], r[0], r[1], r[4], False) for i, r in enumerate(rows))
-    return Scenario(fn, names, {"dx": tuple(range(N)), "dy": tuple(range(N, 2 * N + 1))}, infos)
+    # -- the row as one Function ----------------------------------------------------------------
+    def scenario(self) -> Scenario:
+        N, P = self.N, self.P
+        dx, dy = ca.SX.sym("dx", N), ca.SX.sym("dy", N + 1)
+        zero = ca.SX(1, 1)
+
+        def window(v, K):  # pivots K - P .. K + 1 (1-based) of v, zeros outside it
+            return ca.vertcat(*[v[j - 1] if 1 <= j <= v.shape[0] else zero
+                                for j in range(K - P, K + 2)])
+
+        fn, rows = self.start
+        slack, scale, u, o = fn(self.x, dx[0], dy[0])
+        slacks, scales, infos = [slack], [scale], _infos(rows, 1, 0)
+        for K in range(1, N + 1):
+            fn, rows = self.stage(K)
+            slack, scale, u, o = fn(self.x, u, o, window(dx, K), window(dy, K))
+            slacks.append(slack)
+            scales.append(scale)
+            infos += _infos(rows, K, len(infos))
+        d = ca.vertcat(dx, dy)
+        function = ca.Function("offsets", [self.x, d], [ca.vertcat(*slacks), ca.vertcat(*scales)])
+        names = tuple(f"dx{K}" for K in range(1, N + 1)) + tuple(f"dy{K}" for K in range(1, N + 2))
+        return Scenario(function, names, {"dx": tuple(range(N)), "dy": tuple(range(N, 2 * N + 1))},
+                        tuple(infos))
+
+    # -- many samples, streamed -----------------------------------------------------------------
+    def stream(self, x, required: dict[str, float], offsets, samples: int,
+               parked: int | None = None) -> dict:
+        """The smallest excess margin (slack / scale - requirement) over every row of every
+        stage for `samples` offset vectors, pushed through the stage maps together.
+        offsets(K) -> (dx_K, dy_K) arrays of `samples` values (pivot K = 1 .. N + 1), asked for
+        once each, in order. parked: the palms behind that can reach the object at this design
+        (`manipulators.parked_rows` at it; default the formulation's, for its whole box).
+        Returns the worst excess, where (the row's label), at which stage and which sample;
+        memory: the state and P + 2 offsets per sample, whatever the row's length."""
+        with self._lock:
+            return self._stream(x, required, offsets, samples, parked)
+
+    def _stream(self, x, required, offsets, samples, parked):
+        N, P, S = self.N, self.P, samples
+        xs = np.ascontiguousarray(np.broadcast_to(np.asarray(x, dtype=float).ravel(),
+                                                  (S, self.x.numel())))
+        # (samples, n) in C order is CasADi's (n, samples) in column order: no copies
+        wdx, wdy = np.zeros((S, P + 2)), np.zeros((S, P + 2))
+        worst = {"value": np.inf, "label": "", "sample": 0, "stage": 0}
+        wdx[:, P], wdy[:, P] = offsets(1)
+        wdx[:, P + 1], wdy[:, P + 1] = offsets(2)
+        fn, rows = self.start
+        slack, scale, u, o = self._run(fn, S, [xs, wdx[:, P].copy(), wdy[:, P].copy()])
+        _worse(worst, slack, scale, rows, required, 1)
+        for K in range(1, N + 1):
+            fn, rows = self.stage(K, parked)
+            slack, scale, u, o = self._run(fn, S, [xs, u, o, wdx, wdy])
+            _worse(worst, slack, scale, rows, required, K)
+            if K < N:  # slide the window one pivot on
+                wdx[:, :-1], wdy[:, :-1] = wdx[:, 1:].copy(), wdy[:, 1:].copy()
+                wdx[:, -1], wdy[:, -1] = offsets(K + 2)
+        return worst
+
+    def _run(self, fn, count: int, args):
+        """fn mapped over `count` samples, evaluated in place on numpy arrays (CasADi's buffer
+        interface: converting its results cost as much as evaluating them). Returns fresh
+        arrays (samples x outputs)."""
+        key = (id(fn), count)
+        if key not in self._maps:
+            mapped = fn.map(count)
+            buffer, call = mapped.buffer()
+            outs = [np.zeros((count, mapped.size1_out(i))) for i in range(mapped.n_out())]
+            for i, out in enumerate(outs):
+                buffer.set_res(i, memoryview(out))
+            self._maps[key] = (fn, buffer, call, outs)
+        _, buffer, call, outs = self._maps[key]
+        kept = [np.ascontiguousarray(a, dtype=float) for a in args]
+        for i, a in enumerate(kept):
+            buffer.set_arg(i, memoryview(a))
+        call()
+        return [out.copy() if out.shape[1] > 1 else out[:, 0].copy() for out in outs]
+
+
+def _worse(worst: dict, slack, scale, rows, required, K: int) -> None:
+    """Fold one stage's rows (samples x rows) into the running worst excess margin."""
+    r = np.array([required.get(key, 0.0) if kind == MARGIN else 0.0
+                  for key, _, _, _, kind in rows])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        excess = slack / np.where(scale != 0, scale, 1.0) - r[None, :]
+    excess = np.where(np.isfinite(excess), excess, -np.inf)
+    j, i = np.unravel_index(np.argmin(excess), excess.shape)
+    if excess[j, i] < worst["value"]:
+        worst.update(value=float(excess[j, i]), label=_label(rows[i], K), sample=int(j), stage=K)
+
+
+def _adder(rows: list):
+    def add(key, where, slack, scale=1.0, kind=MARGIN):
+        rows.append((key, where, slack, scale, kind))
+    return add
+
+
+def _stack(rows, column):
+    return ca.vertcat(*[ca.SX(r[column]) if not isinstance(r[column], ca.SX) else r[column]
+                        for r in rows])
+
+
+def _where(template: str, K: int) -> str:
+    return template.format(K=K, K1=K + 1, **{f"K_{n}": K - n for n in range(1, K)})
+
+
+def _label(row, K: int) -> str:
+    return f"{row[0]} ({_where(row[1], K)})"
+
+
+def _infos(rows, K: int, start: int) -> list[ConditionInfo]:
+    return [ConditionInfo(start + i, key, (key,), _where(where, K), kind, False)
+            for i, (key, where, _, _, kind) in enumerate(rows)]
+
+
+def scenario(spec, model, m) -> Scenario:
+    """The whole row's conditions as one Function of every offset."""
+    return Stages(spec, model, m).scenario()
 
 
 def _parked_clearance(spec, m):

@@ -25,8 +25,9 @@ Instead of enumerating the 4^N corners we bound each quantity a condition depend
 * Landing position o_K on palm K (from the palm centre): telescoping the per-stage shifts,
       o_K = o_1(dy_1) - dx_K + dx_1... = C0 + vx0 t(dy_1) - dx_K + sum_j g(delta_j),
   g(delta) = l (sin th(delta) - sin b) is concave with g'(0) = -cot b, so sum_j g <= -cot b
-  (dy_K - dy_1) and sum_j g >= -cot b (dy_K - dy_1) + (K-1) min(r(2 tau), r(-2 tau)) with
-  r = g + cot b delta <= 0 concave. The first flight time t(dy_1) is concave in dy_1.
+  (dy_K - dy_1) and sum_j g >= -cot b (dy_K - dy_1) + min sum_j r(delta_j) with r = g + cot b
+  delta <= 0 concave; that minimum is at alternating corners, floor((K-1)/2) (r(2 tau) +
+  r(-2 tau)) (+ the worse end for odd K-1): `drift_worst`. t(dy_1) is concave in dy_1.
 * Conditions at an impact are A cos th + B sin th >= 0 in th (a sinusoid): on an interval shorter
   than pi it holds everywhere iff it holds at both ends. The first impact's conditions are affine
   in the fall speed Q: ends again.
@@ -296,7 +297,7 @@ class _Model:
                   l * (ca.sqrt(1 - cm**2) - ca.sin(b)) - 2 * tau * cot_b]
         spread = tau * (1 + cot_b)
         o_hi = [C0 + p + spread for p in phi_max]
-        o_lo = [C0 + p - spread + (N - 1) * r for p in phi_min for r in r_ends]
+        o_lo = [C0 + p - spread + d for p in phi_min for d in drift_worst(N, r_ends)]
         return o1, (o_hi, o_lo)
 
     # -- the conditions -----------------------------------------------------------------------
@@ -458,6 +459,16 @@ class _Model:
             impact_rows(add, self.scene, "first_slip_impact", "first_tip_impact", where, px, py,
                         [o1_hi], [o1_lo])
         return out
+
+
+def drift_worst(stages: int, r_ends) -> list:
+    """The smallest second-order drift sum_{j=2..N} r(dy_j - dy_{j-1}) over |dy_j| <= tol, in
+    closed form (docs/optimizer.md section 4): concave in the offsets, so least at a corner,
+    where the steps of +-2 tol alternate in sign: floor((N-1)/2) (r(2 tol) + r(-2 tol)) plus,
+    for an odd count of steps, the worse end once more (each candidate its own row)."""
+    pairs, odd = divmod(stages - 1, 2)
+    both = pairs * (r_ends[0] + r_ends[1])
+    return [both + r for r in r_ends] if odd else [both]
 
 
 def impact_rows(add, scene, slip, tip, where, px, py, o_hi, o_lo):

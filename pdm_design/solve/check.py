@@ -54,6 +54,8 @@ def offset_samples(names, groups, tau: float, count: int, seed: int = 0) -> np.n
 
 
 def sampled_offsets_check(form, x, p, tau: float, *, samples: int = 256, seed: int = 0) -> dict:
+    if hasattr(form.scenario_source, "stream"):  # a row of stage maps: streamed
+        return _streamed_check(form, x, p, tau, samples, seed)
     sc = form.scenario
     D = offset_samples(sc.offset_names, sc.groups, tau, samples, seed)
     fn = sc.function.map(D.shape[0])
@@ -70,3 +72,55 @@ def sampled_offsets_check(form, x, p, tau: float, *, samples: int = 256, seed: i
     return {"passed": worst >= -CHECK_TOL, "samples": int(D.shape[0]), "tolerance": float(tau),
             "worst_excess_margin": worst, "worst_condition": sc.conditions[i].label,
             "worst_offsets": dict(zip(sc.offset_names, D[j].tolist()))}
+
+
+# The streamed check's fixed patterns, per pivot K (1-based): (name, dx sign, dy sign), a sign
+# "alt" alternating along the row (+ on odd pivots).
+PATTERNS = (("nominal", 0, 0), ("all +", 1, 1), ("all -", -1, -1), ("alternating", "alt", "alt"),
+            ("alternating, opposite", "-alt", "-alt"), ("dx alternating", "alt", 0),
+            ("dx alternating, opposite", "-alt", 0), ("dy alternating", 0, "alt"),
+            ("dy alternating, opposite", 0, "-alt"), ("dy alternating, dx +", 1, "alt"),
+            ("dy alternating, dx -", -1, "alt"))
+
+
+def _pattern_value(sign, K: int) -> float:
+    alt = 1.0 if K % 2 else -1.0
+    return {"alt": alt, "-alt": -alt}.get(sign, sign)
+
+
+def _streamed_check(form, x, p, tau: float, samples: int, seed: int) -> dict:
+    """sampled_offsets_check of a manipulators row, streamed stage by stage through its stage
+    maps (formulation/manipulator_offsets.py): the fixed patterns, random corners and uniform
+    points, each pivot's offsets drawn when the row reaches it. Memory flat in the stages."""
+    stages = form.scenario_source
+    count = max(samples, len(PATTERNS))
+    corners = count // 2
+    uniform = count - corners - len(PATTERNS)
+    rng = np.random.default_rng(seed)
+
+    def offsets(K):
+        pattern = np.array([[_pattern_value(sx, K), _pattern_value(sy, K)]
+                            for _, sx, sy in PATTERNS])
+        drawn = np.vstack([rng.choice([-1.0, 1.0], size=(corners, 2)),
+                           rng.uniform(-1.0, 1.0, size=(uniform, 2))])
+        both = tau * np.vstack([pattern, drawn])
+        return both[:, 0], both[:, 1]
+
+    required = dict(zip(form.p_names, np.asarray(p, dtype=float).ravel()))
+    worst = stages.stream(x, required, offsets, count, parked=_parked_reach(form, x))
+    j = worst["sample"]
+    which = (PATTERNS[j][0] if j < len(PATTERNS) else f"random corner {j - len(PATTERNS) + 1}"
+             if j < len(PATTERNS) + corners else f"uniform point {j - len(PATTERNS) - corners + 1}")
+    return {"passed": worst["value"] >= -CHECK_TOL, "samples": count, "tolerance": float(tau),
+            "worst_excess_margin": worst["value"], "worst_condition": worst["label"],
+            "worst_sample": which, "worst_stage": worst["stage"]}
+
+
+def _parked_reach(form, x) -> int:
+    """The parked palms that can reach the object at design x (formulation.manipulators.
+    parked_rows with the design's values for bounds): those further back never can."""
+    from ..formulation.manipulators import parked_rows
+
+    stages = form.scenario_source
+    values = form.design_values(x)
+    return parked_rows(stages.spec.scene, values, {}, stages.N)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from ..lru import Bounded
 from ..status import Status
 
 _STATUS = {
@@ -89,7 +90,7 @@ class Solve:
                    np.zeros(rows), 0, seconds, start)
 
 
-_SOLVERS: dict[tuple, object] = {}
+_SOLVERS: Bounded = Bounded()
 _LOCK = threading.Lock()
 
 
@@ -150,11 +151,11 @@ def _within(lo: float, hi: float, r: float) -> float:
 @functools.lru_cache(maxsize=64)
 def _sobol(dimension: int, count: int, seed: int) -> np.ndarray:
     """count scrambled-Sobol points in the unit cube (cached: drawing them took 0.4 ms, 4 % of
-    an 8-start optimize of problems/manipulators_robust.toml). scipy.stats is imported here:
-    it takes 0.4 s, and a fixed design or a single start never needs it."""
-    from scipy.stats import qmc
+    an 8-start optimize of problems/manipulators_robust.toml). solve/sobol.py draws scipy's
+    points without importing scipy.stats (0.4 s)."""
+    from .sobol import sobol
 
-    points = qmc.Sobol(d=dimension, scramble=True, seed=seed).random(_pow2(count))[:count]
+    points = sobol(dimension, _pow2(count), seed)[:count]
     points.flags.writeable = False
     return points
 
@@ -166,6 +167,17 @@ def _pow2(n: int) -> int:
     return k
 
 
+TIE = 1e-9  # objectives this close (relative) are one optimum
+
+
 def best(solves: list[Solve]) -> Solve:
-    """The best run: best status first (optimal < acceptable < ...), then least objective."""
-    return min(solves, key=lambda s: (_RANK[s.status], s.f if np.isfinite(s.f) else np.inf))
+    """The best run: best status first (optimal < acceptable < ...), then least objective; of
+    runs that reach the least objective to TIE, the first (a warm start's, else the spec's
+    guess'): which one IPOPT's last digits favour is noise (solve/tiebreak.py then settles a
+    flat optimum)."""
+    def f(s):
+        return s.f if np.isfinite(s.f) else np.inf
+
+    top = min(solves, key=lambda s: (_RANK[s.status], f(s)))
+    near = TIE * max(1.0, abs(f(top))) if np.isfinite(f(top)) else 0.0
+    return next(s for s in solves if s.status is top.status and f(s) <= f(top) + near)

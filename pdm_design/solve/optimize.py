@@ -13,12 +13,14 @@ from ..formulation.common import BACKOFF_FACTOR, MODEL, OBJECTIVE_SENSE
 from ..status import Status
 from . import check, elastic
 from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
-from .result import OptimizeResult, Solution, SolverStats
+from .result import LinearisedTolerance, OptimizeResult, Solution, SolverStats
 from .stacked import groups, solve_stacked, stacked_solver_for
-from .tolerance import linearised_tolerance
+from .tiebreak import nearest_optimum
 from .words import bounds_hint, normalised_margin, summarise
 
 FEASIBILITY_TOL = 1e-7
+NOT_ASKED = ("not computed: not asked for (`optimize --linearised`, linearise=True in the API); "
+             "the robust box is the answer")
 
 
 def optimize(
@@ -32,8 +34,10 @@ def optimize(
     requirements: dict[str, float] | None = None,
     warm_start: OptimizeResult | None = None,
     diagnose: bool = True,
-    linearise: bool = True,
+    linearise: bool = False,
     check_samples: int = 256,
+    start_from: dict[str, float] | None = None,
+    tie_break: bool = True,
 ) -> OptimizeResult:
     """Best design of `spec` (see docs/optimizer.md).
 
@@ -43,9 +47,15 @@ def optimize(
     warm_start: a previous result of the same spec: one extra run from its solution and
         multipliers (IPOPT warm start), tried first.
     diagnose: when no start succeeds, solve the elastic problem and report what cannot be met.
-    linearise: compute the cvxpy box / ellipsoid in the linearised safe set.
+    linearise: compute the cvxpy box / ellipsoid in the linearised safe set (an informative
+        extra that costs more than the answer: off unless asked; a robust answer then carries
+        a `linearised` whose status says it was not computed).
     check_samples: offsets sampled inside the robust box for the independent check (0: skip).
     bound_relax_factor: IPOPT's bound relaxation; 0 puts the optimum on its bounds exactly.
+    start_from: a design (free variables by name) to start from first, besides the others (a
+        table's neighbouring point): it may speed the solve, never move the spec's guess.
+    tie_break: of an optimal set, the design nearest the spec's guess (solve/tiebreak.py: the
+        same spec gives the same design whatever the starts found first).
     """
     tic = time.perf_counter()
     was_cached = _is_cached(spec)
@@ -70,9 +80,14 @@ def optimize(
     lows = [spec.design[n].min for n in names]
     highs = [spec.design[n].max for n in names]
     designs = start_designs(names, lows, highs, guess, max(starts, 1), seed)
+    if start_from:  # first, so that it is tried even with one start
+        designs = [{n: float(start_from.get(n, guess[n])) for n in names}] + designs
     x_starts = form.defined_starts(designs, guess, p)
 
-    runs, calls, stacked_starts = _multistart(form, options, x_starts, p, ws)
+    # stacked only for an NLP solved before in this process: creating the stacked solver costs
+    # more than it saves in one solve (docs/optimizer.md section 5)
+    stack = was_cached and form.stack_starts
+    runs, calls, stacked_starts = _multistart(form, options, x_starts, p, ws, stack)
     chosen = best(runs)
     if chosen.status in (Status.OPTIMAL, Status.ACCEPTABLE) and form.deferred_broken(chosen.x, p):
         # The answer breaks a row left out of the NLP: solve every start again with every row
@@ -81,12 +96,21 @@ def optimize(
         was_cached = _is_cached(spec, full=True)
         form = formulate(spec, full=True)
         build_time += 0.0 if was_cached else form.build_time
-        runs, more_calls, stacked_starts = _multistart(form, options, x_starts, p, None)
+        runs, more_calls, stacked_starts = _multistart(form, options, x_starts, p, None,
+                                                       was_cached and form.stack_starts)
         calls += more_calls
         chosen = best(runs)
+    extra_iters, extra_time, tie_iters, kept = 0, 0.0, -1, False
+    if chosen.status is Status.OPTIMAL and tie_break:
+        # one design for one spec: the optimal design nearest the spec's guess (tiebreak.py)
+        nearest, kept = nearest_optimum(form, options, chosen, p, guess, lows, highs)
+        if nearest is not None:
+            tie_iters = extra_iters = nearest.iterations
+            extra_time = nearest.seconds
+        if kept:
+            chosen = replace(chosen, x=nearest.x)
     status, x = chosen.status, chosen.x
     violations, at_bounds = (), ()
-    extra_iters, extra_time = 0, 0.0
     if status in (Status.INFEASIBLE, Status.SOLVER_ERROR) and diagnose:
         chosen, status, x, violations, at_bounds, extra_iters, extra_time = _diagnose(
             form, options, x_starts, p, chosen, runs, calls)
@@ -121,9 +145,13 @@ def optimize(
             form, x, p, float(x[form.tolerance_index]), samples=check_samples, seed=seed)
 
     linearised = None
-    if linearise and answered and form.scenario is not None:
+    if linearise and answered and robust:
+        from .tolerance import linearised_tolerance  # cvxpy: only when asked
+
         size = _length_scale(spec, design)  # offsets in units of the device's size: the same
         linearised = linearised_tolerance(form, x, p, cap=10.0 * size, length=size)  # at any scale
+    elif answered and robust:
+        linearised = LinearisedTolerance(0.0, {}, {}, (), status=NOT_ASKED)
 
     if status in (Status.OPTIMAL, Status.ACCEPTABLE):
         failed = [k for k, v in checks.items() if isinstance(v, dict) and not v["passed"]]
@@ -141,6 +169,8 @@ def optimize(
         build_time=build_time,
         wall_time=time.perf_counter() - tic,
         return_statuses=tuple(r.return_status for r in runs),
+        tie_break_iterations=tie_iters,
+        tie_break_kept=kept,
     )
     return OptimizeResult(
         status=status, design=design, objective=score, objectives=objectives,
@@ -197,7 +227,7 @@ def _message(status, violations, at_bounds) -> str:
     return message
 
 
-def _multistart(form, options, x_starts, p, warm_solution):
+def _multistart(form, options, x_starts, p, warm_solution, stack):
     """(one Solve per start, the IPOPT runs made, how many starts shared a stacked run), the
     warm start's run first when it solved this NLP."""
     runs, calls = [], []  # one Solve per start; one per IPOPT run (stacked starts share one)
@@ -208,19 +238,20 @@ def _multistart(form, options, x_starts, p, warm_solution):
                                lam_x0=ws.lam_x, lam_g0=ws.lam_g, start=-1))
         calls.append(runs[-1])
     solver = solver_for(form.key, form.nlp, options)
-    from_starts, start_calls, stacked_starts = _solve_starts(form, options, solver, x_starts, p)
+    from_starts, start_calls, stacked_starts = _solve_starts(form, options, solver, x_starts, p,
+                                                             stack)
     return runs + from_starts, calls + start_calls, stacked_starts
 
 
-def _solve_starts(form, options, solver, x_starts, p):
+def _solve_starts(form, options, solver, x_starts, p, stack):
     """(one Solve per start, the IPOPT runs made, how many starts shared a stacked run). The
-    starts are solved together in groups (solve/stacked.py) where the NLP gains by it
-    (Formulation.stack_starts); a group whose stacked run does not succeed is solved one by one,
-    and its failed run still counts in the totals."""
+    starts are solved together in groups (solve/stacked.py) when `stack` (the NLP gains by it,
+    Formulation.stack_starts, and was solved before); a group whose stacked run does not succeed
+    is solved one by one, and its failed run still counts in the totals."""
     runs, calls, shared = [], [], 0
     for group in groups(len(x_starts)):
         starts = x_starts[group.start:group.stop]
-        if len(starts) > 1 and form.stack_starts:
+        if len(starts) > 1 and stack:
             stacked = stacked_solver_for(form.key, form.nlp, options, len(starts))
             together = solve_stacked(stacked, starts, p, form.lbx, form.ubx, form.lbg, form.ubg,
                                      first=group.start)

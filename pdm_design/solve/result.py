@@ -40,6 +40,10 @@ class SolverStats:
     # starts solved in stacked runs, several per IPOPT run (0: one run per start); when the
     # reported run is one, iterations and solve_time are that whole run's
     stacked_starts: int = 0
+    # iterations of the tie-break run (solve/tiebreak.py; counted in total_iterations): the
+    # optimal design nearest the spec's guess (-1: not run); kept: its design is the answer
+    tie_break_iterations: int = -1
+    tie_break_kept: bool = False
 
     def to_json(self) -> dict:
         return {k: getattr(self, k) for k in self.__dataclass_fields__} | {

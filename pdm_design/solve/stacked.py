@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 import casadi as ca
 import numpy as np
 
+from ..lru import Bounded
 from .ipopt import Solve, SolverOptions, map_status
 
 # Stacked runs of 8 starts of the shipped problems take 16-28 iterations (one start alone: a
@@ -46,7 +47,7 @@ class StackedSolver:
     n: int  # variables per copy
 
 
-_SOLVERS: dict[tuple, StackedSolver] = {}
+_SOLVERS: Bounded = Bounded()
 _LOCK = threading.Lock()
 
 

@@ -23,13 +23,14 @@ import warnings
 import casadi as ca
 import numpy as np
 
+from ..lru import Bounded
 from .result import LinearisedTolerance
 
 FULL_ELLIPSOID_MAX_DIM = 24
 # Beyond this many offsets the linearised sets cost more than the whole optimisation: the
 # axis-aligned ellipsoid took cvxpy 30 s at 400 coordinates, the dense Jacobian 4 GB at 2001.
 MAX_COORDINATES = 256
-_JAC: dict[str, object] = {}
+_JAC: Bounded = Bounded()
 _LOCK = threading.Lock()
 
 

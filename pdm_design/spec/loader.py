@@ -30,6 +30,7 @@ from .model import (
     MANIPULATOR_MARGINS,
     MAX_MANIPULATOR_STAGES,
     MAX_OPTIMISED_BOUNCES,
+    MAX_OPTIMISED_MANIPULATORS,
     OBJECTIVES,
     STAIRS_MARGINS,
     Bounds,
@@ -202,6 +203,12 @@ def _check_stages(verification: Verification, kind: _Kind, design: dict) -> None
     if kind.scene is ManipulatorsScene and stages > MAX_MANIPULATOR_STAGES:
         raise _Invalid("verification.stages", f"an integer <= {MAX_MANIPULATOR_STAGES} for a row "
                        "of manipulators (the simulator keeps every stage's record)", str(stages))
+    if kind.scene is ManipulatorsScene and stages > MAX_OPTIMISED_MANIPULATORS and any(
+            isinstance(v, Bounds) for v in design.values()):
+        raise _Invalid("verification.stages", f"an integer <= {MAX_OPTIMISED_MANIPULATORS} "
+                       "when the design has free variables (the optimizer's verification "
+                       "simulates the row at every corner of the box; a fixed design may be "
+                       f"run for up to {MAX_MANIPULATOR_STAGES})", str(stages))
     if kind.scene is StairsScene and stages > MAX_OPTIMISED_BOUNCES and any(
             isinstance(v, Bounds) for v in design.values()):
         raise _Invalid("verification.stages", f"an integer <= {MAX_OPTIMISED_BOUNCES} when the "

@@ -19,6 +19,10 @@ Count = Annotated[int, Strict(), Field(ge=1, le=10_000_000)]
 # 300, one start), so a stairs design with free variables is optimised over at most 200.
 MAX_MANIPULATOR_STAGES = 100_000
 MAX_OPTIMISED_BOUNCES = 200
+# An optimised row of manipulators is verified by the simulator at the nominal build and the
+# tolerance box's corners, and its box re-checked through every stage: 12 s at 10 000 stages
+# (results/bench_scale.md), so longer rows are evaluated as fixed designs only.
+MAX_OPTIMISED_MANIPULATORS = 10_000
 SampleCount = Annotated[int, Strict(), Field(ge=0, le=1_000_000)]
 # Weights beyond a million (or their ratios) only scale IPOPT's objective out of range.
 Weight = Annotated[float, Strict(), Field(ge=0, le=LARGEST)]

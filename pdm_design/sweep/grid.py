@@ -216,21 +216,12 @@ def chains(points: list[GridPoint], length: int) -> list[list[int]]:
 
 # --------------------------------------------------------------------------- point specs
 
-def point_data(data: dict, axes_paths, values, warm: dict[str, float] | None = None) -> dict:
-    """A copy of raw spec `data` with the swept keys set to `values` and, when `warm` is given,
-    each free design variable's `initial` set to the warm-start value (clipped to its bounds)."""
+def point_data(data: dict, axes_paths, values) -> dict:
+    """A copy of raw spec `data` with the swept keys set to `values` (a warm start never
+    changes a free variable's `initial`: that guess is the spec's tie-break, solve/tiebreak.py)."""
     out = copy.deepcopy(data)
     for path, value in zip(axes_paths, values):
         _set(out, path, value)
-    design = out.get("design")
-    if warm and isinstance(design, dict):
-        for name, bounds in design.items():
-            guess = warm.get(name)
-            if not isinstance(bounds, dict) or guess is None or not math.isfinite(guess):
-                continue
-            low, high = bounds.get("min"), bounds.get("max")
-            if is_number(low) and is_number(high) and low <= high:
-                bounds["initial"] = min(max(float(guess), float(low)), float(high))
     return out
 
 

@@ -3,9 +3,10 @@ worker processes or on a Dask distributed cluster, rows appended to the CSV as t
 `resume` continuing an interrupted sweep, the final tables and plots written at the end.
 
 Warm starts: the grid is cut into chains along the last axis (`grid.chains`); a chain's points
-are solved in order, each with the free design variables' `initial` set to the design found at
-the point before it. Chains run in parallel. The chains do not depend on the number of workers
-or on the scheduler, so neither do the results.
+are solved in order, each starting first from the design found at the point before it (an extra
+start: the spec's `initial`, which picks one design of a flat optimum, is left as it is, so a row
+is the design `optimize` gives its point: solve/tiebreak.py). Chains run in parallel. The chains
+do not depend on the number of workers or on the scheduler, so neither do the results.
 
 Files in the output folder:
     table.csv     one row per grid point; appended row by row while the sweep runs (a row is a
@@ -79,8 +80,8 @@ def solve_point(task: PointTask) -> dict[str, str]:
     from ..api import design
 
     try:
-        spec = parse_spec(point_data(task.data, task.paths, task.values, task.warm), task.source)
-        return tables.outcome_cells(design(spec), spec.kind)
+        spec = parse_spec(point_data(task.data, task.paths, task.values), task.source)
+        return tables.outcome_cells(design(spec, start_from=task.warm), spec.kind)
     except Exception as error:  # one point's failure must not end the sweep
         return tables.error_cells(error)
 
