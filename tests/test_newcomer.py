@@ -287,7 +287,7 @@ def test_the_linearised_coordinates_name_the_pivots_the_sheet_lists(tmp_path):
     data = tomllib.loads(ROBUST.read_text())
     data["verification"]["stages"] = 10
     spec = write(tmp_path, data)
-    code, out, _ = run("optimize", spec, "--format", "json", "--no-verify")
+    code, out, _ = run("optimize", spec, "--format", "json", "--no-verify", "--linearised")
     names = json.loads(out)["tolerance"]["linearised"]["coordinates"]
     listed = [item["manipulator"] for item in sheet_for(spec).items]
     assert listed == list(range(1, 11))
