@@ -150,8 +150,9 @@ class OdePhases:
         if self.plain:
             return (abs(math.tan(theta)) <= self.mu
                     and self.g * math.cos(theta) > self.ls[k] * omega ** 2)
-        thdd = ph.swing_acceleration(theta, omega, self.swing_loaded, direction=1.0)
-        fx, fn = ph.stuck_contact_force(theta, omega, thdd, gravity=self.g, link_length=self.l)
+        thdd = ph.swing_acceleration(theta, omega, self.swings_loaded[k], direction=1.0)
+        fx, fn = ph.stuck_contact_force(theta, omega, thdd, gravity=self.g,
+                                        link_length=self.ls[k])
         return fn > 0.0 and abs(fx) <= self.mu * fn
 
     def _jam(self, t, k, theta, omega, s, sd):
@@ -175,7 +176,7 @@ class OdePhases:
         the support (tip); th' -> 0 (stall: the palm stops short and swings back, or pivot
         friction holds it); front stop, beta on the last manipulator, and the first contact
         of the object's arc with a resting palm (closed form in th, geometry.first_contact)."""
-        sw, g, l, mu = self.swing_loaded, self.g, self.l, self.mu
+        sw, g, l, mu = self.swings_loaded[k], self.g, self.ls[k], self.mu
         lo, hi = self.row.support(s)
         half_h = 0.5 * self.h
 
@@ -245,11 +246,13 @@ class OdePhases:
         }
         return self._fail(te, kind, k + 1, state, details[kind])
 
-    def _free_swing_arrival(self, theta0, w0):
+    def _free_swing_arrival(self, k, theta0, w0):
         """(dt, stop angle, speed there) of an empty palm on real links and pivots swinging from
         (th0, tangential speed w0): integrated to its front or back stop, or to where pivot
-        friction holds it (a turning point where its weight's torque is within the friction)."""
-        sw, l, t, theta, omega = self.swing_alone, self.l, 0.0, theta0, w0 / self.l
+        friction holds it (a turning point where its weight's torque is within the friction):
+        palm k's own swing and back stop."""
+        sw, l, t, theta, omega = self.swings_alone[k], self.ls[k], 0.0, theta0, w0 / self.ls[k]
+        back = self.alphas[k]
         for _ in range(50):  # turning points of a swing that friction and damping slow down
             if omega == 0.0:  # at rest: held, or it starts down the way gravity pulls
                 if ph.held_by_friction(theta, sw):
@@ -257,7 +260,7 @@ class OdePhases:
                 direction = 1.0 if theta > 0.0 else -1.0
             else:
                 direction = math.copysign(1.0, omega)
-            physics = [(lambda t_, z: z[0] + self.alpha, "back_stop"),
+            physics = [(lambda t_, z: z[0] + back, "back_stop"),
                        (lambda t_, z: self.fs - z[0], "front_stop"),
                        (lambda t_, z: direction * z[1], "turn")]
             te, z, kind, _ = self._integrate(
@@ -265,7 +268,7 @@ class OdePhases:
                 t, [theta, omega], physics, [])
             theta, omega, t = float(z[0]), float(z[1]), te
             if kind in ("back_stop", "front_stop"):
-                stop = -self.alpha if kind == "back_stop" else self.fs
+                stop = -back if kind == "back_stop" else self.fs
                 return t, stop, abs(omega) * l
             if kind != "turn":
                 return math.inf, theta, 0.0
@@ -281,7 +284,7 @@ class OdePhases:
         def rhs(t, z):
             if not self.plain:  # the palm on real links and pivots
                 return [z[2], z[3], 0.0, -g, z[5], ph.swing_acceleration(z[4], z[5],
-                                                                       self.swing_alone)]
+                                                                       self.swings_alone[k])]
             return [z[2], z[3], 0.0, -g, z[5], g * math.sin(z[4]) / l]
 
         def point(z):
