@@ -122,3 +122,24 @@ def test_yield_of_a_pivot_friction_lot_is_its_exact_probability(real, distributi
     assert r.ci_low <= exact <= r.ci_high
     assert r.ci_high - r.ci_low < 0.02
     assert set(r.failures) == {"stall", "invalid_part"}
+
+
+def test_a_palm_that_friction_can_hold_short_of_its_front_stop_is_left_to_the_simulator(real):
+    """Palm 1's friction torque at or beyond what its empty weight turns at the handover angle,
+    (M + 2 m_l / 2) g l sin(theta): it could stop past the handover, held there, not at its
+    front stop where the map takes parked palms, so the map leaves the build to the simulator
+    (a conservative rule: here the palm's speed carries it to its stop all the same). Just
+    below that torque the map judges the build itself, as the simulator does."""
+    scene, design = real
+    m = scene.body
+    weight = (m.mass / design.mass_ratio + scene.links.mass) * scene.gravity * design.link_length
+    held = weight * math.sin(design.beta) - scene.pivots.friction_torque  # (a deviation)
+    dev = {"pivot_friction": np.array([[held * 1.001, 0.0, 0.0], [held * 0.999, 0.0, 0.0]])}
+    out = run_builds(scene, design, dev, 3)
+    assert list(out.closed_form) == [False, True]
+    for i in range(2):
+        sim = simulate_build(scene, design, {"pivot_friction": dev["pivot_friction"][i:i + 1]},
+                             3, accuracy="precise")
+        assert sim.outcome.completed and out.failure[i] == "" and out.stages_passed[i] == 3
+        assert [e.after["theta"] for e in sim.events
+                if e.kind == "front_stop" and e.stage == 1] == [scene.palm.front_stop]

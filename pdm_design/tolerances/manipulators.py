@@ -275,6 +275,8 @@ class _Builds:
                                       friction=terms[2])
         if self.real:
             self.inside(k, u, a, theta, offset, w, mu, terms)
+            if not last:
+                self.held_short(k, theta)
         self.group(k, [*self.guards(k, theta, v2, offset, w, mu, terms),
                        *self.parked_palms(k, theta, offset, w)])
         if last:
@@ -285,6 +287,16 @@ class _Builds:
         vx, vy = speed * np.cos(theta), -speed * np.sin(theta)
         u = self.land(k + 1, vx, vy, offset, v["object_mass"], w, mu, passed=k + 1)
         return u, offset
+
+    def held_short(self, k, theta):
+        """Palm k, empty after the handover at theta, may stop short of its front stop where
+        its pivot friction holds it (tau >= (M + n m_l / 2) g l sin th somewhere on [theta,
+        pi/2], i.e. at theta): the palms parked behind are then not where the map takes them
+        (at their front stops), and the build is left to the simulator."""
+        v = self.v
+        weight = (v["palm_mass"][k] + 0.5 * self.scene.links.count * v["link_mass"][k]) * (
+            self.g * v["link_length"][k])
+        self.closed &= ~(self.alive & (v["pivot_friction"][k] >= weight * np.sin(theta)))
 
     def inside(self, k, u, a, theta, offset, w, mu, terms):
         """With links and pivots the carry's guards are judged at its ends (docs/physics.md,
