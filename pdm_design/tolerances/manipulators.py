@@ -99,7 +99,9 @@ class _Builds:
         self.n = n = _count(deviations)
         self.stages, self.g = stages, scene.gravity
         # every part's values by stage (stages, builds): a stage's values contiguous
-        self.v = {key: np.ascontiguousarray(x.T) if x.ndim == 2 else x
+        # (a part nobody varies stays a broadcast view: no copy of a constant)
+        self.v = {key: (x.T if x.ndim == 2 and x.strides == (0, 0)
+                        else np.ascontiguousarray(x.T) if x.ndim == 2 else x)
                   for key, x in build_values(scene, design, deviations, stages, n).items()}
         self.beta, self.fs = design.beta, scene.palm.front_stop
         self.W, self.h, self.T = scene.palm.width, scene.body.height, scene.palm.thickness
