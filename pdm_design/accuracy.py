@@ -18,7 +18,8 @@ from .errors import did_you_mean
 MIN_RTOL = 2.22e-14  # 100 machine epsilons (to 3 digits, as documented): the integrator's floor
 PRESET_NAMES = ("fast", "default", "precise")
 TOLERANCE_KEYS = ("rtol", "atol", "event_tol", "agreement")
-SETTING_KEYS = ("base", *TOLERANCE_KEYS)  # the keys of a custom accuracy
+CARRIES = ("closed", "integrated")
+SETTING_KEYS = ("base", *TOLERANCE_KEYS, "carry")  # the keys of a custom accuracy
 
 # What each tolerance must be, in the words of an error message.
 _EXPECTED = {
@@ -27,6 +28,7 @@ _EXPECTED = {
     "event_tol": "a finite number > 0",
     "agreement": "a number > 0 and < 1 (a relative difference)",
     "base": f"one of: {', '.join(PRESET_NAMES)}",
+    "carry": f"one of: {', '.join(CARRIES)}",
 }
 EXPECTED_SETTING = (f"one of: {', '.join(PRESET_NAMES)} (or custom tolerances with keys "
                     f"{', '.join(SETTING_KEYS)})")
@@ -72,6 +74,10 @@ class Accuracy:
         the errors measured by results/bench_accuracy.py (results/accuracy.md).
     base: the preset whose optimizer settings (IPOPT tolerance, starts, random builds verified)
         go with these tolerances; a preset's base is itself.
+    carry: the optimizer's carry on real links and pivots (docs/physics.md, section 2.1):
+        "closed" (the default) uses the closed form where it applies and integrates only with
+        viscous damping, which has none; "integrated" integrates it in the NLP wherever (fourth-
+        order steps for a tenth of `agreement`), to compare the two paths (results/bench_links.py).
     """
 
     name: str
@@ -80,27 +86,32 @@ class Accuracy:
     event_tol: float
     agreement: float = 1e-7
     base: str = "default"
+    carry: str = "closed"
 
     def __post_init__(self):
         for key in TOLERANCE_KEYS:
             object.__setattr__(self, key, _tolerance(key, getattr(self, key)))
         if self.base not in PRESET_NAMES:
             raise AccuracyError("base", _EXPECTED["base"], self.base)
+        if self.carry not in CARRIES:
+            raise AccuracyError("carry", _EXPECTED["carry"], self.carry)
 
     @property
     def is_preset(self) -> bool:
         return ACCURACY_PRESETS.get(self.name) == self
 
     def settings(self) -> dict:
-        """The base preset and every tolerance, for JSON documents."""
-        return {"base": self.base} | {key: getattr(self, key) for key in TOLERANCE_KEYS}
+        """The base preset, every tolerance and the carry, for JSON documents."""
+        return ({"base": self.base} | {key: getattr(self, key) for key in TOLERANCE_KEYS}
+                | {"carry": self.carry})
 
     def describe(self) -> str:
         """A preset's name, or the name with every setting, for text reports."""
         if self.is_preset:
             return self.name
         values = ", ".join(f"{key} {getattr(self, key):g}" for key in TOLERANCE_KEYS)
-        return f"{self.name}: {values}; base {self.base}"
+        carry = "" if self.carry == "closed" else f"; carry {self.carry}"
+        return f"{self.name}: {values}; base {self.base}{carry}"
 
 
 ACCURACY_PRESETS = {
@@ -118,9 +129,9 @@ AccuracySetting = str | Accuracy | Mapping  # what accuracy() takes
 
 def accuracy(setting: AccuracySetting = "default") -> Accuracy:
     """An Accuracy from a preset name, an Accuracy (passed through), or a mapping
-    {"base": "default", "rtol": 1e-10, ...}: tolerances left out come from the base preset
-    (default "default") and the result is named "custom" (just the base preset when no
-    tolerance is given). AccuracyError (a ValueError) names the offending key."""
+    {"base": "default", "rtol": 1e-10, "carry": "integrated", ...}: tolerances left out come
+    from the base preset (default "default") and the result is named "custom" (just the base
+    preset when no tolerance and no carry is given). AccuracyError (a ValueError) names the offending key."""
     if isinstance(setting, Accuracy):
         return setting
     if isinstance(setting, Mapping):
@@ -156,9 +167,9 @@ def _custom(values: Mapping) -> Accuracy:
     if not isinstance(base, str) or base not in ACCURACY_PRESETS:
         raise AccuracyError("base", _EXPECTED["base"], base)
     preset = ACCURACY_PRESETS[base]
-    if not set(values) & set(TOLERANCE_KEYS):
+    if not set(values) & {*TOLERANCE_KEYS, "carry"}:
         return preset
-    return Accuracy("custom", base=base,
+    return Accuracy("custom", base=base, carry=values.get("carry", preset.carry),
                     **{key: values.get(key, getattr(preset, key)) for key in TOLERANCE_KEYS})
 
 

@@ -62,7 +62,8 @@ def test_spec_table_reaches_the_simulator_and_the_report(tmp_path, monkeypatch):
     assert outcome.verification["passed"]
     assert outcome.verification["accuracy"] == "custom"
     assert outcome.verification["accuracy_settings"] == {
-        "base": "precise", "rtol": 1e-10, "atol": 1e-14, "event_tol": 1e-14, "agreement": 1e-8}
+        "base": "precise", "rtol": 1e-10, "atol": 1e-14, "event_tol": 1e-14, "agreement": 1e-8,
+            "carry": "closed"}
 
 
 def test_spec_agreement_governs_verification(tmp_path):
@@ -131,7 +132,8 @@ def test_simulate_accepts_custom_tolerances_and_reports_them():
     assert doc["accuracy"] == "custom"
     # atol and agreement from the default base (1e-11, 1e-7).
     assert doc["accuracy_settings"] == {"base": "default", "rtol": 1e-10, "atol": 1e-11,
-                                        "event_tol": 1e-12, "agreement": 1e-7}
+                                        "event_tol": 1e-12, "agreement": 1e-7,
+                                        "carry": "closed"}
     code, out, _ = run("simulate", stairs, "--accuracy", "base=fast,rtol=1e-7")
     assert code == 0
     assert "accuracy custom: rtol 1e-07, atol 1e-08, event_tol 1e-07, agreement 0.0001; " \
@@ -145,7 +147,8 @@ def test_optimize_accepts_custom_tolerances_and_reports_them():
     assert code == 0 and doc["verification"]["passed"]
     assert doc["verification"]["accuracy"] == "custom"
     assert doc["verification"]["accuracy_settings"] == {
-        "base": "default", "rtol": 1e-10, "atol": 1e-11, "event_tol": 1e-11, "agreement": 1e-8}
+        "base": "default", "rtol": 1e-10, "atol": 1e-11, "event_tol": 1e-11, "agreement": 1e-8,
+        "carry": "closed"}
     code, out, _ = run("optimize", PAPER, "--accuracy", "rtol=1e-10")
     assert code == 0 and "verification: passed (accuracy custom: rtol 1e-10," in out
 

@@ -88,7 +88,7 @@ def test_carry_equation_is_the_lagrangian_of_palm_links_and_object(mlink, torque
                                    **scene.mechanism())
     for theta, omega in [(-0.3, 0.4), (0.1, 1.3), (0.7, 2.0)]:
         expected = THDD_F(theta, omega, mo, Mp, mlink, L, G, torque, damping)
-        sim = ph.swing_acceleration(theta, omega, run.swing_loaded)
+        sim = ph.swing_acceleration(theta, omega, run.swings_loaded[0])
         assert sim == pytest.approx(expected, rel=1e-13)
         if damping == 0.0:  # the closed form's: l^2 th'' = g_e l sin th - f
             assert (g_e * L * math.sin(theta) - f) / L**2 == pytest.approx(expected, rel=1e-13)
@@ -362,7 +362,7 @@ def test_an_empty_palm_that_friction_stops_mid_swing_rests_where_the_energy_runs
                                    gravity=scene.gravity, link_length=L, **scene.mechanism())
     f_p = 2.0 / felt
     th0, w0 = -0.05, -0.3
-    dt, stop, speed = run._free_swing_arrival(th0, w0)
+    dt, stop, speed = run._free_swing_arrival(0, th0, w0)
 
     def v2(th):
         return w0**2 + 2 * g_p * L * (math.cos(th0) - math.cos(th)) - 2 * f_p * (th0 - th)

@@ -411,8 +411,9 @@ def spec_key(spec) -> str:
     objective = sorted((k, float(v)) for k, v in spec.objective.items())
     required = requires_rows(spec)
     pivots = getattr(spec.scene, "pivots", None)  # damping: the carry's steps follow accuracy
-    steps = (spec.verification.accuracy.agreement if pivots is not None and pivots.damping
-             else None)
+    forced = spec.verification.accuracy.carry == "integrated"  # (the carry integrated: steps)
+    steps = (spec.verification.accuracy.agreement
+             if pivots is not None and (pivots.damping or forced) else None)
     return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages,
                  required, steps))
 

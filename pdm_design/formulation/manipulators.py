@@ -123,14 +123,19 @@ def build(spec):
     return model, bounds, m
 
 
-def integrated_steps(spec, robust, values, bounds, force=False) -> int:
+def integrated_steps(spec, robust, values, bounds) -> int:
     """Steps of the integrated carry (0: the closed form): with pivot damping, which has no
-    closed form, or when asked (force: results/bench_links.py measures the trade), enough for
-    a tenth of the accuracy's agreement over the widest carry alpha + beta the bounds allow
-    (physics.carry_steps). The robust rows'
-    bounds need the closed form: robust with damping is refused in words."""
-    if spec.scene.pivots.damping == 0.0 and not force:
+    closed form, or when the accuracy asks (carry = "integrated": results/bench_links.py
+    measures the trade), enough for a tenth of the accuracy's agreement over the widest carry
+    alpha + beta the bounds allow (physics.carry_steps). The robust rows' bounds need the
+    closed form: robust with damping, or with the integrated carry asked, is refused in words."""
+    forced = spec.verification.accuracy.carry == "integrated"
+    if spec.scene.pivots.damping == 0.0 and not forced:
         return 0
+    if robust and forced:
+        raise SpecError(spec.source or "<spec>", "verification.accuracy.carry",
+                        '"closed" with objective.max_offset_tolerance (the robust tolerance '
+                        "rows bound the closed-form carry)", found='"integrated"')
     if robust:
         raise SpecError(spec.source or "<spec>", "scene.pivots.damping",
                         "0 with objective.max_offset_tolerance (the robust tolerance rows bound "

@@ -44,6 +44,7 @@ def optimize_document(outcome: DesignOutcome) -> dict:
         "status": outcome.status,
         "status_message": outcome.status_message,
         "scene": kind,
+        "scene_parameters": scene_parameters(spec.scene),
         "design": _complete(analysis.design, DESIGN[kind]),
         "free_variables": list(spec.free_variables),
         "at_bounds": outcome.at_bounds,
@@ -58,6 +59,18 @@ def optimize_document(outcome: DesignOutcome) -> dict:
         "verification": _verification(outcome.verification),
         "solver": outcome.solver,
     })
+
+
+def scene_parameters(scene) -> dict:
+    """The device-as-built keys of the spec's scene, as given (docs/json-schema.md): for
+    manipulators `links` (mass of each link, inertia about its pivot or null for a uniform rod,
+    count) and `pivots` (friction_torque, damping), every key even when the spec leaves them
+    out (then the paper's zeros); {} for stairs, which have none."""
+    if getattr(scene, "kind", None) != "manipulators":
+        return {}
+    links, pivots = scene.links, scene.pivots
+    return {"links": {"mass": links.mass, "inertia": links.inertia, "count": links.count},
+            "pivots": {"friction_torque": pivots.friction_torque, "damping": pivots.damping}}
 
 
 def _complete(values: dict | None, keys: tuple[str, ...], lists: tuple[str, ...] = ()) -> dict:

@@ -92,13 +92,25 @@ class ManipulatorsScene:
 
     kind = "manipulators"
 
-    def mechanism(self) -> dict:
+    def mechanism(self, link_mass=None, friction_torque=None, length_scale=None) -> dict:
         """Keyword arguments of physics.manipulators.carry_terms and palm_terms: the links' and
-        the pivots' totals (all links together)."""
+        the pivots' totals (all links together).
+
+        One manipulator as built: link_mass (kg, each of its links), friction_torque (N m,
+        its joints together) and length_scale (its link length over the design's; None: 1) in
+        place of the scene's; floats or numpy arrays. A given link inertia scales as the link does
+        (same shape): I mass / links.mass (length_scale)^2 (a uniform rod's m l^2 / 3 does)."""
         links = self.links
-        inertia = None if links.inertia is None else links.count * links.inertia
-        return {"link_mass": links.count * links.mass, "link_inertia": inertia,
-                "friction_torque": self.pivots.friction_torque}
+        mass = links.mass if link_mass is None else link_mass
+        inertia = links.inertia
+        if inertia is not None and link_mass is not None and links.mass > 0.0:
+            inertia = inertia * (mass / links.mass)
+        if inertia is not None and length_scale is not None:
+            inertia = inertia * length_scale * length_scale
+        torque = self.pivots.friction_torque if friction_torque is None else friction_torque
+        return {"link_mass": links.count * mass,
+                "link_inertia": None if inertia is None else links.count * inertia,
+                "friction_torque": torque}
 
     @property
     def plain_mechanism(self) -> bool:

@@ -128,7 +128,7 @@ def yield_text(result: YieldResult, name: str) -> str:
     for t in r.tolerances:
         q = QUANTITIES[r.kind][t["quantity"]]
         size = f"+-{t['value'] * q.build_factor:.4g} {q.build_unit}"
-        lines.append(f"  {t['quantity']:<13} {size:<16} {t['applies_to']:<5} {t['distribution']}")
+        lines.append(f"  {t['quantity']:<14} {size:<16} {t['applies_to']:<5} {t['distribution']}")
     c = r.confirmed
     lines.append(f"event simulator: {c['agreed']} of {c['random']} random builds agree with "
                  f"the closed forms; {c['left_closed_form']} builds outside the closed forms "

@@ -38,6 +38,7 @@ from ..physics import manipulators as phys
 from .outcome import BuildOutcome
 
 PARKED_CAP = 16  # palms parked behind the carrying one checked, at most
+INSIDE_ANGLES = 32  # angles inside a carry on real links where its guards are compared
 
 
 def run_builds(scene, design, deviations: dict, stages: int) -> BuildOutcome:
@@ -48,8 +49,9 @@ def run_builds(scene, design, deviations: dict, stages: int) -> BuildOutcome:
 
 def build_values(scene, design, deviations: dict, stages: int, count: int) -> dict:
     """Every part's and the lot's values of `count` builds: pivot_x, pivot_y, link_length,
-    back_stop, palm_mass as (count, stages) arrays; friction, object_mass, object_width,
-    feed_x, feed_vx, feed_vy as (count,) arrays."""
+    back_stop, palm_mass, link_mass (each link), pivot_friction (torque, a manipulator's joints
+    together) as (count, stages) arrays; friction, object_mass, object_width, feed_x, feed_vx,
+    feed_vy as (count,) arrays."""
     def each(name, nominal):
         dev = deviations.get(name)
         dev = 0.0 if dev is None else (dev if np.ndim(dev) == 2 else np.asarray(dev)[:, None])
@@ -72,6 +74,8 @@ def build_values(scene, design, deviations: dict, stages: int, count: int) -> di
         "link_length": each("link_length", l),
         "back_stop": each("back_stop", a),
         "palm_mass": each("palm_mass", scene.body.mass / design.mass_ratio),
+        "link_mass": each("link_mass", scene.links.mass),
+        "pivot_friction": each("pivot_friction", scene.pivots.friction_torque),
         "friction": lot("friction", scene.palm.friction),
         "object_mass": lot("object_mass", scene.body.mass),
         "object_width": lot("object_width", scene.body.width),
@@ -95,7 +99,9 @@ class _Builds:
         self.n = n = _count(deviations)
         self.stages, self.g = stages, scene.gravity
         # every part's values by stage (stages, builds): a stage's values contiguous
-        self.v = {key: np.ascontiguousarray(x.T) if x.ndim == 2 else x
+        # (a part nobody varies stays a broadcast view: no copy of a constant)
+        self.v = {key: (x.T if x.ndim == 2 and x.strides == (0, 0)
+                        else np.ascontiguousarray(x.T) if x.ndim == 2 else x)
                   for key, x in build_values(scene, design, deviations, stages, n).items()}
         self.beta, self.fs = design.beta, scene.palm.front_stop
         self.W, self.h, self.T = scene.palm.width, scene.body.height, scene.palm.thickness
@@ -108,6 +114,10 @@ class _Builds:
         self.closed = np.ones(n, bool)
         self.worst = np.full(n, np.inf)
         self.parked = _parked_rows(scene, design, stages)
+        # links and pivots (docs/physics.md, section 2.1): every palm its own carry terms
+        self.scene, self.l = scene, design.link_length
+        self.real = not (scene.plain_mechanism and not self.v["link_mass"].any()
+                         and not self.v["pivot_friction"].any())
 
     def run(self) -> BuildOutcome:
         v = self.v
@@ -127,7 +137,9 @@ class _Builds:
             if not self.alive.any():
                 break
         self.passed[self.alive] = self.stages
-        if self.restitution > 0.0:  # the closed forms' landings are plastic: none applies
+        # the closed forms' landings are plastic, and viscous pivot damping has no closed form:
+        # with either, none applies
+        if self.restitution > 0.0 or self.scene.pivots.damping > 0.0:
             self.closed[self.code != self.names.index("invalid_part")
                         if "invalid_part" in self.names else slice(None)] = False
         failure = np.array(self.names, dtype=object)[self.code]
@@ -155,7 +167,7 @@ class _Builds:
             return
         self.code[failing_any] = code[failing_any]
         self.passed[failing_any] = passed
-        self.closed[failing_any] = ~open_any[failing_any]
+        self.closed[failing_any] &= ~open_any[failing_any]
         self.alive &= ~failing_any
 
     def _code(self, kind: str) -> int:
@@ -170,6 +182,7 @@ class _Builds:
         for key in ("link_length", "palm_mass"):
             bad |= (v[key] <= 0.0).any(axis=0)
         bad |= (np.abs(v["back_stop"]) >= 0.5 * math.pi).any(axis=0)
+        bad |= ((v["link_mass"] < 0.0) | (v["pivot_friction"] < 0.0)).any(axis=0)
         bad |= (v["object_mass"] <= 0.0) | (v["object_width"] <= 0.0) | (v["friction"] < 0.0)
         self.group(0, [("invalid_part", np.where(bad, -1.0, 1.0), True)])
 
@@ -193,10 +206,23 @@ class _Builds:
         self.group(passed, [("fell_clear", _margin(0.5 * (w + self.W), np.abs(offset)), False)])
 
     # -- the phases -------------------------------------------------------------------------
+    def terms(self, k):
+        """(q_e, g_e, f) of palm k's carry (physics.carry_terms): q, g, 0 on the paper's
+        device; with links and pivots its own link length, palm mass, link mass and friction."""
+        v = self.v
+        m, l = v["object_mass"], v["link_length"][k]
+        q = m / v["palm_mass"][k]
+        if not self.real:
+            return q, self.g, 0.0
+        mech = self.scene.mechanism(link_mass=v["link_mass"][k],
+                                    friction_torque=v["pivot_friction"][k],
+                                    length_scale=l / self.l)
+        return phys.carry_terms(q, object_mass=m, gravity=self.g, link_length=l, **mech)
+
     def land(self, k, vx, vy, offset, m, w, mu, passed):
         """Plastic landing on palm k resting at -a_k: the speed the palm moves off with."""
-        a, M = self.v["back_stop"][k], self.v["palm_mass"][k]
-        q = m / M
+        a = self.v["back_stop"][k]
+        q = self.terms(k)[0]
         u = phys.landing_speed(vx, vy, a, q)
         px, py = phys.landing_impulse(vx, vy, a, q)
         self.group(passed, [("stall", u / np.hypot(vx, vy), False),
@@ -204,31 +230,56 @@ class _Builds:
                             *self.tips(-0.5 * self.h * px / py, offset, w)])
         return u
 
+    def guards(self, k, theta, v2, offset, w, mu, terms):
+        """The stuck carry's guards at angle theta, speed v2 (physics.manipulators): lift-off,
+        tip (both edges) and slip, as (failure, margin, closed form?)."""
+        g, l = self.g, self.v["link_length"][k]
+        along = ratio = None
+        if self.real:
+            along = phys.carry_along(theta, gravity=g, carry_gravity=terms[1], friction=terms[2])
+            ratio = phys.carry_force_ratio(theta, v2, gravity=g, link_length=l, along=along)
+        return [("lift_off", _margin(phys.lift_off_capacity(theta, gravity=g, link_length=l,
+                                                            along=along), v2), False),
+                *self.tips(phys.carry_force_point(theta, self.h, ratio), offset, w),
+                ("slip", _margin(mu, phys.friction_demand(theta, ratio)), False)]
+
+    def need(self, a, theta, terms, l):
+        """Squared speed a carry from -a must start with to reach theta: over the top on the
+        paper's device; with pivot friction v^2 falls until the balance angle th* (sin th* =
+        f / (g_e l)) and rises after it, so the slowest point is th* clipped to [-a, theta]."""
+        if not self.real:
+            return np.where(a > 0.0, phys.top_speed_squared_needed(a, gravity=self.g,
+                                                                   link_length=l), 0.0)
+        _, g_e, f = terms
+        star = phys.friction_balance_angle(f, gravity=g_e, link_length=l)
+        slowest = np.clip(star, -a, theta)
+        return -phys.carry_speed_squared(0.0, a, slowest, gravity=g_e, link_length=l,
+                                         friction=f)
+
     def carry(self, k, u, offset, w, mu):
         """Stuck carry on palm k from -a_k at speed u; then the handover (k + 1 < stages)."""
-        v, g = self.v, self.g
+        v = self.v
         px, py = v["pivot_x"][k], v["pivot_y"][k]
         l, a = v["link_length"][k], v["back_stop"][k]
-        self.group(k, [("lift_off", _margin(phys.lift_off_capacity(a, gravity=g,
-                                                                   link_length=l), u * u), False),
-                       *self.tips(phys.carry_force_point(-a, self.h), offset, w),
-                       ("slip", _margin(mu, phys.friction_demand(a)), False)])
-        need = np.where(a > 0.0, phys.top_speed_squared_needed(a, gravity=g, link_length=l), 0.0)
-        self.group(k, [("stall", _margin(u * u, need), True)])
+        terms = self.terms(k)
+        self.group(k, self.guards(k, -a, u * u, offset, w, mu, terms))
         last = k + 1 == self.stages
         if last:
             theta = np.full(self.n, self.beta)
         else:
             nx, ny = self.rest_top(k + 1)
-            start_y = py + l * np.cos(a)
-            self.group(k, [("blocked", (start_y - ny) / l, False)])
             theta = np.arccos(np.clip((ny - py) / l, -1.0, 1.0))
+        self.group(k, [("stall", _margin(u * u, self.need(a, theta, terms, l)), True)])
+        if not last:
+            self.group(k, [("blocked", (py + l * np.cos(a) - ny) / l, False)])
         self.group(k, [("stranded", _margin(self.fs, theta), False)])
-        v2 = phys.carry_speed_squared(u, a, theta, gravity=g, link_length=l)
-        self.group(k, [("lift_off", _margin(phys.lift_off_capacity(theta, gravity=g,
-                                                                   link_length=l), v2), False),
-                       *self.tips(phys.carry_force_point(theta, self.h), offset, w),
-                       ("slip", _margin(mu, phys.friction_demand(theta)), False),
+        v2 = phys.carry_speed_squared(u, a, theta, gravity=terms[1], link_length=l,
+                                      friction=terms[2])
+        if self.real:
+            self.inside(k, u, a, theta, offset, w, mu, terms)
+            if not last:
+                self.held_short(k, theta)
+        self.group(k, [*self.guards(k, theta, v2, offset, w, mu, terms),
                        *self.parked_palms(k, theta, offset, w)])
         if last:
             return u, offset
@@ -238,6 +289,36 @@ class _Builds:
         vx, vy = speed * np.cos(theta), -speed * np.sin(theta)
         u = self.land(k + 1, vx, vy, offset, v["object_mass"], w, mu, passed=k + 1)
         return u, offset
+
+    def held_short(self, k, theta):
+        """Palm k, empty after the handover at theta, may stop short of its front stop where
+        its pivot friction holds it (tau >= (M + n m_l / 2) g l sin th somewhere on [theta,
+        pi/2], i.e. at theta): the palms parked behind are then not where the map takes them
+        (at their front stops), and the build is left to the simulator."""
+        v = self.v
+        weight = (v["palm_mass"][k] + 0.5 * self.scene.links.count * v["link_mass"][k]) * (
+            self.g * v["link_length"][k])
+        self.closed &= ~(self.alive & (v["pivot_friction"][k] >= weight * np.sin(theta)))
+
+    def inside(self, k, u, a, theta, offset, w, mu, terms):
+        """With links and pivots the carry's guards are judged at its ends (docs/physics.md,
+        section 2.1), where on the paper's device they are monotone or convex in between.
+        No such proof here: a build whose guards are lower at any of INSIDE_ANGLES angles
+        inside the carry than at both ends is left to the simulator (closed_form False)."""
+        ends = [self.guards(k, th, v2, offset, w, mu, terms) for th, v2 in (
+            (-a, u * u), (theta, phys.carry_speed_squared(u, a, theta, gravity=terms[1],
+                                                           link_length=self.v["link_length"][k],
+                                                           friction=terms[2])))]
+        low = np.minimum.reduce([c[1] for c in ends[0] + ends[1]])
+        inner = np.full(self.n, np.inf)
+        for frac in np.linspace(0.0, 1.0, INSIDE_ANGLES + 2)[1:-1]:
+            th = -a + frac * (theta + a)
+            v2 = phys.carry_speed_squared(u, a, th, gravity=terms[1],
+                                          link_length=self.v["link_length"][k],
+                                          friction=terms[2])
+            for _, value, _ in self.guards(k, th, v2, offset, w, mu, terms):
+                np.fmin(inner, value, out=inner)
+        self.closed &= ~(self.alive & ~(inner >= low))
 
     def parked_palms(self, k, theta, offset, w):
         """Clearance, in link lengths, to the palms 1 .. parked places behind palm k, each at
@@ -293,7 +374,8 @@ def _parked_rows(scene, design, stages) -> int:
 def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="default",
                    record_trajectory: bool = False):
     """The event simulator on one build (deviations of one build: arrays of 1 row), every
-    part as drawn: pivots as offsets, link lengths, back stops and palm masses as
+    part as drawn: pivots as offsets, link lengths, back stops, palm masses, link masses and
+    pivot friction torques as
     sim.manipulators.geometry.Parts, the lot's values in the scene. A build whose values no
     scene can hold (a negative mass, say) is refused (sim.core.SimulationRefused)."""
     import dataclasses
@@ -312,7 +394,10 @@ def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="de
     offsets = tuple(ManipulatorOffset(manipulator=k + 1, dx=float(dx[k]), dy=float(dy[k]))
                     for k in range(stages) if dx[k] or dy[k])
     parts = Parts(link_length=tuple(v["link_length"][0]), back_stop=tuple(v["back_stop"][0]),
-                  palm_mass=tuple(v["palm_mass"][0]))
+                  palm_mass=tuple(v["palm_mass"][0]),
+                  link_mass=tuple(v["link_mass"][0]) if "link_mass" in deviations else (),
+                  pivot_friction=(tuple(v["pivot_friction"][0])
+                                  if "pivot_friction" in deviations else ()))
     try:
         built = dataclasses.replace(
             scene,

@@ -60,6 +60,11 @@ QUANTITIES: dict[str, dict[str, Quantity]] = {
         _q("feed_x", "m", "mm", 1e3, _LOT, "where the object starts along the row"),
         _q("feed_speed", "m/s", "mm/s", 1e3, _LOT,
            "the object's initial speed (along its initial velocity; +x if that is 0)"),
+        _q("link_mass", "kg", "g", 1e3, _EACH_OR_LOT,
+           "the mass of each of a manipulator's links (nominal: [scene.links] mass)"),
+        _q("pivot_friction", "N m", "N mm", 1e3, _EACH_OR_LOT,
+           "a manipulator's Coulomb pivot friction torque, its joints together (nominal: "
+           "[scene.pivots] friction_torque)"),
     )},
     "stairs": {q.name: q for q in (
         _q("rise", "m", "mm", 1e3, _EACH_OR_LOT, "a step's rise"),
@@ -74,7 +79,7 @@ QUANTITIES: dict[str, dict[str, Quantity]] = {
 # One random stream per quantity name, in this fixed order (tolerances.draw): append only.
 STREAM_ORDER = ("pivot_x", "pivot_y", "link_length", "back_stop", "palm_mass", "friction",
                 "object_mass", "object_width", "feed_x", "feed_speed", "rise", "tread",
-                "restitution", "launch_speed", "launch_x")
+                "restitution", "launch_speed", "launch_x", "link_mass", "pivot_friction")
 
 
 @dataclass(frozen=True)

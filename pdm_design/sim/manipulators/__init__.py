@@ -46,8 +46,6 @@ FAILURE_KINDS = {
     "blocked": "the object hits the side or underside of a palm (outside the model)",
     "fell_clear": "the object fell past the row",
     "missed": "the object lifted off and fell past the row without landing on a palm",
-    "lift_off_on_links": "the object lifts off a palm on real links or pivots: the flight after it"
-                         " is not modelled there (outside the model)",
     "tip": "the contact force leaves the object's supported base: it tips (outside the model)",
     "stall": "the carry stops before the top: the palm swings back to its back stop",
     "slid_off": "the object's centre slid off the end of its palm",

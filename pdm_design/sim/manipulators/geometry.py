@@ -48,12 +48,10 @@ class Row:
     link_lengths: tuple[float, ...] = ()
     back_stops: tuple[float, ...] = ()
     palm_masses: tuple[float, ...] = ()
-
-    @property
-    def parts_vary(self) -> bool:
-        """Some manipulator has its own link length, back stop or palm mass."""
-        return (any(v != self.link_length for v in self.link_lengths)
-                or any(v != self.alpha for v in self.back_stops) or bool(self.palm_masses))
+    # every manipulator's own link mass (kg, each link) and pivot friction torque (N m); empty:
+    # the scene's
+    link_masses: tuple[float, ...] = ()
+    pivot_frictions: tuple[float, ...] = ()
 
     def __len__(self) -> int:
         return len(self.pivots)
@@ -92,28 +90,35 @@ def support_words(point: float, support: tuple[float, float]) -> str:
 
 @dataclass(frozen=True)
 class Parts:
-    """Every manipulator's own link length (m), back stop alpha (rad) and palm mass (kg), as
-    built: one value per manipulator of the row, or () for the design's everywhere. (The place
-    for further per-part quantities.)"""
+    """Every manipulator's own link length (m), back stop alpha (rad), palm mass (kg), link mass
+    (kg, each of its links) and pivot friction torque (N m, its joints together), as built: one
+    value per manipulator of the row, or () for the design's (the scene's) everywhere."""
 
     link_length: tuple[float, ...] = ()
     back_stop: tuple[float, ...] = ()
     palm_mass: tuple[float, ...] = ()
+    link_mass: tuple[float, ...] = ()
+    pivot_friction: tuple[float, ...] = ()
+
+    # what each may be: (low, high, inclusive low?)
+    _RANGES = {"link_length": (0.0, math.inf, False), "back_stop": (-0.5 * math.pi,
+                                                                   0.5 * math.pi, False),
+               "palm_mass": (0.0, math.inf, False), "link_mass": (0.0, math.inf, True),
+               "pivot_friction": (0.0, math.inf, True)}
 
     def check(self, stages: int) -> None:
-        for name in ("link_length", "back_stop", "palm_mass"):
+        for name, (low, high, closed) in self._RANGES.items():
             values = getattr(self, name)
             if values and len(values) != stages:
                 raise SimulationRefused(f"{len(values)} values of {name} for a row of {stages} "
                                         "manipulators")
-            limit = 0.5 * math.pi if name == "back_stop" else math.inf
-            low = -limit if name == "back_stop" else 0.0
             bad = [i + 1 for i, v in enumerate(values)
-                   if not (low < v < limit if name == "back_stop" else 0.0 < v < limit)]
+                   if not ((low <= v if closed else low < v) and v < high)]
             if bad:
                 raise SimulationRefused(f"manipulator {bad[0]}'s {name} = {values[bad[0] - 1]:g}"
                                         " cannot be built (a back stop within +-pi/2, a "
-                                        "positive link length and palm mass)")
+                                        "positive link length and palm mass, a link mass and "
+                                        "pivot friction torque >= 0)")
 
 
 def build_row(scene, design, stages: int, offsets=(), parts: Parts | None = None) -> Row:
@@ -121,7 +126,8 @@ def build_row(scene, design, stages: int, offsets=(), parts: Parts | None = None
 
     offsets: objects with .manipulator (1-based), .dx, .dy (m, y up). Offsets of manipulators
     beyond the row are an error (they would silently do nothing). parts: every manipulator's
-    own link length, back stop and palm mass (default: the design's)."""
+    own link length, back stop, palm mass, link mass and pivot friction (default: the
+    design's and the scene's)."""
     if stages < 1:
         raise SimulationRefused(f"stages must be at least 1, not {stages}")
     l = design.link_length
@@ -147,7 +153,9 @@ def build_row(scene, design, stages: int, offsets=(), parts: Parts | None = None
                body_height=scene.body.height,
                link_lengths=tuple(map(float, parts.link_length)) or (l,) * stages,
                back_stops=tuple(map(float, parts.back_stop)) or (design.alpha,) * stages,
-               palm_masses=tuple(map(float, parts.palm_mass)))
+               palm_masses=tuple(map(float, parts.palm_mass)),
+               link_masses=tuple(map(float, parts.link_mass)),
+               pivot_frictions=tuple(map(float, parts.pivot_friction)))
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,12 @@ ballistic path; the palm, now empty, swings alone (l th'' = g sin th) to one of 
 object may come down on that same palm while it swings (an impact with the palm at its angle
 and speed), on a palm at rest (the next, or any other), or on nothing: `missed`.
 
+On real links and pivots (docs/physics.md, section 2.1) the empty palm swings by Lagrange's
+equation with its links' inertia and weight, the Coulomb torque and the damping
+(phases.swing_acceleration): no closed form, so object and palm are integrated together with
+located events, as a bounce is (ode._bouncing with lifted=True): the palm's stops, its turning
+points (where pivot friction may hold it), the faces of every palm's contact box.
+
 Where the object meets the swinging palm is located exactly. Relative to the palm's top centre
 c(t) the object moves with the acceleration -g y - c'' = lambda r(th),
 lambda = v^2 / l - g cos th = (v0^2 + 2 g l cos th0 - 3 g l cos th) / l, along the palm's
@@ -153,14 +159,14 @@ class LiftOffPhases:
         v0 = l * omega0
         # A sliding lift-off is located by solve_ivp's event to its tolerance, perhaps a hair
         # before N = 0: start the free motion where the palm no longer pushes (v^2 >= g l cos th).
-        while ph.lift_off_guard(theta0, theta0, v0, gravity=g, link_length=l) < 0.0:
+        while self.plain and ph.lift_off_guard(theta0, theta0, v0, gravity=g,
+                                               link_length=l) < 0.0:
             v0 = max(math.nextafter(v0, math.inf), math.sqrt(g * l * math.cos(theta0)))
         state = self._on_palm(k, theta0, v0 / l, s, sd)
-        if not self.plain:  # the empty palm's swing below assumes massless links, free pivots
-            return self._fail(t0, "lift_off_on_links", k + 1, state,
-                              f"{detail}; the flight after a lift-off is modelled for massless "
-                              "links and free pivots only")
         self._log(t0, "lift_off", k + 1, state, state, detail)
+        if not self.plain:  # the empty palm on real links and pivots: integrated (ode.py)
+            obj = (state["x"], state["y"], state["vx"], state["vy"])
+            return lambda: self._bouncing(t0, k, *obj, theta0, v0 / l, lifted=True)
         planned = len(self.palm_events)
         self._release(k, t0, theta0, v0)
         fly = (t0, state["x"], state["y"], state["vx"], state["vy"])

@@ -16,9 +16,11 @@ import math
 import numpy as np
 
 from . import phases as ph
+from ..core import Event
 from .geometry import Arc, face_guards, first_contact, support_words
 
 SLIP_START_ATOLS = 100.0  # initial slip speed of a slip from relative rest, in units of atol
+LIFT_GAP = 1e-9  # link lengths the object rises above its palm after a lift-off before it counts
 
 
 class OdePhases:
@@ -150,8 +152,9 @@ class OdePhases:
         if self.plain:
             return (abs(math.tan(theta)) <= self.mu
                     and self.g * math.cos(theta) > self.ls[k] * omega ** 2)
-        thdd = ph.swing_acceleration(theta, omega, self.swing_loaded, direction=1.0)
-        fx, fn = ph.stuck_contact_force(theta, omega, thdd, gravity=self.g, link_length=self.l)
+        thdd = ph.swing_acceleration(theta, omega, self.swings_loaded[k], direction=1.0)
+        fx, fn = ph.stuck_contact_force(theta, omega, thdd, gravity=self.g,
+                                        link_length=self.ls[k])
         return fn > 0.0 and abs(fx) <= self.mu * fn
 
     def _jam(self, t, k, theta, omega, s, sd):
@@ -175,7 +178,7 @@ class OdePhases:
         the support (tip); th' -> 0 (stall: the palm stops short and swings back, or pivot
         friction holds it); front stop, beta on the last manipulator, and the first contact
         of the object's arc with a resting palm (closed form in th, geometry.first_contact)."""
-        sw, g, l, mu = self.swing_loaded, self.g, self.l, self.mu
+        sw, g, l, mu = self.swings_loaded[k], self.g, self.ls[k], self.mu
         lo, hi = self.row.support(s)
         half_h = 0.5 * self.h
 
@@ -232,10 +235,12 @@ class OdePhases:
             self._log(te, "slip", k + 1, state, state,
                       f"friction / normal = {abs(fx / fn):.6g} reaches mu = {mu:g}")
             return lambda: self._sliding(te, k, theta, omega, s, 0.0)
+        if kind == "lift_off":  # the object flies on (liftoff.py)
+            return self._lift_off(te, k, theta, omega, s, 0.0,
+                                  f"the normal force vanishes at th = {theta:.6g} rad")
         fx, fn = force(z)
         held = ph.held_by_friction(theta, sw)
         details = {
-            "lift_off": f"the normal force vanishes at th = {theta:.6g} rad",
             "tip": f"the contact force crosses the base at {-half_h * fx / fn:+.4g} m, outside "
                    f"the support [{lo:+.4g}, {hi:+.4g}] m, th = {theta:.6g} rad",
             "stall": (f"the palm stops at th = {theta:.6g} rad "
@@ -245,11 +250,13 @@ class OdePhases:
         }
         return self._fail(te, kind, k + 1, state, details[kind])
 
-    def _free_swing_arrival(self, theta0, w0):
+    def _free_swing_arrival(self, k, theta0, w0):
         """(dt, stop angle, speed there) of an empty palm on real links and pivots swinging from
         (th0, tangential speed w0): integrated to its front or back stop, or to where pivot
-        friction holds it (a turning point where its weight's torque is within the friction)."""
-        sw, l, t, theta, omega = self.swing_alone, self.l, 0.0, theta0, w0 / self.l
+        friction holds it (a turning point where its weight's torque is within the friction):
+        palm k's own swing and back stop."""
+        sw, l, t, theta, omega = self.swings_alone[k], self.ls[k], 0.0, theta0, w0 / self.ls[k]
+        back = self.alphas[k]
         for _ in range(50):  # turning points of a swing that friction and damping slow down
             if omega == 0.0:  # at rest: held, or it starts down the way gravity pulls
                 if ph.held_by_friction(theta, sw):
@@ -257,7 +264,7 @@ class OdePhases:
                 direction = 1.0 if theta > 0.0 else -1.0
             else:
                 direction = math.copysign(1.0, omega)
-            physics = [(lambda t_, z: z[0] + self.alpha, "back_stop"),
+            physics = [(lambda t_, z: z[0] + back, "back_stop"),
                        (lambda t_, z: self.fs - z[0], "front_stop"),
                        (lambda t_, z: direction * z[1], "turn")]
             te, z, kind, _ = self._integrate(
@@ -265,7 +272,7 @@ class OdePhases:
                 t, [theta, omega], physics, [])
             theta, omega, t = float(z[0]), float(z[1]), te
             if kind in ("back_stop", "front_stop"):
-                stop = -self.alpha if kind == "back_stop" else self.fs
+                stop = -back if kind == "back_stop" else self.fs
                 return t, stop, abs(omega) * l
             if kind != "turn":
                 return math.inf, theta, 0.0
@@ -273,29 +280,46 @@ class OdePhases:
         return t, theta, 0.0
 
     # ------------------------------------------------------------ bouncing (restitution > 0)
-    def _bouncing(self, t0, k, x, y, vx, vy, theta, omega, leaving=True):
-        """Object in flight above its palm k, which swings freely (l th'' = g sin th); leaving:
-        the object leaves the palm's top face at t0 (False: the phase goes on after a split)."""
+    def _bouncing(self, t0, k, x, y, vx, vy, theta, omega, leaving=True, lifted=False):
+        """Object in flight above its palm k, which swings freely (l th'' = g sin th; on real
+        links and pivots phases.swing_acceleration, split where the palm turns: the Coulomb
+        torque changes sign there, or holds it); leaving: the object leaves the palm's top face
+        at t0 (False: the phase goes on after a split); lifted: the flight after a lift-off
+        off palm k (liftoff.py), whose fall past the row is `missed` and whose contact with
+        palm k is a landing."""
         g, l = self.g, self.ls[k]
+        physics = [(lambda t, z: z[4] + self.alphas[k], "back_stop"),
+                   (lambda t, z: self.fs - z[4], "front_stop"),
+                   (lambda t, z: z[1] - self.y_floor, "fell_clear")]
+        if self.plain:
+            def rhs(t, z):
+                return [z[2], z[3], 0.0, -g, z[5], g * math.sin(z[4]) / l]
+        else:  # the palm on real links and pivots, moving one way (turn: it stops)
+            sw = self.swings_alone[k]
+            way = math.copysign(1.0, omega) if omega != 0.0 else (1.0 if theta > 0.0 else -1.0)
+            if omega == 0.0 and ph.held_by_friction(theta, sw):
+                return self._palm_held(t0, k, theta, (x, y, vx, vy))
 
-        def rhs(t, z):
-            if not self.plain:  # the palm on real links and pivots
-                return [z[2], z[3], 0.0, -g, z[5], ph.swing_acceleration(z[4], z[5],
-                                                                       self.swing_alone)]
-            return [z[2], z[3], 0.0, -g, z[5], g * math.sin(z[4]) / l]
+            def rhs(t, z):
+                return [z[2], z[3], 0.0, -g, z[5], ph.swing_acceleration(z[4], z[5], sw, way)]
+
+            physics.append((lambda t, z: way * z[5], "turn"))
 
         def point(z):
             return z[0], z[1]
 
-        physics = [(lambda t, z: z[4] + self.alphas[k], "back_stop"),
-                   (lambda t, z: self.fs - z[4], "front_stop"),
-                   (lambda t, z: z[1] - self.y_floor, "fell_clear")]
         faces = [(f, d, v, (kind, k))
                  for f, d, v, kind in face_guards(lambda z: self.row.box(k, z[4]), point)]
         # The object leaves the carrier's top face at t0: its gap to that face starts at zero.
         # gap / (t - t0) starts at the separation speed instead and has the same later root.
+        # After a lift-off that speed is zero too (the gap grows like (t - t0)^3 at first,
+        # below the rounding of the heights): the face is left out until the gap has exceeded
+        # LIFT_GAP link lengths (`separated` splits the phase there).
         gap, gn0 = faces[0][0], vy + l * omega * math.sin(theta)
-        if leaving:
+        if lifted and leaving:
+            physics.append((lambda t, z: LIFT_GAP * l - gap(t, z), "separated"))
+            del faces[0]
+        elif leaving:
             faces[0] = ((lambda t, z: gap(t, z) / (t - t0) if t > t0 else gn0),) + faces[0][1:]
         for box in self._obstacles(t0, k):
             faces += [(f, d, v, (kind, box.palm))
@@ -311,15 +335,28 @@ class OdePhases:
         z = [float(v) for v in z]
         state = {"x": z[0], "y": z[1], "vx": z[2], "vy": z[3], "theta": z[4], "omega": z[5]}
         if kind is None and t_split is not None and te >= t_split:
-            return lambda: self._bouncing(te, k, *z, leaving=False)
+            return lambda: self._bouncing(te, k, *z, leaving=False, lifted=lifted)
+        if kind == "separated":
+            return lambda: self._bouncing(te, k, *z, leaving=False, lifted=lifted)
+        if kind == "turn":  # the palm stops: held by pivot friction, or it swings back
+            z[5] = 0.0
+            return lambda: self._bouncing(te, k, *z, leaving=False, lifted=lifted)
         if kind is None:
             return self._fail(te, "timeout", k + 1, state, "no event while bouncing")
         if kind in ("back_stop", "front_stop"):
             stop = -self.alphas[k] if kind == "back_stop" else self.fs
             self.rest_angle[k], self.rest_since[k] = stop, te
-            self._log(te, kind, k + 1, state, dict(state, theta=stop, omega=0.0),
-                      f"palm {k + 1} stopped while the object is in the air")
+            after = dict(state, theta=stop, omega=0.0)
+            if lifted:  # a palm event, as an empty palm's stop after a lift-off (liftoff.py)
+                self.palm_events.append(Event(float(te), kind, k + 1, state, after,
+                                              f"empty palm {k + 1} stopped"))
+            else:
+                self._log(te, kind, k + 1, state, after,
+                          f"palm {k + 1} stopped while the object is in the air")
             return lambda: self._flight(te, z[0], z[1], z[2], z[3], stage=k + 1)
+        if kind == "fell_clear" and lifted:
+            return self._fail(te, "missed", k + 1, state,
+                              "fell past the row after the lift-off, landing on no palm")
         if kind == "fell_clear":
             return self._fail(te, "fell_clear", k + 1, state, "fell past the row")
         face, j = kind
@@ -327,10 +364,21 @@ class OdePhases:
             return self._fail(te, "blocked", k + 1, state, f"hits the side of palm {j + 1}")
         if j == k:
             return self._impact(te, k, z[4], l * z[5], z[0], z[1], z[2], z[3],
-                                log_as="rebound", stage=k + 1, before=state, at_rest=False)
+                                log_as="landing" if lifted else "rebound", stage=k + 1,
+                                before=state, at_rest=False)
         self._release(k, te, z[4], l * z[5])
         return self._impact(te, j, self.rest_angle[j], 0.0, z[0], z[1], z[2], z[3],
                             log_as="landing", stage=k + 1, before=state, at_rest=True)
+
+    def _palm_held(self, t, k, theta, obj):
+        """Palm k, empty, has stopped at theta where pivot friction holds it: it rests there
+        (an obstacle) and the object flies on among the resting palms."""
+        self.rest_angle[k], self.rest_since[k] = theta, t
+        self.palm_events.append(Event(float(t), "pivot_friction_stop", k + 1,
+                                      {"theta": float(theta), "omega": 0.0},
+                                      {"theta": float(theta), "omega": 0.0},
+                                      f"empty palm {k + 1} stopped"))
+        return lambda: self._flight(t, *obj, stage=k + 1)
 
 
 def _event(fun, direction, terminal):

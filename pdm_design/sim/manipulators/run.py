@@ -35,24 +35,19 @@ class Run(OdePhases, LiftOffPhases):
         self.g, self.l = scene.gravity, design.link_length
         self.m = scene.body.mass
         self.M = scene.body.mass / design.mass_ratio
-        self.q = design.mass_ratio
-        self.plain = scene.plain_mechanism
-        if not self.plain:  # links and pivots (docs/physics.md, section 2.1)
-            if self.row.parts_vary:
-                raise SimulationRefused(
-                    "every manipulator's own link length, back stop or palm mass on real links "
-                    "and pivots is not modelled yet: vary the pivots only, or leave out "
-                    "[scene.links] and [scene.pivots]")
-            self._mechanism(scene, design)
         self.mu, self.eps = scene.palm.friction, scene.palm.restitution
         self.alpha, self.beta, self.fs = design.alpha, design.beta, scene.palm.front_stop
         self.h = scene.body.height
         self.n = stages
         self.initial = scene.initial
         # every manipulator's own link, back stop and palm mass (geometry.Parts; nominal: all
-        # the design's); self.l, self.alpha and self.M stay the design's, for the run's scales
+        # the design's); self.l and self.alpha stay the design's, for the run's scales
         self.ls, self.alphas = self.row.link_lengths, self.row.back_stops
         self.Ms = self.row.palm_masses or (self.M,) * stages
+        self.plain = (scene.plain_mechanism and not any(self.row.link_masses)
+                      and not any(self.row.pivot_frictions))
+        if not self.plain:  # links and pivots (docs/physics.md, section 2.1), palm by palm
+            self._mechanism(scene, design)
         self.qs = tuple(self.m / M for M in self.Ms)
         self.rest_angle = [-a for a in self.alphas]
         self.rest_since = [-math.inf] * stages
@@ -73,25 +68,34 @@ class Run(OdePhases, LiftOffPhases):
         self.phase_time = PHASE_TIME * math.sqrt(self.l / self.g)
 
     def _mechanism(self, scene, design):
-        """Links and pivots: the impacts see the palm-plus-links mass felt along the swing
-        (mass ratio m / (M + J)), the swings their inertia, weight and pivot torques."""
-        kw = dict(object_mass=self.m, gravity=self.g, link_length=self.l, **scene.mechanism())
-        felt, g_p, _ = phys.palm_terms(design.mass_ratio, **kw)
-        self.q = phys.carry_terms(design.mass_ratio, **kw)[0]
-        weight = felt * g_p / self.g
-        piv = scene.pivots
-        self.swing_alone = ph.Swing(felt, weight, piv.friction_torque, piv.damping, self.g,
-                                    self.l)
-        self.swing_loaded = ph.Swing(felt + self.m, weight + self.m, piv.friction_torque,
-                                     piv.damping, self.g, self.l)
-        self.M = felt
+        """Links and pivots, every palm its own (its link length, palm mass, link mass and
+        pivot friction): the impacts see the palm-plus-links mass felt along the swing (mass
+        ratio m / (M + J): self.Ms becomes M + J), the swings their inertia, weight and pivot
+        torques (self.swings_alone, self.swings_loaded: phases.Swing)."""
+        row, damping = self.row, scene.pivots.damping
+        self.swings_alone, self.swings_loaded, felt_masses = [], [], []
+        for k in range(self.n):
+            l = self.ls[k]
+            mech = scene.mechanism(
+                link_mass=row.link_masses[k] if row.link_masses else None,
+                friction_torque=row.pivot_frictions[k] if row.pivot_frictions else None,
+                length_scale=l / self.l if l != self.l else None)
+            ratio = self.m / self.Ms[k] if row.palm_masses else design.mass_ratio
+            felt, g_p, _ = phys.palm_terms(ratio, object_mass=self.m, gravity=self.g,
+                                           link_length=l, **mech)
+            weight, torque = felt * g_p / self.g, mech["friction_torque"]
+            self.swings_alone.append(ph.Swing(felt, weight, torque, damping, self.g, l))
+            self.swings_loaded.append(ph.Swing(felt + self.m, weight + self.m, torque, damping,
+                                               self.g, l))
+            felt_masses.append(felt)
+        self.Ms = tuple(felt_masses)
 
     def _slide_params(self, sgn, k):
         """The sliding carry's parameters (phases.SlideParams) on palm k, slip direction sgn."""
         if self.plain:
             return ph.SlideParams(self.m, self.Ms[k], self.mu, self.g, self.ls[k], sgn)
-        sw = self.swing_alone
-        return ph.SlideParams(self.m, self.M, self.mu, self.g, self.l, sgn, sw.weight,
+        sw = self.swings_alone[k]
+        return ph.SlideParams(self.m, self.Ms[k], self.mu, self.g, self.ls[k], sgn, sw.weight,
                               sw.torque, sw.damping)
 
     # ------------------------------------------------------------ driver and bookkeeping
@@ -173,7 +177,7 @@ class Run(OdePhases, LiftOffPhases):
                                                    back_stop=-self.alphas[k],
                                                    front_stop=self.fs)
         else:
-            dt, stop, speed = self._free_swing_arrival(theta, w)
+            dt, stop, speed = self._free_swing_arrival(k, theta, w)
         self.rest_angle[k], self.rest_since[k] = stop, t + dt
         if len(self.swinging) > 2:  # palms at rest by now are dropped now and then
             self.swinging = [j for j in self.swinging if self.rest_since[j] > t]
