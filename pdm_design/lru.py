@@ -48,3 +48,7 @@ class Bounded:
     def __len__(self) -> int:
         with self._lock:
             return len(self._items)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._items.clear()
