@@ -39,6 +39,7 @@ from .outcome import BuildOutcome
 
 PARKED_CAP = 16  # palms parked behind the carrying one checked, at most
 INSIDE_ANGLES = 32  # angles inside a carry on real links where its guards are compared
+AHEAD = 2  # palms beyond the one the object goes to checked one by one; the rest by a bound
 
 
 def run_builds(scene, design, deviations: dict, stages: int) -> BuildOutcome:
@@ -124,11 +125,13 @@ class _Builds:
         m, w, mu = v["object_mass"], v["object_width"], v["friction"]
         self.half_w = 0.5 * w
         self.invalid(v)
+        self.row_boxes(w)
         cx, cy = self.rest_top(0)
         fall = self.y0 - cy
         vx, vy0 = v["feed_vx"], v["feed_vy"]
         self.group(0, [("blocked", fall / v["link_length"][0], False)])
         q_fall = np.sqrt(vy0**2 + 2.0 * self.g * np.maximum(fall, 0.0))
+        self.flight_meets_others(v["feed_x"], vx, vy0, (vy0 + q_fall) / self.g)
         offset = v["feed_x"] + vx * (vy0 + q_fall) / self.g - cx
         self.meets(0, offset, w)
         u = self.land(0, vx, -q_fall, offset, m, w, mu, passed=0)
@@ -262,13 +265,14 @@ class _Builds:
         px, py = v["pivot_x"][k], v["pivot_y"][k]
         l, a = v["link_length"][k], v["back_stop"][k]
         terms = self.terms(k)
-        self.group(k, self.guards(k, -a, u * u, offset, w, mu, terms))
         last = k + 1 == self.stages
         if last:
             theta = np.full(self.n, self.beta)
         else:
             nx, ny = self.rest_top(k + 1)
             theta = np.arccos(np.clip((ny - py) / l, -1.0, 1.0))
+        self.arc_meets_others(k, theta, offset)
+        self.group(k, self.guards(k, -a, u * u, offset, w, mu, terms))
         self.group(k, [("stall", _margin(u * u, self.need(a, theta, terms, l)), True)])
         if not last:
             self.group(k, [("blocked", (py + l * np.cos(a) - ny) / l, False)])
@@ -289,6 +293,90 @@ class _Builds:
         vx, vy = speed * np.cos(theta), -speed * np.sin(theta)
         u = self.land(k + 1, vx, vy, offset, v["object_mass"], w, mu, passed=k + 1)
         return u, offset
+
+    # -- other palms in the way -------------------------------------------------------------
+    def row_boxes(self, w):
+        """Every palm's contact box at rest on its back stop (docs/manipulators_model.md 1.:
+        the object's reference point inside |x - cx| < R, cy - T - h < y < cy meets it), the
+        smallest rear edge cx - R of the palms from each one on, and the largest x any part of
+        the palms up to each one reaches at any angle (pivot x + l + R): the bounds that stand
+        for the palms beyond those checked one by one."""
+        v = self.v
+        self.reach = 0.5 * (w + self.W)
+        self.box_x, self.box_y = phys.palm_centre(v["pivot_x"], v["pivot_y"], -v["back_stop"],
+                                                  v["link_length"])
+        self.rear_from = np.minimum.accumulate((self.box_x - self.reach)[::-1], axis=0)[::-1]
+        self.front_upto = np.maximum.accumulate(v["pivot_x"] + v["link_length"] + self.reach,
+                                                axis=0)
+
+    def _in_box(self, j, lo, hi):
+        """The path's heights over the stretch where it is within palm j's box along x, [lo,
+        hi] (lo > hi: no such stretch), reach into the box's heights (closed, with a hair)."""
+        top = self.box_y[j]
+        hair = 1e-9 * self.v["link_length"][j]
+        return (lo <= hi) & (hi > top - self.T - self.h - hair) & (lo < top + hair)
+
+    def _others_ahead(self, first, x_end, window):
+        """Builds whose path meets a resting palm from `first` on: palms first .. first + AHEAD
+        - 1 exactly (window(j) gives the path's heights within palm j's box along x), the rest
+        by the bound: their rear edges all lie beyond the path's largest x, x_end."""
+        hit = np.zeros(self.n, bool)
+        for j in range(first, min(first + AHEAD, self.stages)):
+            hit |= self._in_box(j, *window(j))
+        if first + AHEAD < self.stages:
+            hit |= ~(self.rear_from[first + AHEAD] > x_end)
+        return hit
+
+    def flight_meets_others(self, x0, vx, vy0, t_end):
+        """The feed's flight (x0 + vx t, y0 + vy0 t - g t^2 / 2, 0 <= t <= t_end) comes down on
+        palm 1's top; a build whose flight enters the box of another palm first is left to the
+        simulator (it lands on that palm or hits its side: closed_form False). Exact for the
+        palms checked one by one: x is linear in t, and y, concave, ranges over [its smaller
+        end, its value at the vertex clipped to the stretch]."""
+        g, y0 = self.g, self.y0
+        moving = vx != 0.0
+        step = np.where(moving, vx, 1.0)
+
+        def window(j):
+            ta, tb = ((self.box_x[j] + side * self.reach - x0) / step for side in (-1.0, 1.0))
+            inside = np.abs(x0 - self.box_x[j]) <= self.reach
+            lo_t = np.maximum(np.where(moving, np.minimum(ta, tb), np.where(inside, 0.0, np.inf)),
+                              0.0)
+            hi_t = np.minimum(np.where(moving, np.maximum(ta, tb), np.where(inside, t_end,
+                                                                            -np.inf)), t_end)
+            y = lambda t: y0 + t * (vy0 - 0.5 * g * t)  # noqa: E731
+            peak = y(np.clip(vy0 / g, lo_t, np.maximum(lo_t, hi_t)))
+            return np.where(lo_t <= hi_t, np.minimum(y(lo_t), y(hi_t)), np.inf), peak
+
+        hit = self._others_ahead(1, np.maximum(x0, x0 + vx * t_end), window)
+        self.closed &= ~(self.alive & hit)
+
+    def arc_meets_others(self, k, theta, offset):
+        """The carry on palm k takes the object along (P_k,x + o + l sin th, P_k,y + l cos th)
+        from -a_k to the handover angle theta, where it comes down on palm k + 1's top (the
+        first time it is below that top: it starts above it, else `blocked`). A build whose arc
+        enters the box of a palm further on first, or reaches a palm parked behind beyond those
+        parked_palms checks, is left to the simulator. Exact for the palms checked one by one
+        (x grows with th, y = l cos th is unimodal); a bound for the others."""
+        v = self.v
+        px, py = v["pivot_x"][k], v["pivot_y"][k]
+        l, a = v["link_length"][k], v["back_stop"][k]
+        end = np.clip(theta, -a, 0.5 * math.pi)
+
+        def window(j):
+            lo, hi = ((self.box_x[j] + side * self.reach - px - offset) / l for side in (-1, 1))
+            th_lo = np.maximum(-a, np.arcsin(np.clip(lo, -1.0, 1.0)))
+            th_hi = np.minimum(end, np.arcsin(np.clip(hi, -1.0, 1.0)))
+            th_hi = np.where((lo <= 1.0) & (hi >= -1.0), th_hi, -np.inf)
+            low = py + l * np.minimum(np.cos(th_lo), np.cos(th_hi))
+            peak = py + l * np.cos(np.clip(0.0, th_lo, np.maximum(th_lo, th_hi)))
+            return np.where(th_lo <= th_hi, low, np.inf), peak
+
+        hit = self._others_ahead(k + 2, px + offset + l * np.sin(end), window)
+        behind = k - min(k, self.parked) - 1
+        if behind >= 0:
+            hit |= ~(self.front_upto[behind] < px + offset - l * np.sin(a))
+        self.closed &= ~(self.alive & hit)
 
     def held_short(self, k, theta):
         """Palm k, empty after the handover at theta, may stop short of its front stop where
