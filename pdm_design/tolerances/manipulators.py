@@ -297,34 +297,41 @@ class _Builds:
     # -- other palms in the way -------------------------------------------------------------
     def row_boxes(self, w):
         """Every palm's contact box at rest on its back stop (docs/manipulators_model.md 1.:
-        the object's reference point inside |x - cx| < R, cy - T - h < y < cy meets it), the
-        smallest rear edge cx - R of the palms from each one on, and the largest x any part of
-        the palms up to each one reaches at any angle (pivot x + l + R): the bounds that stand
-        for the palms beyond those checked one by one."""
+        the object's reference point inside |x - cx| < R, cy - T - h < y < cy meets it), and
+        the bounds that stand for many palms at once: the highest top cy and the smallest rear
+        edge cx - R of the palms from each one on, and the largest x any part of the palms up
+        to each one reaches at any angle (pivot x + l + R)."""
         v = self.v
-        self.reach = 0.5 * (w + self.W)
+        self.reach = np.broadcast_to(0.5 * (w + self.W), (self.n,))
         self.box_x, self.box_y = phys.palm_centre(v["pivot_x"], v["pivot_y"], -v["back_stop"],
                                                   v["link_length"])
+        self.top_from = np.maximum.accumulate(self.box_y[::-1], axis=0)[::-1]
         self.rear_from = np.minimum.accumulate((self.box_x - self.reach)[::-1], axis=0)[::-1]
         self.front_upto = np.maximum.accumulate(v["pivot_x"] + v["link_length"] + self.reach,
                                                 axis=0)
+        self.hair = 1e-9 * v["link_length"].max(axis=0)  # boxes taken closed, and a hair wider
 
-    def _in_box(self, j, lo, hi):
-        """The path's heights over the stretch where it is within palm j's box along x, [lo,
-        hi] (lo > hi: no such stretch), reach into the box's heights (closed, with a hair)."""
-        top = self.box_y[j]
-        hair = 1e-9 * self.v["link_length"][j]
-        return (lo <= hi) & (hi > top - self.T - self.h - hair) & (lo < top + hair)
-
-    def _others_ahead(self, first, x_end, window):
-        """Builds whose path meets a resting palm from `first` on: palms first .. first + AHEAD
-        - 1 exactly (window(j) gives the path's heights within palm j's box along x), the rest
-        by the bound: their rear edges all lie beyond the path's largest x, x_end."""
+    def _others_ahead(self, first, lowest, x_end, window):
+        """Builds (alive) whose path meets a resting palm from `first` on. Where every such
+        palm's top lies below the path's lowest point (`lowest`), none; elsewhere palms first ..
+        first + AHEAD - 1 exactly (window(j, idx) gives the path's lowest and highest points
+        over the stretch where it is within palm j's box along x, lowest > highest: no such
+        stretch) and the rest by a bound: their rear edges lie beyond the path's largest x,
+        x_end(idx)."""
         hit = np.zeros(self.n, bool)
+        if first >= self.stages:
+            return hit
+        idx = np.flatnonzero(self.alive & ~(self.top_from[first] < lowest - self.hair))
+        if not len(idx):
+            return hit
+        near = np.zeros(len(idx), bool)
         for j in range(first, min(first + AHEAD, self.stages)):
-            hit |= self._in_box(j, *window(j))
+            low, high = window(j, idx)
+            top, hair = self.box_y[j][idx], self.hair[idx]
+            near |= (low <= high) & (high > top - self.T - self.h - hair) & (low < top + hair)
         if first + AHEAD < self.stages:
-            hit |= ~(self.rear_from[first + AHEAD] > x_end)
+            near |= ~(self.rear_from[first + AHEAD][idx] > x_end(idx))
+        hit[idx] = near
         return hit
 
     def flight_meets_others(self, x0, vx, vy0, t_end):
@@ -334,22 +341,26 @@ class _Builds:
         palms checked one by one: x is linear in t, and y, concave, ranges over [its smaller
         end, its value at the vertex clipped to the stretch]."""
         g, y0 = self.g, self.y0
-        moving = vx != 0.0
-        step = np.where(moving, vx, 1.0)
+        x0, vx, vy0, t_end = (np.broadcast_to(q, (self.n,)) for q in (x0, vx, vy0, t_end))
 
-        def window(j):
-            ta, tb = ((self.box_x[j] + side * self.reach - x0) / step for side in (-1.0, 1.0))
-            inside = np.abs(x0 - self.box_x[j]) <= self.reach
-            lo_t = np.maximum(np.where(moving, np.minimum(ta, tb), np.where(inside, 0.0, np.inf)),
-                              0.0)
-            hi_t = np.minimum(np.where(moving, np.maximum(ta, tb), np.where(inside, t_end,
-                                                                            -np.inf)), t_end)
-            y = lambda t: y0 + t * (vy0 - 0.5 * g * t)  # noqa: E731
-            peak = y(np.clip(vy0 / g, lo_t, np.maximum(lo_t, hi_t)))
-            return np.where(lo_t <= hi_t, np.minimum(y(lo_t), y(hi_t)), np.inf), peak
+        def window(j, i):
+            moving, start, speed, end = vx[i] != 0.0, x0[i], vx[i], t_end[i]
+            step = np.where(moving, speed, 1.0)
+            ta, tb = ((self.box_x[j][i] + side * self.reach[i] - start) / step
+                      for side in (-1.0, 1.0))
+            inside = np.abs(start - self.box_x[j][i]) <= self.reach[i]
+            lo = np.maximum(np.where(moving, np.minimum(ta, tb), np.where(inside, 0.0, np.inf)),
+                            0.0)
+            hi = np.minimum(np.where(moving, np.maximum(ta, tb), np.where(inside, end, -np.inf)),
+                            end)
+            y = lambda t: y0 + t * (vy0[i] - 0.5 * g * t)  # noqa: E731
+            peak = y(np.clip(vy0[i] / g, lo, np.maximum(lo, hi)))
+            return np.where(lo <= hi, np.minimum(y(lo), y(hi)), np.inf), peak
 
-        hit = self._others_ahead(1, np.maximum(x0, x0 + vx * t_end), window)
-        self.closed &= ~(self.alive & hit)
+        lowest = np.minimum(y0, self.box_y[0])  # the parabola's lowest point is an end
+        hit = self._others_ahead(1, lowest,
+                                 lambda i: np.maximum(x0[i], x0[i] + vx[i] * t_end[i]), window)
+        self.closed &= ~hit
 
     def arc_meets_others(self, k, theta, offset):
         """The carry on palm k takes the object along (P_k,x + o + l sin th, P_k,y + l cos th)
@@ -361,22 +372,30 @@ class _Builds:
         v = self.v
         px, py = v["pivot_x"][k], v["pivot_y"][k]
         l, a = v["link_length"][k], v["back_stop"][k]
-        end = np.clip(theta, -a, 0.5 * math.pi)
 
-        def window(j):
-            lo, hi = ((self.box_x[j] + side * self.reach - px - offset) / l for side in (-1, 1))
-            th_lo = np.maximum(-a, np.arcsin(np.clip(lo, -1.0, 1.0)))
-            th_hi = np.minimum(end, np.arcsin(np.clip(hi, -1.0, 1.0)))
+        def end(i):  # the carry's last angle (beyond pi/2 a build is `stranded`)
+            return np.clip(theta[i], -a[i], 0.5 * math.pi)
+
+        def window(j, i):
+            lo, hi = ((self.box_x[j][i] + side * self.reach[i] - px[i] - offset[i]) / l[i]
+                      for side in (-1, 1))
+            th_lo = np.maximum(-a[i], np.arcsin(np.clip(lo, -1.0, 1.0)))
+            th_hi = np.minimum(end(i), np.arcsin(np.clip(hi, -1.0, 1.0)))
             th_hi = np.where((lo <= 1.0) & (hi >= -1.0), th_hi, -np.inf)
-            low = py + l * np.minimum(np.cos(th_lo), np.cos(th_hi))
-            peak = py + l * np.cos(np.clip(0.0, th_lo, np.maximum(th_lo, th_hi)))
+            low = py[i] + l[i] * np.minimum(np.cos(th_lo), np.cos(th_hi))
+            peak = py[i] + l[i] * np.cos(np.clip(0.0, th_lo, np.maximum(th_lo, th_hi)))
             return np.where(th_lo <= th_hi, low, np.inf), peak
 
-        hit = self._others_ahead(k + 2, px + offset + l * np.sin(end), window)
+        hit = np.zeros(self.n, bool)
+        if k + 2 < self.stages:  # the arc's lowest point is an end (cos is unimodal): the
+            # start on palm k's top, or the handover at palm k + 1's (theta in [-a, pi/2])
+            lowest = np.minimum(self.box_y[k], self.box_y[k + 1])
+            hit = self._others_ahead(k + 2, lowest,
+                                     lambda i: px[i] + offset[i] + l[i] * np.sin(end(i)), window)
         behind = k - min(k, self.parked) - 1
-        if behind >= 0:
-            hit |= ~(self.front_upto[behind] < px + offset - l * np.sin(a))
-        self.closed &= ~(self.alive & hit)
+        if behind >= 0:  # the arc's smallest x is at its start
+            hit |= self.alive & ~(self.front_upto[behind] < self.box_x[k] + offset)
+        self.closed &= ~hit
 
     def held_short(self, k, theta):
         """Palm k, empty after the handover at theta, may stop short of its front stop where
