@@ -16,7 +16,7 @@ from pdm_design.sim.manipulators.geometry import Parts
 from pdm_design.spec import load_spec
 from pdm_design.tolerances import Tolerance, Tolerances, run_builds
 from pdm_design.tolerances.draw import draw
-from pdm_design.tolerances.manipulators import simulate_build
+from pdm_design.tolerances.manipulators import meets_another_palm, simulate_build
 from pdm_design.tolerances.yield_ import wilson, yield_of
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
@@ -345,30 +345,6 @@ def test_bouncing_landings_are_all_left_to_the_simulator(paper):
 
 # ------------------------------------------------- large tolerances: the object meets other palms
 
-def _meets_another_palm(run) -> bool:
-    """The simulated object met a palm other than the next one before any lift-off: the feed
-    came down on (or hit) a palm other than the first, a palm handed it past the next palm, or
-    a carry hit the side of a palm other than the next."""
-    import re
-
-    current = 0  # the palm carrying the object (1-based); 0 in the feed's flight
-    for event in run.events:
-        if event.kind == "lift_off":
-            return False
-        palms = [int(p) for p in re.findall(r"palm (\d+)", event.detail or "")]
-        if event.kind == "landing" and current == 0:
-            if event.after.get("palm") != 1:
-                return True
-            current = 1
-        elif event.kind == "handover":
-            if palms[-1] != current + 1:
-                return True
-            current = palms[-1]
-        elif event.kind == "blocked" and palms and palms[-1] != current + 1:
-            return True
-    return False
-
-
 LONG_ROW = load_spec(PROBLEMS / "manipulators_long_row.toml")
 PIVOTS_25 = (Tolerance("pivot_x", "each", 0.25), Tolerance("pivot_y", "each", 0.25))
 
@@ -394,7 +370,7 @@ def test_at_large_tolerances_the_map_judges_alone_only_what_it_follows(tolerance
         if out.failure[i] == "invalid_part":
             continue
         run = simulate_build(scene, design, {k: v[i:i + 1] for k, v in dev.items()}, stages)
-        if _meets_another_palm(run):
+        if meets_another_palm(run):
             others += 1
             assert not out.closed_form[i], i
         if out.closed_form[i]:

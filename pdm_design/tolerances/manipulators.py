@@ -20,11 +20,15 @@ per-stage logic of formulation/manipulator_offsets.py, extended to every part's 
                   speed v^2 = u^2 + 2 g l_k (cos a_k - cos th) along t(th), new offset
                   o' = P_k,x + o + l_k sin th - C'_x; it lands iff |o'| < (w + W)/2
   the last palm   carries the object to the design's beta: the run is complete.
+  other palms     the feed's flight and every carry's arc meet no palm but the one they end
+                  on (exact for the next AHEAD palms beyond it: the path's heights over its
+                  stretch within a box along x; bounds for the palms further on and for the
+                  parked palms behind those parked_palms checks); else closed_form = False.
 
 These are the simulator's own judgements in the regime it follows in closed form (plastic
 landings that stick, stuck carries; with a palm restitution > 0 no build is in it). A build
 that leaves it (a slip, a lift-off, a landing that drives the palm into its stop, a miss, a
-palm in the way) is marked closed_form = False with the failure the closed forms expect; the
+palm in the way, a palm other than the next met) is marked closed_form = False with the failure the closed forms expect; the
 event simulator has the last word on it.
 """
 
@@ -476,6 +480,31 @@ def _parked_rows(scene, design, stages) -> int:
     far = 2.0 * design.link_length + scene.palm.width + scene.body.width
     reach = math.ceil(far / pitch_x) if pitch_x > 0.0 else PARKED_CAP
     return max(0, min(stages - 1, reach, PARKED_CAP))
+
+
+def meets_another_palm(run) -> bool:
+    """A simulated run (sim.manipulators' result) whose object met a palm other than the next
+    one before any lift-off: the feed came down on (or hit) a palm other than the first, a palm
+    handed it past the next palm, or a carry hit the side of a palm other than the next. The
+    map leaves every such build to the simulator (tests/test_tolerances.py checks it)."""
+    import re
+
+    current = 0  # the palm carrying the object (1-based); 0 in the feed's flight
+    for event in run.events:
+        if event.kind == "lift_off":
+            return False
+        palms = [int(p) for p in re.findall(r"palm (\d+)", event.detail or "")]
+        if event.kind == "landing" and current == 0:
+            if event.after.get("palm") != 1:
+                return True
+            current = 1
+        elif event.kind == "handover":
+            if palms[-1] != current + 1:
+                return True
+            current = palms[-1]
+        elif event.kind == "blocked" and palms and palms[-1] != current + 1:
+            return True
+    return False
 
 
 def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="default",
