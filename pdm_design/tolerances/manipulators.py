@@ -28,8 +28,8 @@ per-stage logic of formulation/manipulator_offsets.py, extended to every part's 
 These are the simulator's own judgements in the regime it follows in closed form (plastic
 landings that stick, stuck carries; with a palm restitution > 0 no build is in it). A build
 that leaves it (a slip, a lift-off, a landing that drives the palm into its stop, a miss, a
-palm in the way, a palm other than the next met) is marked closed_form = False with the failure the closed forms expect; the
-event simulator has the last word on it.
+palm in the way, a palm other than the next met) is marked closed_form = False with the
+failure the closed forms expect; the event simulator has the last word on it.
 """
 
 from __future__ import annotations
