@@ -103,7 +103,8 @@ def main() -> None:
               "8b4d8fc), measured once: it judged alone builds whose object the simulator saw "
               "handed past a low palm or come down on a high one, and named a `tip` where the "
               "row went on or a `blocked` came first."]
-    lines[2] = f"Regenerate: `python results/yield_map_regime.py` ({time.perf_counter() - start:.0f} s)."
+    took = time.perf_counter() - start
+    lines[2] = f"Regenerate: `python results/yield_map_regime.py` ({took:.0f} s)."
     (ROOT / "results" / "yield_map_regime.md").write_text("\n".join(lines) + "\n")
 
 
