@@ -16,7 +16,7 @@ from pdm_design.sim.manipulators.geometry import Parts
 from pdm_design.spec import load_spec
 from pdm_design.tolerances import Tolerance, Tolerances, run_builds
 from pdm_design.tolerances.draw import draw
-from pdm_design.tolerances.manipulators import simulate_build
+from pdm_design.tolerances.manipulators import meets_another_palm, simulate_build
 from pdm_design.tolerances.yield_ import wilson, yield_of
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
@@ -341,3 +341,52 @@ def test_bouncing_landings_are_all_left_to_the_simulator(paper):
         width=1.6, restitution=0.3), initial=scene.initial)
     out = run_builds(bouncy, design, draw([Tolerance("pivot_x", "each", 0.01)], 20, 3, 0), 3)
     assert not out.closed_form.any()
+
+
+# ------------------------------------------------- large tolerances: the object meets other palms
+
+LONG_ROW = load_spec(PROBLEMS / "manipulators_long_row.toml")
+PIVOTS_25 = (Tolerance("pivot_x", "each", 0.25), Tolerance("pivot_y", "each", 0.25))
+
+
+@pytest.mark.parametrize("tolerances, scale", [
+    (PIVOTS_25, 1.0), (PIVOTS_25, 2.0), (PIVOTS_25, 3.0),
+    (tuple(LONG_ROW.tolerances), 3.0), (ALL, 2.0),
+])
+def test_at_large_tolerances_the_map_judges_alone_only_what_it_follows(tolerances, scale):
+    # pivots +-0.25 m off (manipulators_robust's optimum, as in manipulators_long_row) up to
+    # 3 times: the object is handed past a low palm, comes down on a high palm further on or
+    # hits its side. Every build is simulated: each one whose object meets a palm other than
+    # the next is left to the simulator, and every build the map judges alone it judges as
+    # the simulator does (stages passed and failure).
+    scene, design = LONG_ROW.scene, LONG_ROW.design_at()
+    stages, builds = 12, 200
+    scaled = [Tolerance(t.quantity, t.applies_to, t.value * scale, 1.0, t.distribution)
+              for t in tolerances]
+    dev = draw(scaled, builds, stages, seed=3)
+    out = run_builds(scene, design, dev, stages)
+    others = 0
+    for i in range(builds):
+        if out.failure[i] == "invalid_part":
+            continue
+        run = simulate_build(scene, design, {k: v[i:i + 1] for k, v in dev.items()}, stages)
+        if meets_another_palm(run):
+            others += 1
+            assert not out.closed_form[i], i
+        if out.closed_form[i]:
+            name = "" if run.outcome.completed else run.outcome.failure.kind
+            assert (run.outcome.stages_passed, name) == (out.stages_passed[i], out.failure[i]), i
+    assert others > (0 if scale == 1.0 else 10)  # the sample holds such builds
+    assert out.closed_form.sum() >= 5  # and builds the map judges alone
+
+
+def test_a_feed_passing_over_a_low_palm_is_left_to_the_simulator():
+    # palm 1 set 0.45 m back and 0.365 m low, palm 2 0.49 m high: the feed's flight comes down
+    # on palm 2's rear end (palm 1's top lies lower, under it) and the object tips there. The
+    # map, which lands it on palm 1, must not judge this build alone.
+    scene, design = LONG_ROW.scene, LONG_ROW.design_at()
+    dev = {"pivot_x": np.array([[-0.45, -0.16, 0.0]]), "pivot_y": np.array([[-0.365, 0.49, 0.0]])}
+    out = run_builds(scene, design, dev, 3)
+    run = simulate_build(scene, design, dev, 3)
+    assert run.events[0].kind == "landing" and run.events[0].after["palm"] == 2
+    assert not out.closed_form[0]

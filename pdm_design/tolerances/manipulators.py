@@ -20,12 +20,16 @@ per-stage logic of formulation/manipulator_offsets.py, extended to every part's 
                   speed v^2 = u^2 + 2 g l_k (cos a_k - cos th) along t(th), new offset
                   o' = P_k,x + o + l_k sin th - C'_x; it lands iff |o'| < (w + W)/2
   the last palm   carries the object to the design's beta: the run is complete.
+  other palms     the feed's flight and every carry's arc meet no palm but the one they end
+                  on (exact for the next AHEAD palms beyond it: the path's heights over its
+                  stretch within a box along x; bounds for the palms further on and for the
+                  parked palms behind those parked_palms checks); else closed_form = False.
 
 These are the simulator's own judgements in the regime it follows in closed form (plastic
 landings that stick, stuck carries; with a palm restitution > 0 no build is in it). A build
 that leaves it (a slip, a lift-off, a landing that drives the palm into its stop, a miss, a
-palm in the way) is marked closed_form = False with the failure the closed forms expect; the
-event simulator has the last word on it.
+palm in the way, a palm other than the next met) is marked closed_form = False with the
+failure the closed forms expect; the event simulator has the last word on it.
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ from .outcome import BuildOutcome
 
 PARKED_CAP = 16  # palms parked behind the carrying one checked, at most
 INSIDE_ANGLES = 32  # angles inside a carry on real links where its guards are compared
+AHEAD = 2  # palms beyond the one the object goes to checked one by one; the rest by a bound
 
 
 def run_builds(scene, design, deviations: dict, stages: int) -> BuildOutcome:
@@ -124,11 +129,13 @@ class _Builds:
         m, w, mu = v["object_mass"], v["object_width"], v["friction"]
         self.half_w = 0.5 * w
         self.invalid(v)
+        self.row_boxes(w)
         cx, cy = self.rest_top(0)
         fall = self.y0 - cy
         vx, vy0 = v["feed_vx"], v["feed_vy"]
         self.group(0, [("blocked", fall / v["link_length"][0], False)])
         q_fall = np.sqrt(vy0**2 + 2.0 * self.g * np.maximum(fall, 0.0))
+        self.flight_meets_others(v["feed_x"], vx, vy0, (vy0 + q_fall) / self.g)
         offset = v["feed_x"] + vx * (vy0 + q_fall) / self.g - cx
         self.meets(0, offset, w)
         u = self.land(0, vx, -q_fall, offset, m, w, mu, passed=0)
@@ -262,13 +269,14 @@ class _Builds:
         px, py = v["pivot_x"][k], v["pivot_y"][k]
         l, a = v["link_length"][k], v["back_stop"][k]
         terms = self.terms(k)
-        self.group(k, self.guards(k, -a, u * u, offset, w, mu, terms))
         last = k + 1 == self.stages
         if last:
             theta = np.full(self.n, self.beta)
         else:
             nx, ny = self.rest_top(k + 1)
             theta = np.arccos(np.clip((ny - py) / l, -1.0, 1.0))
+        self.arc_meets_others(k, theta, offset)
+        self.group(k, self.guards(k, -a, u * u, offset, w, mu, terms))
         self.group(k, [("stall", _margin(u * u, self.need(a, theta, terms, l)), True)])
         if not last:
             self.group(k, [("blocked", (py + l * np.cos(a) - ny) / l, False)])
@@ -289,6 +297,109 @@ class _Builds:
         vx, vy = speed * np.cos(theta), -speed * np.sin(theta)
         u = self.land(k + 1, vx, vy, offset, v["object_mass"], w, mu, passed=k + 1)
         return u, offset
+
+    # -- other palms in the way -------------------------------------------------------------
+    def row_boxes(self, w):
+        """Every palm's contact box at rest on its back stop (docs/manipulators_model.md 1.:
+        the object's reference point inside |x - cx| < R, cy - T - h < y < cy meets it), and
+        the bounds that stand for many palms at once: the highest top cy and the smallest rear
+        edge cx - R of the palms from each one on, and the largest x any part of the palms up
+        to each one reaches at any angle (pivot x + l + R)."""
+        v = self.v
+        self.reach = np.broadcast_to(0.5 * (w + self.W), (self.n,))
+        self.box_x, self.box_y = phys.palm_centre(v["pivot_x"], v["pivot_y"], -v["back_stop"],
+                                                  v["link_length"])
+        self.top_from = np.maximum.accumulate(self.box_y[::-1], axis=0)[::-1]
+        self.rear_from = np.minimum.accumulate((self.box_x - self.reach)[::-1], axis=0)[::-1]
+        self.front_upto = np.maximum.accumulate(v["pivot_x"] + v["link_length"] + self.reach,
+                                                axis=0)
+        self.hair = 1e-9 * v["link_length"].max(axis=0)  # boxes taken closed, and a hair wider
+
+    def _others_ahead(self, first, lowest, x_end, window):
+        """Builds (alive) whose path meets a resting palm from `first` on. Where every such
+        palm's top lies below the path's lowest point (`lowest`), none; elsewhere palms first ..
+        first + AHEAD - 1 exactly (window(j, idx) gives the path's lowest and highest points
+        over the stretch where it is within palm j's box along x, lowest > highest: no such
+        stretch) and the rest by a bound: their rear edges lie beyond the path's largest x,
+        x_end(idx)."""
+        hit = np.zeros(self.n, bool)
+        if first >= self.stages:
+            return hit
+        idx = np.flatnonzero(self.alive & ~(self.top_from[first] < lowest - self.hair))
+        if not len(idx):
+            return hit
+        near = np.zeros(len(idx), bool)
+        for j in range(first, min(first + AHEAD, self.stages)):
+            low, high = window(j, idx)
+            top, hair = self.box_y[j][idx], self.hair[idx]
+            near |= (low <= high) & (high > top - self.T - self.h - hair) & (low < top + hair)
+        if first + AHEAD < self.stages:
+            near |= ~(self.rear_from[first + AHEAD][idx] > x_end(idx))
+        hit[idx] = near
+        return hit
+
+    def flight_meets_others(self, x0, vx, vy0, t_end):
+        """The feed's flight (x0 + vx t, y0 + vy0 t - g t^2 / 2, 0 <= t <= t_end) comes down on
+        palm 1's top; a build whose flight enters the box of another palm first is left to the
+        simulator (it lands on that palm or hits its side: closed_form False). Exact for the
+        palms checked one by one: x is linear in t, and y, concave, ranges over [its smaller
+        end, its value at the vertex clipped to the stretch]."""
+        g, y0 = self.g, self.y0
+        x0, vx, vy0, t_end = (np.broadcast_to(q, (self.n,)) for q in (x0, vx, vy0, t_end))
+
+        def window(j, i):
+            moving, start, speed, end = vx[i] != 0.0, x0[i], vx[i], t_end[i]
+            step = np.where(moving, speed, 1.0)
+            ta, tb = ((self.box_x[j][i] + side * self.reach[i] - start) / step
+                      for side in (-1.0, 1.0))
+            inside = np.abs(start - self.box_x[j][i]) <= self.reach[i]
+            lo = np.maximum(np.where(moving, np.minimum(ta, tb), np.where(inside, 0.0, np.inf)),
+                            0.0)
+            hi = np.minimum(np.where(moving, np.maximum(ta, tb), np.where(inside, end, -np.inf)),
+                            end)
+            y = lambda t: y0 + t * (vy0[i] - 0.5 * g * t)  # noqa: E731
+            peak = y(np.clip(vy0[i] / g, lo, np.maximum(lo, hi)))
+            return np.where(lo <= hi, np.minimum(y(lo), y(hi)), np.inf), peak
+
+        lowest = np.minimum(y0, self.box_y[0])  # the parabola's lowest point is an end
+        hit = self._others_ahead(1, lowest,
+                                 lambda i: np.maximum(x0[i], x0[i] + vx[i] * t_end[i]), window)
+        self.closed &= ~hit
+
+    def arc_meets_others(self, k, theta, offset):
+        """The carry on palm k takes the object along (P_k,x + o + l sin th, P_k,y + l cos th)
+        from -a_k to the handover angle theta, where it comes down on palm k + 1's top (the
+        first time it is below that top: it starts above it, else `blocked`). A build whose arc
+        enters the box of a palm further on first, or reaches a palm parked behind beyond those
+        parked_palms checks, is left to the simulator. Exact for the palms checked one by one
+        (x grows with th, y = l cos th is unimodal); a bound for the others."""
+        v = self.v
+        px, py = v["pivot_x"][k], v["pivot_y"][k]
+        l, a = v["link_length"][k], v["back_stop"][k]
+
+        def end(i):  # the carry's last angle (beyond pi/2 a build is `stranded`)
+            return np.clip(theta[i], -a[i], 0.5 * math.pi)
+
+        def window(j, i):
+            lo, hi = ((self.box_x[j][i] + side * self.reach[i] - px[i] - offset[i]) / l[i]
+                      for side in (-1, 1))
+            th_lo = np.maximum(-a[i], np.arcsin(np.clip(lo, -1.0, 1.0)))
+            th_hi = np.minimum(end(i), np.arcsin(np.clip(hi, -1.0, 1.0)))
+            th_hi = np.where((lo <= 1.0) & (hi >= -1.0), th_hi, -np.inf)
+            low = py[i] + l[i] * np.minimum(np.cos(th_lo), np.cos(th_hi))
+            peak = py[i] + l[i] * np.cos(np.clip(0.0, th_lo, np.maximum(th_lo, th_hi)))
+            return np.where(th_lo <= th_hi, low, np.inf), peak
+
+        hit = np.zeros(self.n, bool)
+        if k + 2 < self.stages:  # the arc's lowest point is an end (cos is unimodal): the
+            # start on palm k's top, or the handover at palm k + 1's (theta in [-a, pi/2])
+            lowest = np.minimum(self.box_y[k], self.box_y[k + 1])
+            hit = self._others_ahead(k + 2, lowest,
+                                     lambda i: px[i] + offset[i] + l[i] * np.sin(end(i)), window)
+        behind = k - min(k, self.parked) - 1
+        if behind >= 0:  # the arc's smallest x is at its start
+            hit |= self.alive & ~(self.front_upto[behind] < self.box_x[k] + offset)
+        self.closed &= ~hit
 
     def held_short(self, k, theta):
         """Palm k, empty after the handover at theta, may stop short of its front stop where
@@ -369,6 +480,31 @@ def _parked_rows(scene, design, stages) -> int:
     far = 2.0 * design.link_length + scene.palm.width + scene.body.width
     reach = math.ceil(far / pitch_x) if pitch_x > 0.0 else PARKED_CAP
     return max(0, min(stages - 1, reach, PARKED_CAP))
+
+
+def meets_another_palm(run) -> bool:
+    """A simulated run (sim.manipulators' result) whose object met a palm other than the next
+    one before any lift-off: the feed came down on (or hit) a palm other than the first, a palm
+    handed it past the next palm, or a carry hit the side of a palm other than the next. The
+    map leaves every such build to the simulator (tests/test_tolerances.py checks it)."""
+    import re
+
+    current = 0  # the palm carrying the object (1-based); 0 in the feed's flight
+    for event in run.events:
+        if event.kind == "lift_off":
+            return False
+        palms = [int(p) for p in re.findall(r"palm (\d+)", event.detail or "")]
+        if event.kind == "landing" and current == 0:
+            if event.after.get("palm") != 1:
+                return True
+            current = 1
+        elif event.kind == "handover":
+            if palms[-1] != current + 1:
+                return True
+            current = palms[-1]
+        elif event.kind == "blocked" and palms and palms[-1] != current + 1:
+            return True
+    return False
 
 
 def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="default",
