@@ -38,11 +38,13 @@ Bounds that are not exact are outer bounds, so the box found is sound (never too
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import casadi as ca
 
 from ..errors import SpecError
 from ..physics import manipulators as phys
+from . import allocation
 from ..scenes import ManipulatorsDesign
 from .common import (
     MARGIN,
@@ -76,6 +78,8 @@ def build(spec):
     scene = spec.scene
     values, symbols, bounds = design_inputs(spec, ManipulatorsDesign.VARIABLES, DEFAULTS)
     robust = float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0
+    if allocation.allocating(spec):
+        allocation.check(spec)
     epigraph = float(spec.objective.get("max_min_margin", 0.0)) > 0.0
     stages = spec.verification.stages
 
@@ -87,7 +91,7 @@ def build(spec):
 
     m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages))
     m.steps = integrated_steps(spec, robust, values, bounds)
-    conditions = m.conditions(S, u_lo, u_hi, tau, robust)
+    conditions = box_conditions(spec, m, S, u_lo, u_hi, tau, robust)
     aux = [("periodic_speed_sq", S, 0.0, math.inf),
            ("landing_speed_lo", u_lo, 0.0, math.inf),
            ("landing_speed_hi", u_hi, 0.0, math.inf)]
@@ -121,6 +125,27 @@ def build(spec):
         objective_scale=objective_scale(spec.objective, min(l_max, 1.0)),
     )
     return model, bounds, m
+
+
+def box_conditions(spec, m, S, u_lo, u_hi, tau, robust):
+    """The conditions over the tolerance box: today's pivot box (|dx|, |dy| <= tau), or, when
+    the spec allocates ([tolerances], formulation/allocation.py), one half-width per quantity
+    (t_q = tau w_min / w_q, or its given value). Allocated, each row is first built on a symbol
+    per quantity, to record which quantities it depends on (Condition.quantities: the
+    conditions that limit each quantity), then the symbols are replaced by their half-widths."""
+    if not (robust and allocation.allocating(spec)):
+        return m.conditions(S, u_lo, u_hi, {"pivot_x": tau, "pivot_y": tau}, robust)
+    widths = allocation.half_widths(spec, tau)
+    symbols = {q: ca.SX.sym(f"t_{q}") for q in widths}
+    out = []
+    for c in m.conditions(S, u_lo, u_hi, symbols, robust):
+        slack, scale = (ca.SX(e) for e in (c.slack, c.scale))
+        used = tuple(q for q, t in symbols.items()
+                     if ca.depends_on(slack, t) or ca.depends_on(scale, t))
+        subs = [list(symbols.values()), [ca.SX(widths[q]) for q in symbols]]
+        out.append(replace(c, slack=ca.substitute([slack], *subs)[0],
+                           scale=ca.substitute([scale], *subs)[0], quantities=used))
+    return out
 
 
 def integrated_steps(spec, robust, values, bounds, force=False) -> int:
@@ -266,18 +291,29 @@ class _Model:
         u1 = self.first_speed(self.fall_speed(0.0))
         return [S, ca.fmax(ca.fmin(u1, u_star), 0.0), ca.fmax(u1, u_star)]
 
-    def landing_ranges(self, tau, robust):
+    def landing_ranges(self, box, robust):
         """(o1_hi, o1_lo), (later o_hi versions, later o_lo versions): outer bounds of the landing
-        offset on palm 1 and on every palm (module docstring)."""
+        offset on palm 1 and on every palm (module docstring) over the box {quantity:
+        half-width}: pivot_y (tau below), pivot_x and feed_x (the start's place: it moves
+        every landing place by its own error, docs/optimizer.md section 4a)."""
         vx0, C0, N = self.vx0, self.C0, self.stages
         if not robust:
             o = C0 + vx0 * self.flight_time(0.0)
             return (o, o), ([o], [o])
+        tau, t_x, t_f = (box.get(q, 0.0) for q in ("pivot_y", "pivot_x", "feed_x"))
+        o1, (o_hi, o_lo) = self._landing_ranges(tau, t_x, N)
+        shift = (lambda o, sign: o + sign * t_f) if _nonzero(t_f) else (lambda o, sign: o)
+        return ((shift(o1[0], 1), shift(o1[1], -1)),
+                ([shift(o, 1) for o in o_hi], [shift(o, -1) for o in o_lo]))
+
+    def _landing_ranges(self, tau, t_x, N):
+        """landing_ranges without the feed's error: tau the pivots' heights, t_x their places."""
+        vx0, C0 = self.vx0, self.C0
         t_up, t_down = self.flight_time(-tau), self.flight_time(tau)  # palm lower: longer flight
         if vx0 >= 0:
-            o1 = (C0 + vx0 * t_up + tau, C0 + vx0 * t_down - tau)
+            o1 = (C0 + vx0 * t_up + t_x, C0 + vx0 * t_down - t_x)
         else:
-            o1 = (C0 + vx0 * t_down + tau, C0 + vx0 * t_up - tau)
+            o1 = (C0 + vx0 * t_down + t_x, C0 + vx0 * t_up - t_x)
         if N < 2:
             return o1, ([o1[0]], [o1[1]])
         b, l = self.b, self.l
@@ -295,16 +331,24 @@ class _Model:
         cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
         r_ends = [l * (ca.sqrt(1 - cp**2) - ca.sin(b)) + 2 * tau * cot_b,
                   l * (ca.sqrt(1 - cm**2) - ca.sin(b)) - 2 * tau * cot_b]
-        spread = tau * (1 + cot_b)
+        spread = tau * (1 + cot_b) if t_x is tau else t_x + tau * cot_b
         o_hi = [C0 + p + spread for p in phi_max]
         o_lo = [C0 + p - spread + d for p in phi_min for d in drift_worst(N, r_ends)]
         return o1, (o_hi, o_lo)
 
     # -- the conditions -----------------------------------------------------------------------
-    def conditions(self, S, u_lo, u_hi, tau, robust):
+    def conditions(self, S, u_lo, u_hi, box, robust):
+        """Every condition over the box {quantity: half-width} (pivot_x, pivot_y, feed_x,
+        friction, object_width; a quantity left out is exact): outer bounds, module docstring
+        and docs/optimizer.md section 4a."""
         a, b, l, g = self.a, self.b, self.l, self.g
         body, palm = self.scene.body, self.scene.palm
-        mu, W, w, h = palm.friction, palm.width, body.width, body.height
+        tau = box.get("pivot_y", 0.0)  # the pivot heights: handover angles, fall, clearance
+        t_w = box.get("object_width", 0.0)
+        # every row is increasing in the friction (the stick rows: py > 0) and monotone in the
+        # width (wider: lands less fully on the palm, tips less over its own edges)
+        mu, W, h = palm.friction - box.get("friction", 0.0), palm.width, body.height
+        w, w_lo = body.width + t_w, body.width - t_w
         out: list[Condition] = []
 
         def add(keys, where, slack, scale=1.0, kind=MARGIN, **kw):
@@ -419,7 +463,7 @@ class _Model:
             add("front_stop", "largest handover angle before the front stop",
                 palm.front_stop - th_hi, palm.front_stop, epigraph=False)
 
-        (o1_hi, o1_lo), (o_hi, o_lo) = self.landing_ranges(tau, robust)
+        (o1_hi, o1_lo), (o_hi, o_lo) = self.landing_ranges(box, robust)
         # Palms parked at their front stops behind the carrying one stay clear of the object
         # (physics.parked_palm_clearance; each palm's landing offset lies between the smallest
         # of the o_lo versions and the largest of the o_hi ones, each pivot within the box).
@@ -428,7 +472,7 @@ class _Model:
                   "front_stop": palm.front_stop, "pitch_x": self.pitch_x,
                   "pitch_y": self.pitch_y, "offset_lo": fmin_all(o_lo),
                   "offset_hi": fmax_all(o_hi), "reach": (w + W) / 2,
-                  "depth": palm.thickness + h, "shift": 2 * tau}
+                  "depth": palm.thickness + h, "shift": 2 * _larger(tau, box.get("pivot_x", 0.0))}
         for n in range(1, self.parked + 1):
             add("parked_palms", f"palm {n} back, at its front stop",
                 phys.parked_palm_clearance(n, **parked), l, epigraph=False, deferred=True)
@@ -439,11 +483,11 @@ class _Model:
             add("landing", _v("object furthest behind", i, o_lo), W / 2 + o - w / 2, W / 2)
         # Tipping during the carry: the force point within the support (ahead of the centre at
         # the back stop, behind it at the handover).
-        add("tip_carry", "at the back stop, object's front edge", w / 2 - fp_back, w / 2)
+        add("tip_carry", "at the back stop, object's front edge", w_lo / 2 - fp_back, w_lo / 2)
         for i, o in enumerate(o_hi):
             add("tip_carry", _v("at the back stop, palm's front edge", i, o_hi),
                 W / 2 - o - fp_back, W / 2 - o)
-        add("tip_carry", "at the handover, object's rear edge", w / 2 - fp_front, w / 2)
+        add("tip_carry", "at the handover, object's rear edge", w_lo / 2 - fp_front, w_lo / 2)
         for i, o in enumerate(o_lo):
             add("tip_carry", _v("at the handover, palm's rear edge", i, o_lo),
                 W / 2 + o - fp_front, W / 2 + o)
@@ -452,12 +496,12 @@ class _Model:
         if self.stages >= 2:
             for where, th in thetas:
                 px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a, self.q)
-                impact_rows(add, self.scene, "slip_impact", "tip_impact", where, px, py, o_hi,
-                            o_lo)
+                impact_rows(add, (mu, W, w, w_lo, h), "slip_impact", "tip_impact", where, px,
+                            py, o_hi, o_lo)
         for where, Q in Qs:
             px, py = phys.landing_impulse(self.vx0, -Q, a, self.q)
-            impact_rows(add, self.scene, "first_slip_impact", "first_tip_impact", where, px, py,
-                        [o1_hi], [o1_lo])
+            impact_rows(add, (mu, W, w, w_lo, h), "first_slip_impact", "first_tip_impact",
+                        where, px, py, [o1_hi], [o1_lo])
         return out
 
 
@@ -471,12 +515,19 @@ def drift_worst(stages: int, r_ends) -> list:
     return [both + r for r in r_ends] if odd else [both]
 
 
-def impact_rows(add, scene, slip, tip, where, px, py, o_hi, o_lo):
+def scene_sizes(scene):
+    """impact_rows' sizes of a scene as specified (no tolerance box)."""
+    body, palm = scene.body, scene.palm
+    return palm.friction, palm.width, body.width, body.width, body.height
+
+
+def impact_rows(add, sizes, slip, tip, where, px, py, o_hi, o_lo):
     """Stick (|px| <= mu py) and no tip (impulse line through the support) at a landing with
     impulse (px, py) and landing offsets o_hi (furthest ahead) and o_lo (furthest behind):
-    add(key, where, slack, scale) once per row."""
-    body, palm = scene.body, scene.palm
-    mu, W, w, h = palm.friction, palm.width, body.width, body.height
+    add(key, where, slack, scale) once per row. sizes: (mu, W, w, w_lo, h), the friction, the
+    palm's width, the object's widest and narrowest width and its height (the rows over the
+    object's own edges ask most of the narrowest; the palm's edges' rows do not involve it)."""
+    mu, W, _, w, h = sizes
     sep = ", " if where else ""
     add(slip, f"{where}{sep}sliding back", mu * py - px, mu * py)
     add(slip, f"{where}{sep}sliding forward", mu * py + px, mu * py)
@@ -490,6 +541,17 @@ def impact_rows(add, scene, slip, tip, where, px, py, o_hi, o_lo):
     for i, o in enumerate(o_lo):
         add(tip, _v(f"{where}{sep}over the palm's rear edge", i, o_lo),
             (W / 2 + o) * py - h / 2 * px, (W / 2 + o) * py)
+
+
+def _nonzero(value) -> bool:
+    return not (isinstance(value, (int, float)) and value == 0.0)
+
+
+def _larger(a, b):
+    """The larger of two half-widths (one of them itself when they are the same expression)."""
+    if a is b or not _nonzero(b):
+        return a
+    return b if not _nonzero(a) else ca.fmax(a, b)
 
 
 def _v(text, i, versions):

@@ -1,0 +1,117 @@
+"""Worst-case tolerance allocation: which quantities of a spec's `[tolerances]` the robust NLP
+allocates, and the box half-width each gets (docs/optimizer.md section 4a).
+
+The rule: one scale variable s (the NLP's `tolerance`, maximised by `max_offset_tolerance`) and
+
+    t_q = s * w_min / w_q        for every quantity q with `allocate = true`, weight w_q,
+
+w_min the smallest of those weights: a quantity twice as cheap to hold tight (weight 2) gets half
+the tolerance, and s is the tolerance of the quantity that is dearest to hold tight (the
+smallest weight). With equal weights every allocated quantity gets t = s, whatever the weight's
+value, so pivot_x and pivot_y allocated alike are today's pivot box, the same NLP. Quantities
+with a given `value` enter the bounds as fixed half-widths t_q = value. The weights compare
+half-widths in SI units: between a length and a ratio (friction) a weight is also a choice of
+scale (weight 1000 on pivot_x against 1 on friction: a millimetre of pivot costs as much as 0.001
+of friction).
+
+A quantity enters the NLP only where a sound outer bound of every condition over its box is
+proven (docs/optimizer.md section 4a): ALLOCATABLE. A spec that allocates, or gives a value to,
+any other quantity while allocating is refused in words (exit 2), never guessed.
+"""
+
+from __future__ import annotations
+
+from ..errors import SpecError
+
+# Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
+ALLOCATABLE = {
+    "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width"),
+    "stairs": (),
+}
+# Why the others are refused: what a sound bound of them would need (the words of the error).
+NOT_YET = {
+    "link_length": "every stage's handover angle, speed map and landing place move with each "
+                   "link's own length; no outer bound of the speed interval over a box of link "
+                   "lengths is derived yet",
+    "back_stop": "each palm's rest angle moves its landing speed, impulse and the next "
+                 "handover at once; no outer bound over a box of stop angles is derived yet",
+    "palm_mass": "the mass ratio moves the speed map's contraction on every stage; no outer "
+                 "bound of the speed interval over a box of palm masses is derived yet",
+    "object_mass": "the object's mass moves the mass ratio of every stage; no outer bound of "
+                   "the speed interval over it is derived yet",
+    "feed_speed": "the first landing speed and place move together with the feed speed; no "
+                  "outer bound of both is derived yet",
+    "link_mass": "no outer bound over a box of link masses is derived yet",
+    "pivot_friction": "no outer bound over a box of pivot frictions is derived yet",
+}
+STAIRS_NOT_YET = ("the stairs' robust rows bound one box of rise and tread errors (the "
+                  "objective max_offset_tolerance alone); a per-quantity allocation is not "
+                  "derived yet")
+
+
+def allocating(spec) -> bool:
+    """Whether the spec's [tolerances] asks the optimizer to allocate a tolerance."""
+    return any(t.allocate for t in getattr(spec, "tolerances", ()))
+
+
+def coefficients(spec) -> dict[str, float]:
+    """{quantity: w_min / w_q} of every allocated quantity (t_q = s * coefficient)."""
+    allocated = [t for t in spec.tolerances if t.allocate]
+    w_min = min(t.weight for t in allocated)
+    return {t.quantity: w_min / t.weight for t in allocated}
+
+
+def given(spec) -> dict[str, float]:
+    """{quantity: value} of the quantities with a given tolerance (fixed half-widths)."""
+    return {t.quantity: float(t.value) for t in spec.tolerances if not t.allocate}
+
+
+def check(spec) -> None:
+    """Refuse (SpecError, exit 2) an allocation the robust rows cannot bound soundly."""
+    source = spec.source or "<spec>"
+    if float(spec.objective.get("max_offset_tolerance", 0.0)) <= 0.0:
+        name = next(t.quantity for t in spec.tolerances if t.allocate)
+        raise SpecError(source, f"tolerances.{name}.allocate",
+                        "an [objective] with max_offset_tolerance > 0 (allocation maximises "
+                        "the weighted tolerances)", found="no max_offset_tolerance")
+    allowed = ALLOCATABLE[spec.kind]
+    for tol in spec.tolerances:
+        if tol.quantity in allowed:
+            continue
+        key = "allocate" if tol.allocate else "value"
+        why = STAIRS_NOT_YET if spec.kind == "stairs" else NOT_YET.get(
+            tol.quantity, "no outer bound over its box is derived yet")
+        raise SpecError(source, f"tolerances.{tol.quantity}.{key}",
+                        "a quantity the worst-case allocation can bound: "
+                        + (", ".join(allowed) or "none on stairs yet") + f" ({why})",
+                        found=tol.quantity)
+
+
+def half_widths(spec, s) -> dict[str, object]:
+    """{quantity: half-width} of every toleranced quantity of an allocating spec: s times its
+    coefficient when allocated, its value when given (quantities not listed: exact)."""
+    out = {q: s * c if c != 1.0 else s for q, c in coefficients(spec).items()}
+    out.update(given(spec))
+    return out
+
+
+def values_at(spec, s: float) -> list[dict]:
+    """The tolerance list of an answer with scale s: one entry per toleranced quantity, the
+    allocated first ({quantity, applies_to, value (SI), unit, allocated})."""
+    from ..tolerances.model import QUANTITIES
+
+    coeff = coefficients(spec)
+    entries = []
+    for tol in sorted(spec.tolerances, key=lambda t: not t.allocate):
+        value = s * coeff[tol.quantity] if tol.allocate else float(tol.value)
+        entries.append({"quantity": tol.quantity, "applies_to": tol.applies_to,
+                        "value": float(value), "unit": QUANTITIES[spec.kind][tol.quantity].unit,
+                        "allocated": tol.allocate})
+    return entries
+
+
+def pivot_box(entries) -> dict[str, float]:
+    """{"dx", "dy"}: the pivots' half-widths of a tolerance list (0 where exact), the box the
+    pivot offsets are checked in (solve/check.py, verify/tolerance.py)."""
+    value = {e["quantity"]: e["value"] for e in entries}
+    return {"dx": float(value.get("pivot_x", 0.0)), "dy": float(value.get("pivot_y", 0.0))}
