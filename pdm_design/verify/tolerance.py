@@ -20,6 +20,7 @@ nominal run, every corner pattern and these few.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -55,25 +56,35 @@ def corner_patterns(stages: int) -> list[tuple[str, list[tuple[float, float]]]]:
 
 
 def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accuracy=None,
-                     seed: int = 0) -> dict:
+                     seed: int = 0, lots=None) -> dict:
     """Simulate the corner patterns and `samples` uniform random builds inside the box (fewer
-    on rows longer than RANDOM_ROW: `random_builds`)."""
+    on rows longer than RANDOM_ROW: `random_builds`). lots: an allocated tolerance list
+    (formulation/allocation.py); its quantities other than the pivots' (feed_x, friction,
+    object_width: one value a build) take every sign corner with every pivot pattern, and a
+    uniform value in each random build."""
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
-    builds = [(name, [(sx * half[0], sy * half[1]) for sx, sy in signs])
-              for name, signs in corner_patterns(stages)]
+    lot = {e["quantity"]: e["value"] for e in (lots or ()) if e["quantity"] in LOT_SCENE}
+    builds = [(name + _lot_name(signs_l), [(sx * half[0], sy * half[1]) for sx, sy in signs],
+               {q: sl * lot[q] for q, sl in zip(lot, signs_l)})
+              for name, signs in corner_patterns(stages)
+              for signs_l in itertools.product((1.0, -1.0), repeat=len(lot))]
     for i in range(random_builds(samples, stages)):
         draws = rng.uniform(-1.0, 1.0, size=(stages, 2)) * np.asarray(half)
-        builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws]))
+        built = {q: float(rng.uniform(-t, t)) for q, t in lot.items()}
+        builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws], built))
 
     failures = []
     with progress_bar(len(builds), "verifying the tolerance box") as advance:
-        for name, errors in builds:
+        for name, errors, deviations in builds:
             try:
-                result = simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
-            except SimulationRefused as refusal:  # e.g. a rise error larger than the rise
-                failures.append({"build": name, "errors": errors, "stages_passed": 0,
+                result = simulate_spec(_built(spec, deviations), design, accuracy=accuracy,
+                                       **_as_errors(spec, errors))
+            except (SimulationRefused, ValueError) as refusal:  # e.g. a rise error larger
+                # than the rise; a lot no scene can hold (a negative friction)
+                failures.append({"build": name, "errors": errors, "lots": deviations,
+                                 "stages_passed": 0,
                                  "failure": f"the simulator refuses this build: {refusal}"})
                 continue
             finally:
@@ -81,10 +92,34 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
             if not result.outcome.completed:
                 f = result.outcome.failure
                 what = f"{f.kind} at stage {f.stage}" if f else "incomplete"
-                failures.append({"build": name, "errors": errors, "failure": what,
+                failures.append({"build": name, "errors": errors, "lots": deviations,
+                                 "failure": what,
                                  "stages_passed": result.outcome.stages_passed})
     return {"passed": not failures, "samples": len(builds), "failures": failures,
             "box": dict(zip(_axes(spec), half, strict=True))}
+
+
+# a lot quantity's place in a manipulators scene: (the scene's part, its field)
+LOT_SCENE = {"feed_x": ("initial", "position"), "friction": ("palm", "friction"),
+             "object_width": ("body", "width")}
+
+
+def _lot_name(signs) -> str:
+    return "" if not signs else " with " + ", ".join(f"{s:+.0f}" for s in signs)
+
+
+def _built(spec: Spec, deviations: dict) -> Spec:
+    """The spec with its scene built off by one value of each lot quantity (LOT_SCENE)."""
+    if not deviations:
+        return spec
+    scene = spec.scene
+    for q, dev in deviations.items():
+        part, field = LOT_SCENE[q]
+        old = getattr(getattr(scene, part), field)
+        new = (old[0] + dev, old[1]) if q == "feed_x" else old + dev
+        scene = dataclasses.replace(scene, **{part: dataclasses.replace(
+            getattr(scene, part), **{field: new})})
+    return dataclasses.replace(spec, scene=scene)
 
 
 def _axes(spec: Spec) -> tuple[str, str]:

@@ -1,0 +1,149 @@
+"""Worst-case tolerance allocation (formulation/allocation.py, docs/optimizer.md section 4a):
+today's pivot box is the equal-weights case; the allocated box of every quantity holds in the
+event simulator at its corners, and 1.5 times it does not; bad allocations exit 2 in words."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pdm_design.solve import optimize
+from pdm_design.spec import load_spec
+from pdm_design.tolerances.manipulators import simulate_build
+from pdm_design.verify.tolerance import corner_patterns
+
+ROOT = Path(__file__).resolve().parent.parent
+BASE = (ROOT / "problems" / "manipulators_robust.toml").read_text().split("[expect]")[0]
+EVERY = """[tolerances]
+pivot_x = { allocate = true, weight = 1 }
+pivot_y = { allocate = true, weight = 2 }
+feed_x = { allocate = true, weight = 1 }
+friction = { allocate = true, weight = 10 }
+object_width = { allocate = true, weight = 2 }
+"""
+
+
+def _spec(tmp_path, extra, name="spec.toml", base=BASE):
+    path = tmp_path / name
+    path.write_text(base + "\n" + extra)
+    return load_spec(path)
+
+
+@pytest.fixture(scope="module")
+def every(tmp_path_factory):
+    spec = _spec(tmp_path_factory.mktemp("every"), EVERY)
+    return spec, optimize(spec)
+
+
+@pytest.mark.parametrize("weight", [1.0, 2.5])
+def test_equal_pivot_weights_are_todays_box(tmp_path, weight):
+    today = optimize(_spec(tmp_path, "", "today.toml"))
+    spec = _spec(tmp_path, f"[tolerances]\npivot_x = {{ allocate = true, weight = {weight} }}\n"
+                           f"pivot_y = {{ allocate = true, weight = {weight} }}\n")
+    result = optimize(spec)
+    assert result.status.value == "optimal"
+    assert abs(result.tolerance["dx"] - today.tolerance["dx"]) < 1e-9
+    assert abs(result.tolerance["dy"] - today.tolerance["dy"]) < 1e-9
+    assert [e["quantity"] for e in result.tolerances] == ["pivot_x", "pivot_y"]
+
+
+def test_weights_set_the_ratios(tmp_path, every):
+    spec, result = every
+    assert result.status.value == "optimal"
+    value = {e["quantity"]: e["value"] for e in result.tolerances}
+    s = value["pivot_x"]  # the smallest weight's tolerance is the scale itself
+    assert value["feed_x"] == pytest.approx(s, rel=1e-12)
+    assert value["pivot_y"] == pytest.approx(s / 2, rel=1e-12)
+    assert value["object_width"] == pytest.approx(s / 2, rel=1e-12)
+    assert value["friction"] == pytest.approx(s / 10, rel=1e-12)
+    assert result.checks["sampled_offsets"]["passed"]
+
+
+def _simulate(spec, result, scale, lots_signs, signs):
+    design = spec.design_at({n: result.design[n] for n in spec.free_variables})
+    value = {e["quantity"]: scale * e["value"] for e in result.tolerances}
+    stages = spec.verification.stages
+    deviations = {"pivot_x": np.array([[sx * value["pivot_x"] for sx, _ in signs]]),
+                  "pivot_y": np.array([[sy * value["pivot_y"] for _, sy in signs]])}
+    for q, sign in zip(("feed_x", "friction", "object_width"), lots_signs):
+        deviations[q] = np.array([sign * value[q]])
+    run = simulate_build(spec.scene, design, deviations, stages)
+    return run.outcome.completed
+
+
+def _corners(spec, result, scale):
+    """(pattern, lot signs) of every corner of the scaled box where the simulator fails."""
+    failed = []
+    for name, signs in corner_patterns(spec.verification.stages):
+        for lots in np.array(np.meshgrid(*[[1.0, -1.0]] * 3)).T.reshape(-1, 3):
+            if not _simulate(spec, result, scale, lots, signs):
+                failed.append((name, tuple(lots)))
+    return failed
+
+
+def test_every_corner_of_the_allocated_box_passes(every):
+    spec, result = every
+    assert _corners(spec, result, 1.0) == []
+
+
+def test_a_corner_beyond_the_box_fails(every):
+    spec, result = every
+    assert _corners(spec, result, 1.5)  # the box is not vacuous: 1.5 times it breaks a build
+
+
+def test_json_lists_every_tolerance_with_its_limits(tmp_path):
+    path = tmp_path / "every.toml"
+    path.write_text(BASE + "\n" + EVERY)
+    run = subprocess.run([sys.executable, "-m", "pdm_design", "optimize", str(path),
+                          "--format", "json"], capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(run.stdout)
+    entries = {e["quantity"]: e for e in doc["tolerances"]}
+    assert set(entries) == {"pivot_x", "pivot_y", "feed_x", "friction", "object_width"}
+    for e in entries.values():
+        assert set(e) == {"quantity", "applies_to", "value", "unit", "allocated", "limited_by"}
+    assert entries["pivot_x"]["unit"] == "m" and entries["friction"]["applies_to"] == "lot"
+    # the landing row binds and involves the pivots' places and the feed, not the friction
+    assert any(r["condition"] == "landing" for r in entries["pivot_x"]["limited_by"])
+    assert not any(r["condition"] == "landing" for r in entries["friction"]["limited_by"])
+    assert doc["verification"]["passed"]
+
+
+def test_given_value_is_a_fixed_half_width(tmp_path, every):
+    _, result = every
+    spec = _spec(tmp_path, "[tolerances]\npivot_x = { allocate = true }\n"
+                           "pivot_y = { allocate = true }\nfeed_x = { value = 0.05 }\n")
+    given = optimize(spec)
+    assert given.status.value == "optimal"
+    entries = {e["quantity"]: e for e in given.tolerances}
+    assert entries["feed_x"]["value"] == 0.05 and not entries["feed_x"]["allocated"]
+    today = optimize(_spec(tmp_path, "", "today.toml"))
+    assert given.tolerance["dx"] < today.tolerance["dx"]  # the feed's error takes a share
+
+
+@pytest.mark.parametrize("extra, key", [
+    ("link_length = { allocate = true }", "tolerances.link_length.allocate"),
+    ("pivot_x = { allocate = true }\npalm_mass = { value = 0.01 }", "tolerances.palm_mass.value"),
+])
+def test_unbounded_quantities_are_refused(tmp_path, extra, key):
+    path = tmp_path / "bad.toml"
+    path.write_text(BASE + "\n[tolerances]\n" + extra + "\n")
+    run = subprocess.run([sys.executable, "-m", "pdm_design", "optimize", str(path)],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 2
+    assert key in run.stderr and "expected a quantity the worst-case allocation can bound" in \
+        run.stderr and "Traceback" not in run.stderr
+    assert str(path) in run.stderr
+
+
+def test_allocation_needs_the_tolerance_objective(tmp_path):
+    path = tmp_path / "no_objective.toml"
+    path.write_text(BASE.replace("max_offset_tolerance = 1.0", "min_drop = 1.0")
+                    + "\n[tolerances]\npivot_x = { allocate = true }\n")
+    run = subprocess.run([sys.executable, "-m", "pdm_design", "optimize", str(path)],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 2 and "tolerances.pivot_x.allocate" in run.stderr
+    assert "max_offset_tolerance" in run.stderr and "Traceback" not in run.stderr
