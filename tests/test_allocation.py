@@ -147,3 +147,13 @@ def test_allocation_needs_the_tolerance_objective(tmp_path):
                          capture_output=True, text=True, cwd=ROOT)
     assert run.returncode == 2 and "tolerances.pivot_x.allocate" in run.stderr
     assert "max_offset_tolerance" in run.stderr and "Traceback" not in run.stderr
+
+
+def test_stairs_allocation_is_refused_in_words(tmp_path):
+    base = (ROOT / "problems" / "stairs_design.toml").read_text().split("[expect]")[0]
+    path = tmp_path / "stairs.toml"
+    path.write_text(base + "\n[tolerances]\nrise = { allocate = true }\n")
+    run = subprocess.run([sys.executable, "-m", "pdm_design", "optimize", str(path)],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 2 and "tolerances.rise.allocate" in run.stderr
+    assert "Traceback" not in run.stderr

@@ -55,6 +55,7 @@ import casadi as ca
 
 from ..physics import stairs as phys
 from ..scenes import StairsDesign
+from . import allocation
 from .common import (
     MARGIN,
     MODEL,
@@ -95,6 +96,8 @@ EXACT_LAUNCH = ("comes down: gap while falling", "comes down: height over the no
 
 
 def build(spec):
+    if allocation.allocating(spec):  # refused in words: no per-quantity bounds here yet
+        allocation.check(spec)
     scene = spec.scene
     values, symbols, bounds = design_inputs(spec, StairsDesign.VARIABLES, DEFAULTS)
     robust = float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0
