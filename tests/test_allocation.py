@@ -2,6 +2,7 @@
 today's pivot box is the equal-weights case; the allocated box of every quantity holds in the
 event simulator at its corners, and 1.5 times it does not; bad allocations exit 2 in words."""
 
+import itertools
 import json
 import subprocess
 import sys
@@ -23,7 +24,9 @@ pivot_y = { allocate = true, weight = 2 }
 feed_x = { allocate = true, weight = 1 }
 friction = { allocate = true, weight = 10 }
 object_width = { allocate = true, weight = 2 }
+feed_speed = { allocate = true, weight = 2 }
 """
+LOTS = ("feed_x", "friction", "object_width", "feed_speed")
 
 
 def _spec(tmp_path, extra, name="spec.toml", base=BASE):
@@ -59,6 +62,7 @@ def test_weights_set_the_ratios(tmp_path, every):
     assert value["pivot_y"] == pytest.approx(s / 2, rel=1e-12)
     assert value["object_width"] == pytest.approx(s / 2, rel=1e-12)
     assert value["friction"] == pytest.approx(s / 10, rel=1e-12)
+    assert value["feed_speed"] == pytest.approx(s / 2, rel=1e-12)
     assert result.checks["sampled_offsets"]["passed"]
 
 
@@ -68,7 +72,7 @@ def _simulate(spec, result, scale, lots_signs, signs):
     stages = spec.verification.stages
     deviations = {"pivot_x": np.array([[sx * value["pivot_x"] for sx, _ in signs]]),
                   "pivot_y": np.array([[sy * value["pivot_y"] for _, sy in signs]])}
-    for q, sign in zip(("feed_x", "friction", "object_width"), lots_signs):
+    for q, sign in zip(LOTS, lots_signs):
         deviations[q] = np.array([sign * value[q]])
     run = simulate_build(spec.scene, design, deviations, stages)
     return run.outcome.completed
@@ -78,7 +82,7 @@ def _corners(spec, result, scale):
     """(pattern, lot signs) of every corner of the scaled box where the simulator fails."""
     failed = []
     for name, signs in corner_patterns(spec.verification.stages):
-        for lots in np.array(np.meshgrid(*[[1.0, -1.0]] * 3)).T.reshape(-1, 3):
+        for lots in itertools.product((1.0, -1.0), repeat=len(LOTS)):
             if not _simulate(spec, result, scale, lots, signs):
                 failed.append((name, tuple(lots)))
     return failed
@@ -102,7 +106,7 @@ def test_json_lists_every_tolerance_with_its_limits(tmp_path):
     assert run.returncode == 0, run.stderr
     doc = json.loads(run.stdout)
     entries = {e["quantity"]: e for e in doc["tolerances"]}
-    assert set(entries) == {"pivot_x", "pivot_y", "feed_x", "friction", "object_width"}
+    assert set(entries) == {"pivot_x", "pivot_y", *LOTS}
     for e in entries.values():
         assert set(e) == {"quantity", "applies_to", "value", "unit", "allocated", "limited_by"}
     assert entries["pivot_x"]["unit"] == "m" and entries["friction"]["applies_to"] == "lot"

@@ -25,7 +25,7 @@ from ..errors import SpecError
 
 # Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
 ALLOCATABLE = {
-    "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width"),
+    "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed"),
     "stairs": (),
 }
 # Why the others are refused: what a sound bound of them would need (the words of the error).
@@ -39,8 +39,6 @@ NOT_YET = {
                  "bound of the speed interval over a box of palm masses is derived yet",
     "object_mass": "the object's mass moves the mass ratio of every stage; no outer bound of "
                    "the speed interval over it is derived yet",
-    "feed_speed": "the first landing speed and place move together with the feed speed; no "
-                  "outer bound of both is derived yet",
     "link_mass": "no outer bound over a box of link masses is derived yet",
     "pivot_friction": "no outer bound over a box of pivot frictions is derived yet",
 }
@@ -75,6 +73,12 @@ def check(spec) -> None:
                         "an [objective] with max_offset_tolerance > 0 (allocation maximises "
                         "the weighted tolerances)", found="no max_offset_tolerance")
     allowed = ALLOCATABLE[spec.kind]
+    if spec.kind == "manipulators" and spec.scene.initial.velocity[1] != 0.0 and any(
+            t.quantity == "feed_speed" for t in spec.tolerances):
+        raise SpecError(source, "tolerances.feed_speed", "a horizontal start (initial."
+                        "velocity[1] = 0) to bound the feed speed's tolerance (along a sloped "
+                        "start it moves the fall speed as well; not derived yet)",
+                        found=f"initial.velocity[1] = {spec.scene.initial.velocity[1]:g}")
     for tol in spec.tolerances:
         if tol.quantity in allowed:
             continue

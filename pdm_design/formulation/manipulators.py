@@ -37,6 +37,7 @@ Bounds that are not exact are outer bounds, so the box found is sound (never too
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import replace
 
@@ -245,8 +246,15 @@ class _Model:
     def flight_time(self, dy):
         return (self.vy0 + self.fall_speed(dy)) / self.g
 
-    def first_speed(self, Q):
-        return phys.landing_speed(self.vx0, -Q, self.a, self.q)
+    def first_speed(self, Q, vx=None):
+        return phys.landing_speed(self.vx0 if vx is None else vx, -Q, self.a, self.q)
+
+    def feed_speeds(self, box):
+        """The horizontal start speeds the box allows: the spec's, or both ends of the feed
+        speed's tolerance (a horizontal start: allocation.check; u_1 and the first impact's
+        rows are affine in it, the landing place bilinear, docs/optimizer.md section 4a)."""
+        t_v = box.get("feed_speed", 0.0)
+        return [self.vx0] if not _nonzero(t_v) else [self.vx0 - t_v, self.vx0 + t_v]
 
     def next_speed(self, u, th):
         """Landing speed on the next palm after carrying at u from -alpha to the handover th."""
@@ -301,16 +309,27 @@ class _Model:
             o = C0 + vx0 * self.flight_time(0.0)
             return (o, o), ([o], [o])
         tau, t_x, t_f = (box.get(q, 0.0) for q in ("pivot_y", "pivot_x", "feed_x"))
-        o1, (o_hi, o_lo) = self._landing_ranges(tau, t_x, N)
+        o1, (o_hi, o_lo) = self._landing_ranges(tau, t_x, N, self.vx0)
+        if len(speeds := self.feed_speeds(box)) > 1:  # a bound for each end; the worst holds
+            ranges = [self._landing_ranges(tau, t_x, N, vx) for vx in speeds]
+            o1 = (fmax_all([r[0][0] for r in ranges]), fmin_all([r[0][1] for r in ranges]))
+            o_hi = [o for r in ranges for o in r[1][0]]
+            o_lo = [o for r in ranges for o in r[1][1]]
         shift = (lambda o, sign: o + sign * t_f) if _nonzero(t_f) else (lambda o, sign: o)
         return ((shift(o1[0], 1), shift(o1[1], -1)),
                 ([shift(o, 1) for o in o_hi], [shift(o, -1) for o in o_lo]))
 
-    def _landing_ranges(self, tau, t_x, N):
-        """landing_ranges without the feed's error: tau the pivots' heights, t_x their places."""
-        vx0, C0 = self.vx0, self.C0
+    def _landing_ranges(self, tau, t_x, N, vx0):
+        """landing_ranges without the feed place's error: tau the pivots' heights, t_x their
+        places, vx0 the start speed (a number, or an expression of unknown sign: then both
+        cases' bounds, the larger and the smaller of them)."""
+        C0 = self.C0
+        signed = isinstance(vx0, (int, float))
         t_up, t_down = self.flight_time(-tau), self.flight_time(tau)  # palm lower: longer flight
-        if vx0 >= 0:
+        if not signed:  # vx0 t over t in [t_down, t_up]: at an end
+            o1 = (fmax_all([vx0 * t_up, vx0 * t_down]) + C0 + t_x,
+                  fmin_all([vx0 * t_up, vx0 * t_down]) + C0 - t_x)
+        elif vx0 >= 0:
             o1 = (C0 + vx0 * t_up + t_x, C0 + vx0 * t_down - t_x)
         else:
             o1 = (C0 + vx0 * t_down + t_x, C0 + vx0 * t_up - t_x)
@@ -322,7 +341,9 @@ class _Model:
         slope = cot_b - vx0 / self.fall_speed(0.0)  # d phi / d dy_1 at 0
         phi_plus = vx0 * t_down + cot_b * tau
         phi_minus = vx0 * t_up - cot_b * tau
-        if vx0 >= 0:  # phi concave: tangent above, ends below
+        if not signed:  # concave or convex: the tangent and the ends bound it either way
+            phi_max = phi_min = [phi0 + slope * tau, phi0 - slope * tau, phi_plus, phi_minus]
+        elif vx0 >= 0:  # phi concave: tangent above, ends below
             phi_max = [phi0 + slope * tau, phi0 - slope * tau]
             phi_min = [phi_plus, phi_minus]
         else:  # phi convex: ends above, tangent below
@@ -379,7 +400,8 @@ class _Model:
         else:
             add((), "periodic handover speed: S (1 - c) = D", S * (1 - self.c) - self.D,
                 kind=MODEL, equality=True)
-        u1_lo, u1_hi = self.first_speed(Q_hi), self.first_speed(Qs[0][1])
+        speeds = self.feed_speeds(box)  # u_1 increases with the start speed
+        u1_lo, u1_hi = self.first_speed(Q_hi, speeds[0]), self.first_speed(Qs[0][1], speeds[-1])
         # The interval rows keep the backoff in speed units (sqrt(g l)): without it, an
         # interval met only to IPOPT's tolerance let the first landing stall 1e-4 rad short of
         # the top in 3 of 900 random specs; in m/s it would be a size-dependent 1e-6 m/s.
@@ -415,8 +437,8 @@ class _Model:
             add((), "interval invariant (high)", u_hi - self.next_speed(u_hi, b), **model)
 
         # Validity of the closed forms.
-        add(("forward_landing",), "first landing moves the palm forward", self.first_speed(Q_hi),
-            scale=self.k * ca.sqrt(self.vx0**2 + Q_hi**2), kind=VALIDITY)
+        add(("forward_landing",), "first landing moves the palm forward", u1_lo,
+            scale=self.k * ca.sqrt(speeds[0]**2 + Q_hi**2), kind=VALIDITY)
         add(("forward_landing",), "handover moves the next palm forward",
             phys.landing_speed(ca.cos(th_hi), -ca.sin(th_hi), a, self.q), scale=self.k,
             kind=VALIDITY)
@@ -498,10 +520,12 @@ class _Model:
                 px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a, self.q)
                 impact_rows(add, (mu, W, w, w_lo, h), "slip_impact", "tip_impact", where, px,
                             py, o_hi, o_lo)
-        for where, Q in Qs:
-            px, py = phys.landing_impulse(self.vx0, -Q, a, self.q)
+        # bilinear in (start speed, fall speed): each row holds on the rectangle iff at its corners
+        feeds = [""] if len(speeds) == 1 else ["feed slow", "feed fast"]
+        for (where, Q), (feed, vx) in itertools.product(Qs, zip(feeds, speeds)):
+            px, py = phys.landing_impulse(vx, -Q, a, self.q)
             impact_rows(add, (mu, W, w, w_lo, h), "first_slip_impact", "first_tip_impact",
-                        where, px, py, [o1_hi], [o1_lo])
+                        ", ".join(x for x in (where, feed) if x), px, py, [o1_hi], [o1_lo])
         return out
 
 

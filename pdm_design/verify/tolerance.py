@@ -101,7 +101,7 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
 
 # a lot quantity's place in a manipulators scene: (the scene's part, its field)
 LOT_SCENE = {"feed_x": ("initial", "position"), "friction": ("palm", "friction"),
-             "object_width": ("body", "width")}
+             "object_width": ("body", "width"), "feed_speed": ("initial", "velocity")}
 
 
 def _lot_name(signs) -> str:
@@ -116,10 +116,19 @@ def _built(spec: Spec, deviations: dict) -> Spec:
     for q, dev in deviations.items():
         part, field = LOT_SCENE[q]
         old = getattr(getattr(scene, part), field)
-        new = (old[0] + dev, old[1]) if q == "feed_x" else old + dev
+        new = (old[0] + dev, old[1]) if q == "feed_x" else _faster(old, dev) if \
+            q == "feed_speed" else old + dev
         scene = dataclasses.replace(scene, **{part: dataclasses.replace(
             getattr(scene, part), **{field: new})})
     return dataclasses.replace(spec, scene=scene)
+
+
+def _faster(velocity, dev):
+    """The start velocity with its speed dev more, along it (+x when it is 0), as the yield's
+    builds take it (tolerances.manipulators.build_values)."""
+    speed = float(np.hypot(*velocity))
+    vx, vy = (velocity[0] / speed, velocity[1] / speed) if speed > 0.0 else (1.0, 0.0)
+    return (velocity[0] + dev * vx, velocity[1] + dev * vy)
 
 
 def _axes(spec: Spec) -> tuple[str, str]:
