@@ -25,8 +25,10 @@ feed_x = { allocate = true, weight = 1 }
 friction = { allocate = true, weight = 10 }
 object_width = { allocate = true, weight = 2 }
 feed_speed = { allocate = true, weight = 2 }
+palm_mass = { allocate = true, weight = 10 }
+object_mass = { allocate = true, weight = 10 }
 """
-LOTS = ("feed_x", "friction", "object_width", "feed_speed")
+LOTS = ("feed_x", "friction", "object_width", "feed_speed", "palm_mass", "object_mass")
 
 
 def _spec(tmp_path, extra, name="spec.toml", base=BASE):
@@ -63,6 +65,7 @@ def test_weights_set_the_ratios(tmp_path, every):
     assert value["object_width"] == pytest.approx(s / 2, rel=1e-12)
     assert value["friction"] == pytest.approx(s / 10, rel=1e-12)
     assert value["feed_speed"] == pytest.approx(s / 2, rel=1e-12)
+    assert value["palm_mass"] == pytest.approx(s / 10, rel=1e-12)
     assert result.checks["sampled_offsets"]["passed"]
 
 
@@ -72,8 +75,9 @@ def _simulate(spec, result, scale, lots_signs, signs):
     stages = spec.verification.stages
     deviations = {"pivot_x": np.array([[sx * value["pivot_x"] for sx, _ in signs]]),
                   "pivot_y": np.array([[sy * value["pivot_y"] for _, sy in signs]])}
-    for q, sign in zip(LOTS, lots_signs):
-        deviations[q] = np.array([sign * value[q]])
+    for q, sign in zip(LOTS, lots_signs):  # the palms' masses: every palm alike
+        deviations[q] = np.full((1, stages), sign * value[q]) if q == "palm_mass" else \
+            np.array([sign * value[q]])
     run = simulate_build(spec.scene, design, deviations, stages)
     return run.outcome.completed
 
@@ -130,7 +134,7 @@ def test_given_value_is_a_fixed_half_width(tmp_path, every):
 
 @pytest.mark.parametrize("extra, key", [
     ("link_length = { allocate = true }", "tolerances.link_length.allocate"),
-    ("pivot_x = { allocate = true }\npalm_mass = { value = 0.01 }", "tolerances.palm_mass.value"),
+    ("pivot_x = { allocate = true }\nback_stop = { value = 0.01 }", "tolerances.back_stop.value"),
 ])
 def test_unbounded_quantities_are_refused(tmp_path, extra, key):
     path = tmp_path / "bad.toml"

@@ -25,7 +25,8 @@ from ..errors import SpecError
 
 # Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
 ALLOCATABLE = {
-    "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed"),
+    "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
+                     "palm_mass", "object_mass"),
     "stairs": (),
 }
 # Why the others are refused: what a sound bound of them would need (the words of the error).
@@ -35,10 +36,6 @@ NOT_YET = {
                    "lengths is derived yet",
     "back_stop": "each palm's rest angle moves its landing speed, impulse and the next "
                  "handover at once; no outer bound over a box of stop angles is derived yet",
-    "palm_mass": "the mass ratio moves the speed map's contraction on every stage; no outer "
-                 "bound of the speed interval over a box of palm masses is derived yet",
-    "object_mass": "the object's mass moves the mass ratio of every stage; no outer bound of "
-                   "the speed interval over it is derived yet",
     "link_mass": "no outer bound over a box of link masses is derived yet",
     "pivot_friction": "no outer bound over a box of pivot frictions is derived yet",
 }
@@ -79,6 +76,12 @@ def check(spec) -> None:
                         "velocity[1] = 0) to bound the feed speed's tolerance (along a sloped "
                         "start it moves the fall speed as well; not derived yet)",
                         found=f"initial.velocity[1] = {spec.scene.initial.velocity[1]:g}")
+    masses = [t.quantity for t in spec.tolerances if t.quantity in ("palm_mass", "object_mass")]
+    if spec.kind == "manipulators" and masses and not spec.scene.plain_mechanism:
+        raise SpecError(source, f"tolerances.{masses[0]}", "the paper's device (massless "
+                        "links, frictionless pivots) to bound a mass's tolerance (with links or "
+                        "pivot friction the masses enter the carry; not derived yet)",
+                        found="scene.links or scene.pivots")
     for tol in spec.tolerances:
         if tol.quantity in allowed:
             continue

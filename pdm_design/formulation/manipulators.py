@@ -246,8 +246,21 @@ class _Model:
     def flight_time(self, dy):
         return (self.vy0 + self.fall_speed(dy)) / self.g
 
-    def first_speed(self, Q, vx=None):
-        return phys.landing_speed(self.vx0 if vx is None else vx, -Q, self.a, self.q)
+    def first_speed(self, Q, vx=None, q=None):
+        return phys.landing_speed(self.vx0 if vx is None else vx, -Q, self.a,
+                                  self.q if q is None else q)
+
+    def mass_ratios(self, box):
+        """The mass ratios m / M the box allows, as [q] or [q_lo, q_hi] (the object's mass and
+        the palms' within their tolerances; the paper's device: allocation.check). Every
+        landing speed is m / (m + M), increasing in q, times a factor free of the masses, and
+        the carry is free of them (docs/optimizer.md section 4a)."""
+        t_m, t_M = box.get("object_mass", 0.0), box.get("palm_mass", 0.0)
+        if not (_nonzero(t_m) or _nonzero(t_M)):
+            return [self.q]
+        m = self.scene.body.mass
+        M = m / self.q
+        return [(m - t_m) / (M + t_M), (m + t_m) / (M - t_M)]
 
     def feed_speeds(self, box):
         """The horizontal start speeds the box allows: the spec's, or both ends of the feed
@@ -256,10 +269,12 @@ class _Model:
         t_v = box.get("feed_speed", 0.0)
         return [self.vx0] if not _nonzero(t_v) else [self.vx0 - t_v, self.vx0 + t_v]
 
-    def next_speed(self, u, th):
-        """Landing speed on the next palm after carrying at u from -alpha to the handover th."""
+    def next_speed(self, u, th, q=None):
+        """Landing speed on the next palm after carrying at u from -alpha to the handover th
+        (q: that palm's mass ratio, the spec's by default)."""
         v = ca.sqrt(self.carry_v2(u, th))
-        return phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), self.a, self.q)
+        return phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), self.a,
+                                  self.q if q is None else q)
 
     def carry_v2(self, u, th, lowest=False):
         """v^2 at th on a carry that left -alpha at u: the closed form, or with pivot damping
@@ -400,8 +415,10 @@ class _Model:
         else:
             add((), "periodic handover speed: S (1 - c) = D", S * (1 - self.c) - self.D,
                 kind=MODEL, equality=True)
-        speeds = self.feed_speeds(box)  # u_1 increases with the start speed
-        u1_lo, u1_hi = self.first_speed(Q_hi, speeds[0]), self.first_speed(Qs[0][1], speeds[-1])
+        speeds = self.feed_speeds(box)  # u_1 increases with the start speed and the mass ratio
+        qs = self.mass_ratios(box)
+        u1_lo = self.first_speed(Q_hi, speeds[0], qs[0])
+        u1_hi = self.first_speed(Qs[0][1], speeds[-1], qs[-1])
         # The interval rows keep the backoff in speed units (sqrt(g l)): without it, an
         # interval met only to IPOPT's tolerance let the first landing stall 1e-4 rad short of
         # the top in 3 of 900 random specs; in m/s it would be a size-dependent 1e-6 m/s.
@@ -423,12 +440,12 @@ class _Model:
             sag = ca.exp(-curv * (th_hi - th_lo) ** 2 / 8)
             for where, th in thetas:
                 add((), f"interval invariant (low, {where})",
-                    self.next_speed(u_lo, th) * sag - u_lo, **model)
+                    self.next_speed(u_lo, th, qs[0]) * sag - u_lo, **model)
             # High end: ln F <= ln F(b) + lambda (th - b) + M+ (th - b)^2 / 2 (Taylor), convex in
             # th so largest at an end; lambda = d ln F / d th at b by CasADi AD.
             th_s = ca.SX.sym("th")
             dlog = ca.substitute(ca.jacobian(ca.log(self.next_speed(u_hi, th_s)), th_s), th_s, b)
-            u_b = self.next_speed(u_hi, b)
+            u_b = self.next_speed(u_hi, b, qs[-1])  # ln F's th-derivatives are free of q
             for where, th in thetas:
                 bound = u_b * ca.exp(dlog * (th - b) + curv * (th - b) ** 2 / 2)
                 add((), f"interval invariant (high, {where})", u_hi - bound, **model)
@@ -516,16 +533,18 @@ class _Model:
 
         # Impacts: on palms 2.. (velocity along the handover tangent) and the first landing.
         if self.stages >= 2:
-            for where, th in thetas:
-                px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a, self.q)
-                impact_rows(add, (mu, W, w, w_lo, h), "slip_impact", "tip_impact", where, px,
-                            py, o_hi, o_lo)
-        # bilinear in (start speed, fall speed): each row holds on the rectangle iff at its corners
-        feeds = [""] if len(speeds) == 1 else ["feed slow", "feed fast"]
-        for (where, Q), (feed, vx) in itertools.product(Qs, zip(feeds, speeds)):
-            px, py = phys.landing_impulse(vx, -Q, a, self.q)
+            # affine in m / (m + M): at both ends
+            for (where, th), (mass, q) in itertools.product(thetas, _ends(qs, "mass ratio")):
+                px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a, q)
+                impact_rows(add, (mu, W, w, w_lo, h), "slip_impact", "tip_impact",
+                            _join(where, mass), px, py, o_hi, o_lo)
+        # multilinear in (start speed, fall speed, m / (m + M)): each row holds on the box iff
+        # at its corners
+        for (where, Q), (feed, vx), (mass, q) in itertools.product(
+                Qs, _ends(speeds, "feed"), _ends(qs, "mass ratio")):
+            px, py = phys.landing_impulse(vx, -Q, a, q)
             impact_rows(add, (mu, W, w, w_lo, h), "first_slip_impact", "first_tip_impact",
-                        ", ".join(x for x in (where, feed) if x), px, py, [o1_hi], [o1_lo])
+                        _join(where, feed, mass), px, py, [o1_hi], [o1_lo])
         return out
 
 
@@ -565,6 +584,16 @@ def impact_rows(add, sizes, slip, tip, where, px, py, o_hi, o_lo):
     for i, o in enumerate(o_lo):
         add(tip, _v(f"{where}{sep}over the palm's rear edge", i, o_lo),
             (W / 2 + o) * py - h / 2 * px, (W / 2 + o) * py)
+
+
+def _ends(values, what):
+    """(label, value) of one value or of both ends of an interval."""
+    return [("", values[0])] if len(values) == 1 else [(f"{what} low", values[0]),
+                                                       (f"{what} high", values[-1])]
+
+
+def _join(*words) -> str:
+    return ", ".join(w for w in words if w)
 
 
 def _nonzero(value) -> bool:

@@ -131,7 +131,8 @@ def sheet_for(path: str | Path, *, count: int | None = None,
 # the part each allocated quantity is built on, in the words sheet/parts.py puts on a part
 ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot bracket",
                   "feed_x": "the feed (start place)", "friction": "every palm's surface",
-                  "object_width": "the objects carried", "feed_speed": "the feed (start speed)"}
+                  "object_width": "the objects carried", "feed_speed": "the feed (start speed)",
+                  "palm_mass": "every palm", "object_mass": "the objects carried"}
 
 
 def allocated_entries(entries) -> tuple:

@@ -20,7 +20,6 @@ nominal run, every corner pattern and these few.
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 
 import numpy as np
@@ -59,13 +58,14 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
                      seed: int = 0, lots=None) -> dict:
     """Simulate the corner patterns and `samples` uniform random builds inside the box (fewer
     on rows longer than RANDOM_ROW: `random_builds`). lots: an allocated tolerance list
-    (formulation/allocation.py); its quantities other than the pivots' (feed_x, friction,
-    object_width: one value a build) take every sign corner with every pivot pattern, and a
-    uniform value in each random build."""
+    (formulation/allocation.py); its quantities other than the pivots' (feed_x, feed_speed,
+    friction, object_width, object_mass: one value a build; palm_mass: every palm alike) take
+    every sign corner with every pivot pattern, and a uniform value in each random build."""
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
-    lot = {e["quantity"]: e["value"] for e in (lots or ()) if e["quantity"] in LOT_SCENE}
+    lot = {e["quantity"]: e["value"] for e in (lots or ())
+           if e["quantity"] not in ("pivot_x", "pivot_y")}
     builds = [(name + _lot_name(signs_l), [(sx * half[0], sy * half[1]) for sx, sy in signs],
                {q: sl * lot[q] for q, sl in zip(lot, signs_l)})
               for name, signs in corner_patterns(stages)
@@ -79,8 +79,7 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
     with progress_bar(len(builds), "verifying the tolerance box") as advance:
         for name, errors, deviations in builds:
             try:
-                result = simulate_spec(_built(spec, deviations), design, accuracy=accuracy,
-                                       **_as_errors(spec, errors))
+                result = _simulate(spec, design, errors, deviations, accuracy)
             except (SimulationRefused, ValueError) as refusal:  # e.g. a rise error larger
                 # than the rise; a lot no scene can hold (a negative friction)
                 failures.append({"build": name, "errors": errors, "lots": deviations,
@@ -99,36 +98,29 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
             "box": dict(zip(_axes(spec), half, strict=True))}
 
 
-# a lot quantity's place in a manipulators scene: (the scene's part, its field)
-LOT_SCENE = {"feed_x": ("initial", "position"), "friction": ("palm", "friction"),
-             "object_width": ("body", "width"), "feed_speed": ("initial", "velocity")}
-
-
 def _lot_name(signs) -> str:
     return "" if not signs else " with " + ", ".join(f"{s:+.0f}" for s in signs)
 
 
-def _built(spec: Spec, deviations: dict) -> Spec:
-    """The spec with its scene built off by one value of each lot quantity (LOT_SCENE)."""
+def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
+    """One build: the spec's own path (offsets or step errors), or, with deviations of other
+    quantities (an allocated box), the yield's per-part build (tolerances.manipulators.
+    simulate_build: a part quantity such as palm_mass at one value on every palm)."""
     if not deviations:
-        return spec
-    scene = spec.scene
+        return simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
+    from ..accuracy import accuracy as accuracy_preset
+    from ..tolerances.manipulators import simulate_build
+
+    stages = spec.verification.stages
+    built = {"pivot_x": np.array([[e[0] for e in errors]]),
+             "pivot_y": np.array([[e[1] for e in errors]])}
     for q, dev in deviations.items():
-        part, field = LOT_SCENE[q]
-        old = getattr(getattr(scene, part), field)
-        new = (old[0] + dev, old[1]) if q == "feed_x" else _faster(old, dev) if \
-            q == "feed_speed" else old + dev
-        scene = dataclasses.replace(scene, **{part: dataclasses.replace(
-            getattr(scene, part), **{field: new})})
-    return dataclasses.replace(spec, scene=scene)
+        built[q] = np.full((1, stages), dev) if q in PER_PART else np.array([dev])
+    return simulate_build(spec.scene, design, built, stages,
+                          accuracy=accuracy_preset(accuracy or spec.verification.accuracy))
 
 
-def _faster(velocity, dev):
-    """The start velocity with its speed dev more, along it (+x when it is 0), as the yield's
-    builds take it (tolerances.manipulators.build_values)."""
-    speed = float(np.hypot(*velocity))
-    vx, vy = (velocity[0] / speed, velocity[1] / speed) if speed > 0.0 else (1.0, 0.0)
-    return (velocity[0] + dev * vx, velocity[1] + dev * vy)
+PER_PART = ("palm_mass", "link_length", "back_stop")  # quantities of every manipulator
 
 
 def _axes(spec: Spec) -> tuple[str, str]:
