@@ -157,11 +157,54 @@ def test_allocation_needs_the_tolerance_objective(tmp_path):
     assert "max_offset_tolerance" in run.stderr and "Traceback" not in run.stderr
 
 
-def test_stairs_allocation_is_refused_in_words(tmp_path):
-    base = (ROOT / "problems" / "stairs_design.toml").read_text().split("[expect]")[0]
+STAIRS = (ROOT / "problems" / "stairs_design.toml").read_text().split("[expect]")[0]
+
+
+def test_stairs_equal_weights_are_todays_box(tmp_path):
+    today = optimize(_spec(tmp_path, "", "today.toml", base=STAIRS))
+    spec = _spec(tmp_path, "[tolerances]\nrise = { allocate = true, weight = 3 }\n"
+                           "tread = { allocate = true, weight = 3 }\n", base=STAIRS)
+    result = optimize(spec)
+    assert result.status.value == "optimal"
+    for axis in ("rise", "tread"):
+        assert abs(result.tolerance[axis] - today.tolerance[axis]) < 1e-9
+
+
+def _stairs_corners(spec, result, scale):
+    """Corner patterns of the scaled (rise, tread) box where the simulator fails."""
+    from pdm_design.tolerances.stairs import simulate_build as simulate_stairs_build
+
+    design = spec.design_at({n: result.design[n] for n in spec.free_variables})
+    stages = spec.verification.stages
+    t_r, t_t = scale * result.tolerance["rise"], scale * result.tolerance["tread"]
+    failed = []
+    for name, signs in corner_patterns(stages):
+        run = simulate_stairs_build(spec.scene, design, {
+            "rise": [sr * t_r for sr, _ in signs], "tread": [st * t_t for _, st in signs]},
+            stages)
+        if not run.outcome.completed:
+            failed.append(name)
+    return failed
+
+
+def test_stairs_unequal_weights_hold_at_the_corners(tmp_path):
+    today = optimize(_spec(tmp_path, "", "today.toml", base=STAIRS))
+    spec = _spec(tmp_path, "[tolerances]\nrise = { allocate = true, weight = 1 }\n"
+                           "tread = { allocate = true, weight = 0.5 }\n", base=STAIRS)
+    result = optimize(spec)
+    assert result.status.value == "optimal"
+    assert result.tolerance["tread"] == pytest.approx(2 * result.tolerance["rise"], rel=1e-12)
+    assert result.tolerance["tread"] > today.tolerance["tread"]  # the tread's share grew
+    assert result.checks["sampled_offsets"]["passed"]
+    assert _stairs_corners(spec, result, 1.0) == []
+    assert _stairs_corners(spec, result, 1.5)
+
+
+def test_stairs_lot_allocation_is_refused_in_words(tmp_path):
     path = tmp_path / "stairs.toml"
-    path.write_text(base + "\n[tolerances]\nrise = { allocate = true }\n")
+    path.write_text(STAIRS + "\n[tolerances]\nrise = { allocate = true }\n"
+                    "restitution = { value = 0.01 }\n")
     run = subprocess.run([sys.executable, "-m", "pdm_design", "optimize", str(path)],
                          capture_output=True, text=True, cwd=ROOT)
-    assert run.returncode == 2 and "tolerances.rise.allocate" in run.stderr
+    assert run.returncode == 2 and "tolerances.restitution.value" in run.stderr
     assert "Traceback" not in run.stderr

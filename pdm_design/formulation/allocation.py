@@ -21,13 +21,17 @@ any other quantity while allocating is refused in words (exit 2), never guessed.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
+import casadi as ca
+
 from ..errors import SpecError
 
 # Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
 ALLOCATABLE = {
     "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
                      "palm_mass", "object_mass"),
-    "stairs": (),
+    "stairs": ("rise", "tread"),
 }
 # Why the others are refused: what a sound bound of them would need (the words of the error).
 NOT_YET = {
@@ -39,9 +43,9 @@ NOT_YET = {
     "link_mass": "no outer bound over a box of link masses is derived yet",
     "pivot_friction": "no outer bound over a box of pivot frictions is derived yet",
 }
-STAIRS_NOT_YET = ("the stairs' robust rows bound one box of rise and tread errors (the "
-                  "objective max_offset_tolerance alone); a per-quantity allocation is not "
-                  "derived yet")
+STAIRS_NOT_YET = ("the stairs' lot quantities move the periodic orbit itself (restitution, "
+                  "launch speed) or the launch row's geometry (launch_x, friction); no outer "
+                  "bound over their box is derived yet")
 
 
 def allocating(spec) -> bool:
@@ -90,7 +94,7 @@ def check(spec) -> None:
             tol.quantity, "no outer bound over its box is derived yet")
         raise SpecError(source, f"tolerances.{tol.quantity}.{key}",
                         "a quantity the worst-case allocation can bound: "
-                        + (", ".join(allowed) or "none on stairs yet") + f" ({why})",
+                        + ", ".join(allowed) + f" ({why})",
                         found=tol.quantity)
 
 
@@ -117,8 +121,35 @@ def values_at(spec, s: float) -> list[dict]:
     return entries
 
 
-def pivot_box(entries) -> dict[str, float]:
-    """{"dx", "dy"}: the pivots' half-widths of a tolerance list (0 where exact), the box the
-    pivot offsets are checked in (solve/check.py, verify/tolerance.py)."""
+# the optimizer's box axes of the quantities the scenario samples (solve/check.py) and the
+# simulator's corner patterns take per stage (verify/tolerance.py)
+AXES = {"manipulators": (("dx", "pivot_x"), ("dy", "pivot_y")),
+        "stairs": (("rise", "rise"), ("tread", "tread"))}
+
+
+def pivot_box(kind: str, entries) -> dict[str, float]:
+    """{"dx", "dy"} (manipulators) or {"rise", "tread"} (stairs): the per-stage half-widths of a
+    tolerance list (0 where exact), the box the offsets or step errors are checked in."""
     value = {e["quantity"]: e["value"] for e in entries}
-    return {"dx": float(value.get("pivot_x", 0.0)), "dy": float(value.get("pivot_y", 0.0))}
+    return {axis: float(value.get(q, 0.0)) for axis, q in AXES[kind]}
+
+
+def box_conditions(spec, rows_of, today: dict, s) -> list:
+    """The conditions over the tolerance box: rows_of(box) with box = `today` (the scene's box
+    of max_offset_tolerance alone, every axis s), or, when the spec allocates, one half-width
+    per quantity (half_widths). Allocated, each row is first built on a symbol per quantity, to
+    record which quantities it depends on (Condition.quantities: the rows that can limit each
+    quantity), then the symbols are replaced by their half-widths."""
+    if not allocating(spec):
+        return rows_of(today)
+    widths = half_widths(spec, s)
+    symbols = {q: ca.SX.sym(f"t_{q}") for q in widths}
+    subs = [list(symbols.values()), [ca.SX(widths[q]) for q in symbols]]
+    out = []
+    for c in rows_of(symbols):
+        slack, scale = (ca.SX(e) for e in (c.slack, c.scale))
+        used = tuple(q for q, t in symbols.items()
+                     if ca.depends_on(slack, t) or ca.depends_on(scale, t))
+        out.append(replace(c, slack=ca.substitute([slack], *subs)[0],
+                           scale=ca.substitute([scale], *subs)[0], quantities=used))
+    return out

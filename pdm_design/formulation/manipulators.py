@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import replace
 
 import casadi as ca
 
@@ -92,7 +91,9 @@ def build(spec):
 
     m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages))
     m.steps = integrated_steps(spec, robust, values, bounds)
-    conditions = box_conditions(spec, m, S, u_lo, u_hi, tau, robust)
+    conditions = allocation.box_conditions(
+        spec, lambda box: m.conditions(S, u_lo, u_hi, box, robust),
+        {"pivot_x": tau, "pivot_y": tau}, tau)
     aux = [("periodic_speed_sq", S, 0.0, math.inf),
            ("landing_speed_lo", u_lo, 0.0, math.inf),
            ("landing_speed_hi", u_hi, 0.0, math.inf)]
@@ -126,27 +127,6 @@ def build(spec):
         objective_scale=objective_scale(spec.objective, min(l_max, 1.0)),
     )
     return model, bounds, m
-
-
-def box_conditions(spec, m, S, u_lo, u_hi, tau, robust):
-    """The conditions over the tolerance box: today's pivot box (|dx|, |dy| <= tau), or, when
-    the spec allocates ([tolerances], formulation/allocation.py), one half-width per quantity
-    (t_q = tau w_min / w_q, or its given value). Allocated, each row is first built on a symbol
-    per quantity, to record which quantities it depends on (Condition.quantities: the
-    conditions that limit each quantity), then the symbols are replaced by their half-widths."""
-    if not (robust and allocation.allocating(spec)):
-        return m.conditions(S, u_lo, u_hi, {"pivot_x": tau, "pivot_y": tau}, robust)
-    widths = allocation.half_widths(spec, tau)
-    symbols = {q: ca.SX.sym(f"t_{q}") for q in widths}
-    out = []
-    for c in m.conditions(S, u_lo, u_hi, symbols, robust):
-        slack, scale = (ca.SX(e) for e in (c.slack, c.scale))
-        used = tuple(q for q, t in symbols.items()
-                     if ca.depends_on(slack, t) or ca.depends_on(scale, t))
-        subs = [list(symbols.values()), [ca.SX(widths[q]) for q in symbols]]
-        out.append(replace(c, slack=ca.substitute([slack], *subs)[0],
-                           scale=ca.substitute([scale], *subs)[0], quantities=used))
-    return out
 
 
 def integrated_steps(spec, robust, values, bounds, force=False) -> int:

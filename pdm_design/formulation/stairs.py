@@ -96,7 +96,7 @@ EXACT_LAUNCH = ("comes down: gap while falling", "comes down: height over the no
 
 
 def build(spec):
-    if allocation.allocating(spec):  # refused in words: no per-quantity bounds here yet
+    if allocation.allocating(spec):  # refused in words where no bound is derived
         allocation.check(spec)
     scene = spec.scene
     values, symbols, bounds = design_inputs(spec, StairsDesign.VARIABLES, DEFAULTS)
@@ -125,7 +125,9 @@ def build(spec):
 
     model = SceneModel(
         kind="stairs", design_symbols=symbols, aux=tuple(aux),
-        conditions=tuple(m.conditions(tau, robust, exact)),
+        conditions=tuple(allocation.box_conditions(
+            spec, lambda box: m.conditions(box, robust, exact),
+            {"rise": tau, "tread": tau}, tau)),
         objective_terms={
             "max_offset_tolerance": tau if robust else ca.SX(0.0),
             "max_min_margin": t if epigraph else ca.SX(0.0),
@@ -244,7 +246,7 @@ class _Model:
         x = self.v0 * self.vy1 / self.g - self.L1 + r
         return a * self.v0**2 - self.g * ca.fmax(x, 0.0) ** 2 / 2
 
-    def conditions(self, tau, robust, exact=False):
+    def conditions(self, box, robust, exact=False):
         """Every row. exact (max_min_margin asked, or a nose clearance required): the smooth
         nose rows keep the ball off the noses, as always, but the exact gaps (the analysis' nose
         margins, gap / tread) hold the requirement and bound the epigraph t: the smooth rows'
@@ -254,6 +256,9 @@ class _Model:
         the smooth ones."""
         g, r = self.g, self.scene.ball.radius
         length, speed = self.length, self.speed
+        # the box {quantity: half-width}: every step's rise and tread errors (docs/optimizer.md
+        # sections 4, 4a); tau the rise's, t_t the tread's
+        tau, t_t = box.get("rise", 0.0), box.get("tread", 0.0)
         out: list[Condition] = []
 
         def add(key, where, slack, scale=1.0, kind=MARGIN, unit=1.0, keys=None, **kw):
@@ -300,8 +305,8 @@ class _Model:
                 add(None, f"launch, exact {phase}", gap, tread, unit=length, keys=LAUNCH_KEYS)
         scale = tread * self.vx**2
         if robust:
-            L_long, _ = self.trajectory(tau, -tau)
-            L_short, v_short = self.trajectory(-tau, tau)
+            L_long, _ = self.trajectory(tau, -t_t)
+            L_short, v_short = self.trajectory(-tau, t_t)
         else:
             L_long, v_short = self.trajectory(0.0, 0.0)
             L_short = L_long
@@ -312,8 +317,8 @@ class _Model:
             add("riser_clearance", where, L_short[n] - phys.riser_reach(self.rise + tau, r),
                 tread, unit=length)
             ends = [("", tread - L_long[n])] if not robust else [
-                (", nose nearest", tread - tau - L_long[n]),
-                (", nose furthest", tread + tau - L_short[n]),
+                (", nose nearest", tread - t_t - L_long[n]),
+                (", nose furthest", tread + t_t - L_short[n]),
             ]
             # exact gaps: the flights the analysis judges (a simulation of N bounces flies N - 1)
             judged = exact and (stage < self.stages or self.stages == 1)

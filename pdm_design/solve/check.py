@@ -57,7 +57,10 @@ def sampled_offsets_check(form, x, p, tau: float, *, samples: int = 256, seed: i
     if hasattr(form.scenario_source, "stream"):  # a row of stage maps: streamed
         return _streamed_check(form, x, p, tau, samples, seed)
     sc = form.scenario
-    D = offset_samples(sc.offset_names, sc.groups, tau, samples, seed)
+    D = offset_samples(sc.offset_names, sc.groups, 1.0, samples, seed)
+    widths = np.broadcast_to(np.asarray(tau, dtype=float), (len(sc.groups),))
+    for width, columns in zip(widths, sc.groups.values()):  # each group's own half-width
+        D[:, list(columns)] *= width
     fn = sc.function.map(D.shape[0])
     slack, scale = (np.asarray(v, dtype=float) for v in fn(np.tile(np.asarray(x)[:, None],
                                                                    (1, D.shape[0])), D.T))
@@ -69,7 +72,8 @@ def sampled_offsets_check(form, x, p, tau: float, *, samples: int = 256, seed: i
     excess = np.where(np.isfinite(excess), excess, -np.inf)
     i, j = np.unravel_index(np.argmin(excess), excess.shape)
     worst = float(excess[i, j])
-    return {"passed": worst >= -CHECK_TOL, "samples": int(D.shape[0]), "tolerance": float(tau),
+    return {"passed": worst >= -CHECK_TOL, "samples": int(D.shape[0]),
+            "tolerance": float(tau) if np.ndim(tau) == 0 else dict(zip(sc.groups, widths)),
             "worst_excess_margin": worst, "worst_condition": sc.conditions[i].label,
             "worst_offsets": dict(zip(sc.offset_names, D[j].tolist()))}
 

@@ -132,7 +132,7 @@ def optimize(
         tolerance = {axis: tol_value for axis in form.tolerance_axes}
         if allocating(spec):  # one half-width per quantity (formulation/allocation.py)
             allocated = tuple(values_at(spec, tol_value))
-            tolerance = pivot_box(allocated)
+            tolerance = pivot_box(spec.kind, allocated)
     robust_margins = _robust_margins(form, x, p, slack, scale)
     score = None
     if answered:
@@ -146,7 +146,7 @@ def optimize(
                                                  "failures": closed["failures"]}}
     if robust and tolerance and check_samples > 0:
         checks["sampled_offsets"] = check.sampled_offsets_check(
-            form, x, p, (tolerance["dx"], tolerance["dy"]) if allocated else
+            form, x, p, tuple(tolerance.values()) if allocated else
             float(x[form.tolerance_index]), samples=check_samples, seed=seed)
 
     linearised = None

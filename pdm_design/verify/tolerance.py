@@ -24,6 +24,7 @@ import itertools
 
 import numpy as np
 
+from ..formulation.allocation import AXES
 from ..progress import progress_bar
 from ..sim.core import SimulationRefused
 from ..spec.model import ManipulatorOffset, Spec, StepError
@@ -64,8 +65,8 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
-    lot = {e["quantity"]: e["value"] for e in (lots or ())
-           if e["quantity"] not in ("pivot_x", "pivot_y")}
+    per_stage = {q for _, q in AXES[spec.kind]}  # the corner patterns' own quantities
+    lot = {e["quantity"]: e["value"] for e in (lots or ()) if e["quantity"] not in per_stage}
     builds = [(name + _lot_name(signs_l), [(sx * half[0], sy * half[1]) for sx, sy in signs],
                {q: sl * lot[q] for q, sl in zip(lot, signs_l)})
               for name, signs in corner_patterns(stages)
