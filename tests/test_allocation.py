@@ -97,6 +97,22 @@ def test_every_corner_of_the_allocated_box_passes(every):
     assert _corners(spec, result, 1.0) == []
 
 
+def test_palm_masses_palm_by_palm(every):
+    """The mass bound holds stage by stage: palms alternately heavy and light pass too."""
+    spec, result = every
+    design = spec.design_at({n: result.design[n] for n in spec.free_variables})
+    value = {e["quantity"]: e["value"] for e in result.tolerances}
+    stages = spec.verification.stages
+    alternating = np.array([[(-1.0) ** k * value["palm_mass"] for k in range(stages)]])
+    for _, signs in corner_patterns(stages):
+        for lots in itertools.product((1.0, -1.0), repeat=2):
+            deviations = {"pivot_x": np.array([[sx * value["pivot_x"] for sx, _ in signs]]),
+                          "pivot_y": np.array([[sy * value["pivot_y"] for _, sy in signs]]),
+                          "palm_mass": lots[0] * alternating,
+                          "object_mass": np.array([lots[1] * value["object_mass"]])}
+            assert simulate_build(spec.scene, design, deviations, stages).outcome.completed
+
+
 def test_a_corner_beyond_the_box_fails(every):
     spec, result = every
     assert _corners(spec, result, 1.5)  # the box is not vacuous: 1.5 times it breaks a build
