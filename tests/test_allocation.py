@@ -216,6 +216,44 @@ def test_stairs_unequal_weights_hold_at_the_corners(tmp_path):
     assert _stairs_corners(spec, result, 1.5)
 
 
+def test_stairs_launch_place_holds_at_the_corners(tmp_path):
+    spec = _spec(tmp_path, "[tolerances]\nrise = { allocate = true }\n"
+                           "tread = { allocate = true }\nlaunch_x = { allocate = true }\n",
+                 base=STAIRS)
+    result = optimize(spec)
+    assert result.status.value == "optimal"
+    t_l = {e["quantity"]: e["value"] for e in result.tolerances}["launch_x"]
+    assert t_l == result.tolerance["rise"] == result.tolerance["tread"]
+    from pdm_design.tolerances.stairs import simulate_build as simulate_stairs_build
+
+    design = spec.design_at({n: result.design[n] for n in spec.free_variables})
+    stages = spec.verification.stages
+
+    def failures(scale):
+        t = scale * t_l
+        return [(name, sl) for name, signs in corner_patterns(stages) for sl in (1.0, -1.0)
+                if not simulate_stairs_build(spec.scene, design, {
+                    "rise": [sr * t for sr, _ in signs], "tread": [st * t for _, st in signs],
+                    "launch_x": sl * t}, stages).outcome.completed]
+
+    assert failures(1.0) == []
+    assert failures(1.5)
+
+
+def test_stairs_verification_runs_the_launch_place_corners(tmp_path):
+    path = tmp_path / "launch.toml"
+    path.write_text(STAIRS + "\n[tolerances]\nrise = { allocate = true }\n"
+                    "tread = { allocate = true }\nlaunch_x = { allocate = true, weight = 0.5 }\n")
+    run = subprocess.run([sys.executable, "-m", "pdm_design", "optimize", str(path),
+                          "--format", "json"], capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(run.stdout)
+    value = {e["quantity"]: e["value"] for e in doc["tolerances"]}
+    assert value["launch_x"] == pytest.approx(2 * value["rise"], rel=1e-12)
+    assert doc["verification"]["passed"]
+    assert doc["verification"]["samples"] == 1 + 12 * 2 + 16  # nominal, corners x lot, random
+
+
 def test_stairs_lot_allocation_is_refused_in_words(tmp_path):
     path = tmp_path / "stairs.toml"
     path.write_text(STAIRS + "\n[tolerances]\nrise = { allocate = true }\n"

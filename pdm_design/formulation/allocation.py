@@ -31,7 +31,7 @@ from ..errors import SpecError
 ALLOCATABLE = {
     "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
                      "palm_mass", "object_mass"),
-    "stairs": ("rise", "tread"),
+    "stairs": ("rise", "tread", "launch_x"),
 }
 # Why the others are refused: what a sound bound of them would need (the words of the error).
 NOT_YET = {
@@ -43,9 +43,9 @@ NOT_YET = {
     "link_mass": "no outer bound over a box of link masses is derived yet",
     "pivot_friction": "no outer bound over a box of pivot frictions is derived yet",
 }
-STAIRS_NOT_YET = ("the stairs' lot quantities move the periodic orbit itself (restitution, "
-                  "launch speed) or the launch row's geometry (launch_x, friction); no outer "
-                  "bound over their box is derived yet")
+STAIRS_NOT_YET = ("restitution and launch speed move the periodic orbit itself, and friction "
+                  "the rolling speed of every flight; no outer bound over their box is "
+                  "derived yet")
 
 
 def allocating(spec) -> bool:

@@ -53,6 +53,7 @@ import math
 
 import casadi as ca
 
+from ..errors import SpecError
 from ..physics import stairs as phys
 from ..scenes import StairsDesign
 from . import allocation
@@ -105,6 +106,12 @@ def build(spec):
     # the exact nose rows when the reported nose margins must reach something: the epigraph, or
     # a required nose clearance (the smooth rows measure another quantity, section 2)
     exact = epigraph or requires_rows(spec)
+    if exact and any(t.quantity == "launch_x" for t in spec.tolerances) and \
+            allocation.allocating(spec):
+        raise SpecError(spec.source or "<spec>", "tolerances.launch_x",
+                        "no max_min_margin and no nose requirement with an allocated box (the "
+                        "exact launch rows' worst launch place is not derived)",
+                        found="the exact nose rows")
     tau = ca.SX.sym("tolerance") if robust else 0.0
     t = ca.SX.sym("min_margin") if epigraph else None
     top = tolerance_bound(scene.initial.drop_height, values, bounds)
@@ -233,17 +240,19 @@ class _Model:
             ends = [("passes over the nose", dist)]
         return [(where, self.eps * v * vx * z - g * z**2 / 2) for where, z in ends]
 
-    def launch_slack(self):
+    def launch_slack(self, back=0.0):
         """The launch clears the top landing (step 0, one design rise above the designed tread 1;
         neither it nor the launcher has construction errors). The ball starts at its apex,
         a = h0 - rise above that landing, horizontal speed v0, and the landing's nose is
         x_n = v0 t(0) - landing_offset ahead. The lowest point falls for x > 0, so it is above the
         nose level while the centre is within r of the nose iff it is at x_n + r (nothing to
         check when x_n + r <= 0): a v0^2 - g max(x_n + r, 0)^2 / 2 >= 0 (the height times v0^2;
-        C1). Conservative when the launch is below the top landing (a < 0) but already past it."""
+        C1). Conservative when the launch is below the top landing (a < 0) but already past it.
+        back: the launcher that far further back (the slack decreases with x_n: a launch_x
+        tolerance's worst end)."""
         h0, r = self.scene.initial.drop_height, self.scene.ball.radius
         a = h0 - self.rise
-        x = self.v0 * self.vy1 / self.g - self.L1 + r
+        x = self.v0 * self.vy1 / self.g - self.L1 + back + r
         return a * self.v0**2 - self.g * ca.fmax(x, 0.0) ** 2 / 2
 
     def conditions(self, box, robust, exact=False):
@@ -259,6 +268,7 @@ class _Model:
         # the box {quantity: half-width}: every step's rise and tread errors (docs/optimizer.md
         # sections 4, 4a); tau the rise's, t_t the tread's
         tau, t_t = box.get("rise", 0.0), box.get("tread", 0.0)
+        t_x = box.get("launch_x", 0.0)  # every landing moves with the launcher, alike
         out: list[Condition] = []
 
         def add(key, where, slack, scale=1.0, kind=MARGIN, unit=1.0, keys=None, **kw):
@@ -295,7 +305,7 @@ class _Model:
                 kind=VALIDITY, unit=length)
 
         tread = self.tread
-        add(None, "launch: comes down beyond the top landing's nose", self.launch_slack(),
+        add(None, "launch: comes down beyond the top landing's nose", self.launch_slack(t_x),
             tread * self.v0**2, unit=length * speed**2, keys=LAUNCH_KEYS, epigraph=not exact)
         if exact:  # the analysis' first_nose_clearance: one design rise above tread 1 (to land
             # a rise tau higher at worst: the longer flight's gap is the smaller)
@@ -307,6 +317,8 @@ class _Model:
         if robust:
             L_long, _ = self.trajectory(tau, -t_t)
             L_short, v_short = self.trajectory(-tau, t_t)
+            if not (isinstance(t_x, float) and t_x == 0.0):
+                L_long, L_short = [L + t_x for L in L_long], [L - t_x for L in L_short]
         else:
             L_long, v_short = self.trajectory(0.0, 0.0)
             L_short = L_long

@@ -110,15 +110,21 @@ def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
     if not deviations:
         return simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
     from ..accuracy import accuracy as accuracy_preset
-    from ..tolerances.manipulators import simulate_build
 
     stages = spec.verification.stages
+    accuracy = accuracy_preset(accuracy or spec.verification.accuracy)
+    if spec.kind == "stairs":  # one build's values: K per step, a number for a lot
+        from ..tolerances.stairs import simulate_build as simulate_steps
+
+        built = {"rise": [e[0] for e in errors], "tread": [e[1] for e in errors], **deviations}
+        return simulate_steps(spec.scene, design, built, stages, accuracy=accuracy)
+    from ..tolerances.manipulators import simulate_build
+
     built = {"pivot_x": np.array([[e[0] for e in errors]]),
              "pivot_y": np.array([[e[1] for e in errors]])}
     for q, dev in deviations.items():
         built[q] = np.full((1, stages), dev) if q in PER_PART else np.array([dev])
-    return simulate_build(spec.scene, design, built, stages,
-                          accuracy=accuracy_preset(accuracy or spec.verification.accuracy))
+    return simulate_build(spec.scene, design, built, stages, accuracy=accuracy)
 
 
 PER_PART = ("palm_mass", "link_length", "back_stop")  # quantities of every manipulator
