@@ -118,6 +118,20 @@ def test_a_corner_beyond_the_box_fails(every):
     assert _corners(spec, result, 1.5)  # the box is not vacuous: 1.5 times it breaks a build
 
 
+def test_a_mass_tolerance_keeps_a_mass(tmp_path):
+    """Alone, the palms' mass tolerance is held by the palms keeping a mass (the speed rows
+    allow any mass ratio here): (1 - 1e-3) of the 0.1 kg palm, and the builds pass."""
+    spec = _spec(tmp_path, "[tolerances]\npalm_mass = { allocate = true }\n")
+    result = optimize(spec)
+    assert result.status.value == "optimal"
+    value = result.tolerances[0]["value"]
+    assert value == pytest.approx(0.1 * (1 - 1e-3), rel=1e-6)
+    design = spec.design_at({n: result.design[n] for n in spec.free_variables})
+    for sign in (1.0, -1.0):
+        run = simulate_build(spec.scene, design, {"palm_mass": np.full((1, 6), sign * value)}, 6)
+        assert run.outcome.completed
+
+
 def test_json_lists_every_tolerance_with_its_limits(tmp_path):
     path = tmp_path / "every.toml"
     path.write_text(BASE + "\n" + EVERY)

@@ -71,6 +71,7 @@ SHARED_ROWS = (OVER_THE_TOP, LIFT_OFF)
 OUTSIDE_MIN_MARGIN = ("parked_palms",)
 PARKED_ROWS_CAP = 16  # parked palms checked behind the carrying one, at most (docs/optimizer.md)
 ACOS_EDGE = 1e-15  # acos is taken of at most 1 - this: a finite slope
+MASS_KEPT = 1e-3  # a mass tolerance leaves at least this fraction of the mass
 
 
 def build(spec):
@@ -441,6 +442,12 @@ class _Model:
             kind=VALIDITY)
         add(("start_height",), "",
             self.H - tau - START_CLEARANCE * l, scale=l, kind=VALIDITY)
+        m_obj = body.mass
+        for name, mass, t_mass in (("object", m_obj, box.get("object_mass", 0.0)),
+                                   ("every palm", m_obj / self.q, box.get("palm_mass", 0.0))):
+            if _nonzero(t_mass):  # a build with no mass is none: the mass ratio's ends hold
+                add(("positive_mass",), f"{name} keeps a mass within its tolerance",
+                    (1.0 - MASS_KEPT) * mass - t_mass, mass, kind=VALIDITY)
         if robust and not phys.is_exact_zero(self.f):
             add(("over_the_top",), "gravity beats the pivot friction at the handover",
                 self.gc * l * ca.sin(th_lo) - self.f, self.gc * l, kind=VALIDITY)

@@ -132,7 +132,8 @@ def sheet_for(path: str | Path, *, count: int | None = None,
 ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot bracket",
                   "feed_x": "the feed (start place)", "friction": "every palm's surface",
                   "object_width": "the objects carried", "feed_speed": "the feed (start speed)",
-                  "palm_mass": "every palm", "object_mass": "the objects carried"}
+                  "palm_mass": "every palm", "object_mass": "the objects carried",
+                  "launch_x": "the launcher (release place)"}
 
 
 def allocated_entries(entries) -> tuple:
