@@ -132,6 +132,43 @@ def test_a_mass_tolerance_keeps_a_mass(tmp_path):
         assert run.outcome.completed
 
 
+STOPS = """[tolerances]
+pivot_x = { allocate = true }
+pivot_y = { allocate = true }
+back_stop = { allocate = true, weight = 10 }
+"""
+
+
+def _stop_failures(spec, result, scale):
+    """Corner patterns of the pivots with the back stops all high, all low or alternating,
+    scaled, where the simulator fails."""
+    design = spec.design_at({n: result.design[n] for n in spec.free_variables})
+    value = {e["quantity"]: scale * e["value"] for e in result.tolerances}
+    stages = spec.verification.stages
+    alternating = np.array([(-1.0) ** k for k in range(stages)])
+    failed = []
+    for name, signs in corner_patterns(stages):
+        for stop_name, stop in (("+", np.ones(stages)), ("-", -np.ones(stages)),
+                                ("alt", alternating), ("-alt", -alternating)):
+            deviations = {"pivot_x": np.array([[sx * value["pivot_x"] for sx, _ in signs]]),
+                          "pivot_y": np.array([[sy * value["pivot_y"] for _, sy in signs]]),
+                          "back_stop": (stop * value["back_stop"])[None, :]}
+            if not simulate_build(spec.scene, design, deviations, stages).outcome.completed:
+                failed.append((name, stop_name))
+    return failed
+
+
+def test_back_stops_hold_at_the_corners(tmp_path):
+    spec = _spec(tmp_path, STOPS)
+    result = optimize(spec)
+    assert result.status.value == "optimal" and result.checks["sampled_offsets"]["passed"]
+    value = {e["quantity"]: e["value"] for e in result.tolerances}
+    assert value["back_stop"] == pytest.approx(value["pivot_x"] / 10, rel=1e-12)
+    assert value["back_stop"] > 0.0
+    assert _stop_failures(spec, result, 1.0) == []
+    assert _stop_failures(spec, result, 1.5)
+
+
 def test_json_lists_every_tolerance_with_its_limits(tmp_path):
     path = tmp_path / "every.toml"
     path.write_text(BASE + "\n" + EVERY)
@@ -164,7 +201,8 @@ def test_given_value_is_a_fixed_half_width(tmp_path, every):
 
 @pytest.mark.parametrize("extra, key", [
     ("link_length = { allocate = true }", "tolerances.link_length.allocate"),
-    ("pivot_x = { allocate = true }\nback_stop = { value = 0.01 }", "tolerances.back_stop.value"),
+    ("pivot_x = { allocate = true }\nlink_length = { value = 0.01 }",
+     "tolerances.link_length.value"),
 ])
 def test_unbounded_quantities_are_refused(tmp_path, extra, key):
     path = tmp_path / "bad.toml"

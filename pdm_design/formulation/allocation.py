@@ -30,7 +30,7 @@ from ..errors import SpecError
 # Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
 ALLOCATABLE = {
     "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
-                     "palm_mass", "object_mass"),
+                     "palm_mass", "object_mass", "back_stop"),
     "stairs": ("rise", "tread", "launch_x"),
 }
 # Why the others are refused: what a sound bound of them would need (the words of the error).
@@ -38,8 +38,6 @@ NOT_YET = {
     "link_length": "every stage's handover angle, speed map and landing place move with each "
                    "link's own length; no outer bound of the speed interval over a box of link "
                    "lengths is derived yet",
-    "back_stop": "each palm's rest angle moves its landing speed, impulse and the next "
-                 "handover at once; no outer bound over a box of stop angles is derived yet",
     "link_mass": "no outer bound over a box of link masses is derived yet",
     "pivot_friction": "no outer bound over a box of pivot frictions is derived yet",
 }
@@ -80,11 +78,12 @@ def check(spec) -> None:
                         "velocity[1] = 0) to bound the feed speed's tolerance (along a sloped "
                         "start it moves the fall speed as well; not derived yet)",
                         found=f"initial.velocity[1] = {spec.scene.initial.velocity[1]:g}")
-    masses = [t.quantity for t in spec.tolerances if t.quantity in ("palm_mass", "object_mass")]
+    masses = [t.quantity for t in spec.tolerances
+              if t.quantity in ("palm_mass", "object_mass", "back_stop")]
     if spec.kind == "manipulators" and masses and not spec.scene.plain_mechanism:
         raise SpecError(source, f"tolerances.{masses[0]}", "the paper's device (massless "
-                        "links, frictionless pivots) to bound a mass's tolerance (with links or "
-                        "pivot friction the masses enter the carry; not derived yet)",
+                        "links, frictionless pivots) to bound a mass's or a stop's tolerance "
+                        "(with links or pivot friction they enter the carry; not derived yet)",
                         found="scene.links or scene.pivots")
     for tol in spec.tolerances:
         if tol.quantity in allowed:

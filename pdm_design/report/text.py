@@ -128,6 +128,10 @@ def _built_parts(geometry: dict) -> dict:
     return {k: v for k, v in geometry.items() if k not in MECHANISM}
 
 
+# an allocated quantity no binding row involves: only the weights' proportion holds it back
+SHARED = "its weight's share of the others' (no binding row involves it)"
+
+
 def allocation_rows(kind: str, entries) -> list[str]:
     """The allocated tolerance table in build units (mm, degrees, g, %), with what limits each
     (optimize's `tolerances`, docs/optimizer.md section 4a)."""
@@ -142,7 +146,7 @@ def allocation_rows(kind: str, entries) -> list[str]:
             shown = f"+-{value:.4g}"
         else:
             shown = f"+-{value:.4g} {unit}"
-        how = (("limited by: " + (in_words(e["limited_by"]) or "-")) if e["allocated"]
+        how = (("limited by: " + (in_words(e["limited_by"]) or SHARED)) if e["allocated"]
                else "given")
         rows.append(f"  {e['quantity']:<13} {shown:<14} {e['applies_to']:<5} {how}")
     return rows

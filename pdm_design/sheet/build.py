@@ -139,6 +139,7 @@ ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot brac
 def allocated_entries(entries) -> tuple:
     """ToleranceEntry of every allocated or given tolerance of an optimize answer other than
     the pivots' (the sheet's own box lists those), on its part, with what limits it."""
+    from ..report.text import SHARED
     from ..solve.binding import in_words
     from .parts import ToleranceEntry
 
@@ -147,7 +148,7 @@ def allocated_entries(entries) -> tuple:
         if e["quantity"] in ("pivot_x", "pivot_y"):
             continue
         lot = " (one lot)" if e["applies_to"] == "lot" else ""
-        why = ("allocated; limited by " + (in_words(e["limited_by"]) or "-")
+        why = ("allocated; limited by " + (in_words(e["limited_by"]) or SHARED)
                if e["allocated"] else "given in the spec")
         out.append(ToleranceEntry(e["quantity"].replace("_", " "),
                                   ALLOCATED_PART.get(e["quantity"], e["quantity"]) + lot,
