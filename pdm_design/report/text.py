@@ -128,14 +128,10 @@ def _built_parts(geometry: dict) -> dict:
     return {k: v for k, v in geometry.items() if k not in MECHANISM}
 
 
-# an allocated quantity no binding row involves: only the weights' proportion holds it back
-SHARED = "its weight's share of the others' (no binding row involves it)"
-
-
 def allocation_rows(kind: str, entries) -> list[str]:
     """The allocated tolerance table in build units (mm, degrees, g, %), with what limits each
     (optimize's `tolerances`, docs/optimizer.md section 4a)."""
-    from ..solve.binding import in_words
+    from ..solve.binding import SHARED, in_words
     from ..tolerances.model import QUANTITIES
 
     rows = []

@@ -139,8 +139,7 @@ ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot brac
 def allocated_entries(entries) -> tuple:
     """ToleranceEntry of every allocated or given tolerance of an optimize answer other than
     the pivots' (the sheet's own box lists those), on its part, with what limits it."""
-    from ..report.text import SHARED
-    from ..solve.binding import in_words
+    from ..solve.binding import SHARED, in_words
     from .parts import ToleranceEntry
 
     out = []

@@ -94,6 +94,10 @@ def limits_of_quantities(spec, solution, entries) -> list[dict]:
     return out
 
 
+# an allocated quantity no binding row involves: only the weights' proportion holds it back
+SHARED = "its weight's share of the others' (no binding row involves it)"
+
+
 def in_words(limits: list[dict]) -> str:
     """A limited_by list in one line: 'lift_off (at the handover) 58 %; alpha at its min 0'."""
     return "; ".join(
