@@ -90,7 +90,9 @@ def build(spec):
     t = ca.SX.sym("min_margin") if epigraph else None
     l_max = bounds["link_length"][1] if "link_length" in bounds else values["link_length"]
 
-    m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages))
+    stops = any(t.quantity == "back_stop" for t in spec.tolerances) and \
+        allocation.allocating(spec)
+    m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages, stops))
     m.steps = integrated_steps(spec, robust, values, bounds)
     conditions = allocation.box_conditions(
         spec, lambda box: m.conditions(S, u_lo, u_hi, box, robust),
@@ -148,7 +150,7 @@ def integrated_steps(spec, robust, values, bounds, force=False) -> int:
     return phys.carry_steps(spec.verification.accuracy.agreement / 10.0, span=span)
 
 
-def parked_rows(scene, values, bounds, stages) -> int:
+def parked_rows(scene, values, bounds, stages, stops=False) -> int:
     """How many palms behind the carrying one can meet the carried object somewhere in the
     design box (at most PARKED_ROWS_CAP and stages - 1). The palm n places back is behind the
     object from the start of the carry once n pitch_x >= l (sin f + sin a) + (w + W) / 2 - o +
@@ -164,7 +166,9 @@ def parked_rows(scene, values, bounds, stages) -> int:
     l_max = high("link_length")
     pitch_min = low("link_length") * (math.sin(max(low("alpha"), 0.0))
                                       + math.sin(max(low("beta"), 0.0)))
-    far = (l_max * (max(math.sin(palm.front_stop), 0.0) + math.sin(min(high("alpha"), 1.5)))
+    # stops: the back stops toleranced, at most 2 alpha (back_stop_range keeps t_a <= alpha)
+    a_max = min((2.0 if stops else 1.0) * high("alpha"), 1.5)
+    far = (l_max * (max(math.sin(palm.front_stop), 0.0) + math.sin(a_max))
            + palm.width + l_max)
     reach = math.ceil(far / pitch_min) if pitch_min > 0.0 else PARKED_ROWS_CAP
     return max(0, min(stages - 1, reach, PARKED_ROWS_CAP))
@@ -485,6 +489,10 @@ class _Model:
             kind=VALIDITY)
         add(("start_height",), "",
             self.H - raise_hi - START_CLEARANCE * l, scale=l, kind=VALIDITY)
+        t_x = box.get("pivot_x", 0.0)
+        if t_x is not tau and _nonzero(t_x):  # the parked palms' count assumes 2 t_x <= l
+            add(("palm_clearance",), "pivots' places within half a link", l - 2 * t_x, l,
+                kind=VALIDITY)
         if stopped:  # the bounds take the stops in [0, pi/2) and a start moving forward
             add(("back_stop_range",), "every back stop at or behind the vertical", a_lo, 1.0,
                 kind=VALIDITY)
