@@ -66,8 +66,8 @@ class Stages:
         add("forward_landing", "palm 1", u, m.k * ca.sqrt(m.vx0**2 + Q**2), VALIDITY)
         o = m.C0 + m.vx0 * m.flight_time(dy1) - dx1
         px, py = phys.landing_impulse(m.vx0, -Q, m.a, m.q)
-        impact_rows(add, scene_sizes(self.spec.scene), "first_slip_impact", "first_tip_impact", "palm 1",
-                    px, py, [o], [o])
+        impact_rows(add, scene_sizes(self.spec.scene), "first_slip_impact", "first_tip_impact",
+                    "palm 1", px, py, [o], [o])
         fn = ca.Function("first_landing", [self.x, dx1, dy1],
                          [_stack(rows, 2), _stack(rows, 3), u, o])
         return fn, rows

@@ -33,6 +33,12 @@ Instead of enumerating the 4^N corners we bound each quantity a condition depend
   in the fall speed Q: ends again.
 * Every other condition is monotone in the bounded quantity (worst end used).
 Bounds that are not exact are outer bounds, so the box found is sound (never too large).
+
+Allocated tolerances ([tolerances] with allocate = true, formulation/allocation.py): the same
+rows over a box with one half-width per quantity, `box` {quantity: half-width}: the pivots'
+places and heights apart, the feed's place and speed, the friction, the object's width, the
+masses (the mass ratio's ends) and the back stops (their ends, and the drift they add along the
+row); docs/optimizer.md section 4a derives each.
 """
 
 from __future__ import annotations
