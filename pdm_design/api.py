@@ -22,6 +22,9 @@ class DesignOutcome:
     violations: tuple[str, ...] = ()
     objective: dict | None = None
     tolerance: dict | None = None
+    # allocated and given tolerances ([tolerances] with allocate = true): {quantity,
+    # applies_to, value (SI), unit, allocated, limited_by}; None otherwise
+    tolerances: tuple[dict, ...] | None = None
     verification: dict | None = None
     solver: dict | None = None
     accuracy: Accuracy | None = None
@@ -124,7 +127,7 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
     if verify and result.status.is_success:
         samples = round(spec.verification.samples * preset["sample_factor"])
         verification = _verify_with_box(spec, point, analysis, result.tolerance, accuracy,
-                                        samples)
+                                        samples, result.tolerances)
     solver = result.stats.to_json() | {"status": result.status.value, "message": result.message}
     objective = {"weights": dict(spec.objective), "value": result.objective,
                  "terms": _terms(spec, result.objectives, analysis.margins, result.tolerance)}
@@ -137,9 +140,15 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
             from .solve.binding import limited_by
 
             tolerance["limited_by"] = limited_by(spec, result.solution)
+    tolerances = None
+    if result.tolerances is not None and result.solution is not None:
+        from .solve.binding import limits_of_quantities
+
+        tolerances = tuple(limits_of_quantities(spec, result.solution, result.tolerances))
     return DesignOutcome(spec=spec, status=result.status, analysis=analysis,
                          violations=violations, objective=objective, tolerance=tolerance,
-                         verification=verification, solver=solver, accuracy=accuracy)
+                         tolerances=tolerances, verification=verification, solver=solver,
+                         accuracy=accuracy)
 
 
 def _terms(spec: Spec, nlp_terms: dict, margins: dict, tolerance: dict | None) -> dict:
@@ -156,7 +165,8 @@ def _terms(spec: Spec, nlp_terms: dict, margins: dict, tolerance: dict | None) -
     return terms
 
 
-def _verify_with_box(spec, point, analysis, tolerance, accuracy, samples) -> dict:
+def _verify_with_box(spec, point, analysis, tolerance, accuracy, samples,
+                     tolerances=None) -> dict:
     """Nominal run plus, when a tolerance is claimed, its corners and random samples."""
     from .verify import verify_nominal
 
@@ -165,7 +175,8 @@ def _verify_with_box(spec, point, analysis, tolerance, accuracy, samples) -> dic
         return nominal
     from .verify.tolerance import verify_tolerance
 
-    box = verify_tolerance(spec, point, tolerance, samples=samples, accuracy=accuracy)
+    box = verify_tolerance(spec, point, tolerance, samples=samples, accuracy=accuracy,
+                           lots=tolerances)
     failures = nominal["failures"] + [
         f"tolerance refuted: {f['build']} fails ({f['failure']})" for f in box["failures"]]
     summary = nominal["summary"] if nominal["passed"] else "; ".join(nominal["failures"])

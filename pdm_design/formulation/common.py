@@ -71,6 +71,9 @@ class Condition:
     # a row that seldom binds and costs IPOPT iterations when present: left out of the NLP
     # first and added only if the answer without it breaks it (solve/optimize.py)
     deferred: bool = False
+    # the toleranced quantities the row depends on, when the spec allocates tolerances
+    # (formulation/allocation.py): the rows that can limit each quantity
+    quantities: tuple[str, ...] = ()
 
     @property
     def name(self) -> str:
@@ -91,6 +94,7 @@ class ConditionInfo:
     where: str
     kind: str
     equality: bool
+    quantities: tuple[str, ...] = ()  # Condition.quantities
 
     @property
     def label(self) -> str:
@@ -324,7 +328,8 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
             continue
         lbg.append(0.0)
         ubg.append(0.0 if c.equality else math.inf)
-        infos.append(ConditionInfo(len(infos), c.name, c.keys, c.where, c.kind, c.equality))
+        infos.append(ConditionInfo(len(infos), c.name, c.keys, c.where, c.kind, c.equality,
+                                   c.quantities))
     conditions = [c for c in model.conditions if not (c.deferred and defer)]
     norms = np.array([n for c, n in zip(model.conditions, norms) if not (c.deferred and defer)])
     deferred = None
@@ -414,8 +419,10 @@ def spec_key(spec) -> str:
     forced = spec.verification.accuracy.carry == "integrated"  # (the carry integrated: steps)
     steps = (spec.verification.accuracy.agreement
              if pivots is not None and (pivots.damping or forced) else None)
+    allocated = tuple(getattr(spec, "tolerances", ())) if any(
+        t.allocate for t in getattr(spec, "tolerances", ())) else ()  # allocation.py
     return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages,
-                 required, steps))
+                 required, steps) + ((allocated,) if allocated else ()))
 
 
 # objective terms measured in metres (the others are pure numbers)

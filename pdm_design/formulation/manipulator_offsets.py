@@ -30,7 +30,7 @@ import numpy as np
 
 from ..physics import manipulators as phys
 from .common import MARGIN, VALIDITY, ConditionInfo, Scenario
-from .manipulators import impact_rows
+from .manipulators import impact_rows, scene_sizes
 
 
 class Stages:
@@ -66,8 +66,8 @@ class Stages:
         add("forward_landing", "palm 1", u, m.k * ca.sqrt(m.vx0**2 + Q**2), VALIDITY)
         o = m.C0 + m.vx0 * m.flight_time(dy1) - dx1
         px, py = phys.landing_impulse(m.vx0, -Q, m.a, m.q)
-        impact_rows(add, self.spec.scene, "first_slip_impact", "first_tip_impact", "palm 1",
-                    px, py, [o], [o])
+        impact_rows(add, scene_sizes(self.spec.scene), "first_slip_impact", "first_tip_impact",
+                    "palm 1", px, py, [o], [o])
         fn = ca.Function("first_landing", [self.x, dx1, dy1],
                          [_stack(rows, 2), _stack(rows, 3), u, o])
         return fn, rows
@@ -142,7 +142,7 @@ class Stages:
             add("forward_landing", "palm {K1}", u_next / v, m.k, VALIDITY)
             o_next = o + l * (ca.sin(th) - ca.sin(b)) - (wdx[at + 1] - wdx[at])
             px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a, m.q)
-            impact_rows(add, scene, "slip_impact", "tip_impact", "palm {K1}", px, py,
+            impact_rows(add, scene_sizes(scene), "slip_impact", "tip_impact", "palm {K1}", px, py,
                         [o_next], [o_next])
         fn = ca.Function("stage", [self.x, u, o, wdx, wdy],
                          [_stack(rows, 2), _stack(rows, 3), u_next, o_next])

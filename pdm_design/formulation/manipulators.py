@@ -33,16 +33,24 @@ Instead of enumerating the 4^N corners we bound each quantity a condition depend
   in the fall speed Q: ends again.
 * Every other condition is monotone in the bounded quantity (worst end used).
 Bounds that are not exact are outer bounds, so the box found is sound (never too large).
+
+Allocated tolerances ([tolerances] with allocate = true, formulation/allocation.py): the same
+rows over a box with one half-width per quantity, `box` {quantity: half-width}: the pivots'
+places and heights apart, the feed's place and speed, the friction, the object's width, the
+masses (the mass ratio's ends) and the back stops (their ends, and the drift they add along the
+row); docs/optimizer.md section 4a derives each.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import casadi as ca
 
 from ..errors import SpecError
 from ..physics import manipulators as phys
+from . import allocation
 from ..scenes import ManipulatorsDesign
 from .common import (
     MARGIN,
@@ -69,6 +77,7 @@ SHARED_ROWS = (OVER_THE_TOP, LIFT_OFF)
 OUTSIDE_MIN_MARGIN = ("parked_palms",)
 PARKED_ROWS_CAP = 16  # parked palms checked behind the carrying one, at most (docs/optimizer.md)
 ACOS_EDGE = 1e-15  # acos is taken of at most 1 - this: a finite slope
+MASS_KEPT = 1e-3  # a mass tolerance leaves at least this fraction of the mass
 
 
 def build(spec):
@@ -76,6 +85,8 @@ def build(spec):
     scene = spec.scene
     values, symbols, bounds = design_inputs(spec, ManipulatorsDesign.VARIABLES, DEFAULTS)
     robust = float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0
+    if allocation.allocating(spec):
+        allocation.check(spec)
     epigraph = float(spec.objective.get("max_min_margin", 0.0)) > 0.0
     stages = spec.verification.stages
 
@@ -85,9 +96,13 @@ def build(spec):
     t = ca.SX.sym("min_margin") if epigraph else None
     l_max = bounds["link_length"][1] if "link_length" in bounds else values["link_length"]
 
-    m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages))
+    stops = any(t.quantity == "back_stop" for t in spec.tolerances) and \
+        allocation.allocating(spec)
+    m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages, stops))
     m.steps = integrated_steps(spec, robust, values, bounds)
-    conditions = m.conditions(S, u_lo, u_hi, tau, robust)
+    conditions = allocation.box_conditions(
+        spec, lambda box: m.conditions(S, u_lo, u_hi, box, robust),
+        {"pivot_x": tau, "pivot_y": tau}, tau)
     aux = [("periodic_speed_sq", S, 0.0, math.inf),
            ("landing_speed_lo", u_lo, 0.0, math.inf),
            ("landing_speed_hi", u_hi, 0.0, math.inf)]
@@ -146,7 +161,7 @@ def integrated_steps(spec, robust, values, bounds) -> int:
     return phys.carry_steps(spec.verification.accuracy.agreement / 10.0, span=span)
 
 
-def parked_rows(scene, values, bounds, stages) -> int:
+def parked_rows(scene, values, bounds, stages, stops=False) -> int:
     """How many palms behind the carrying one can meet the carried object somewhere in the
     design box (at most PARKED_ROWS_CAP and stages - 1). The palm n places back is behind the
     object from the start of the carry once n pitch_x >= l (sin f + sin a) + (w + W) / 2 - o +
@@ -162,7 +177,9 @@ def parked_rows(scene, values, bounds, stages) -> int:
     l_max = high("link_length")
     pitch_min = low("link_length") * (math.sin(max(low("alpha"), 0.0))
                                       + math.sin(max(low("beta"), 0.0)))
-    far = (l_max * (max(math.sin(palm.front_stop), 0.0) + math.sin(min(high("alpha"), 1.5)))
+    # stops: the back stops toleranced, at most 2 alpha (back_stop_range keeps t_a <= alpha)
+    a_max = min((2.0 if stops else 1.0) * high("alpha"), 1.5)
+    far = (l_max * (max(math.sin(palm.front_stop), 0.0) + math.sin(a_max))
            + palm.width + l_max)
     reach = math.ceil(far / pitch_min) if pitch_min > 0.0 else PARKED_ROWS_CAP
     return max(0, min(stages - 1, reach, PARKED_ROWS_CAP))
@@ -225,21 +242,51 @@ class _Model:
     def flight_time(self, dy):
         return (self.vy0 + self.fall_speed(dy)) / self.g
 
-    def first_speed(self, Q):
-        return phys.landing_speed(self.vx0, -Q, self.a, self.q)
+    def first_speed(self, Q, vx=None, q=None, a=None):
+        return phys.landing_speed(self.vx0 if vx is None else vx, -Q, self.a if a is None else a,
+                                  self.q if q is None else q)
 
-    def next_speed(self, u, th):
-        """Landing speed on the next palm after carrying at u from -alpha to the handover th."""
-        v = ca.sqrt(self.carry_v2(u, th))
-        return phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), self.a, self.q)
+    def stops(self, box):
+        """(a_lo, a_hi): the back stops' angles the box allows (the spec's alpha twice, the
+        same expression, when exact). Kept at or above 0 by a validity row."""
+        t_a = box.get("back_stop", 0.0)
+        return (self.a, self.a) if not _nonzero(t_a) else (self.a - t_a, self.a + t_a)
 
-    def carry_v2(self, u, th, lowest=False):
+    def mass_ratios(self, box):
+        """The mass ratios m / M the box allows, as [q] or [q_lo, q_hi] (the object's mass and
+        the palms' within their tolerances; the paper's device: allocation.check). Every
+        landing speed is m / (m + M), increasing in q, times a factor free of the masses, and
+        the carry is free of them (docs/optimizer.md section 4a)."""
+        t_m, t_M = box.get("object_mass", 0.0), box.get("palm_mass", 0.0)
+        if not (_nonzero(t_m) or _nonzero(t_M)):
+            return [self.q]
+        m = self.scene.body.mass
+        M = m / self.q
+        return [(m - t_m) / (M + t_M), (m + t_m) / (M - t_M)]
+
+    def feed_speeds(self, box):
+        """The horizontal start speeds the box allows: the spec's, or both ends of the feed
+        speed's tolerance (a horizontal start: allocation.check; u_1 and the first impact's
+        rows are affine in it, the landing place bilinear, docs/optimizer.md section 4a)."""
+        t_v = box.get("feed_speed", 0.0)
+        return [self.vx0] if not _nonzero(t_v) else [self.vx0 - t_v, self.vx0 + t_v]
+
+    def next_speed(self, u, th, q=None, a=None):
+        """Landing speed on the next palm after carrying at u from -alpha to the handover th
+        (q: that palm's mass ratio, the spec's by default; a: both palms' stop angle, the
+        spec's alpha by default)."""
+        a = self.a if a is None else a
+        v = ca.sqrt(self.carry_v2(u, th, a=a))
+        return phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), a,
+                                  self.q if q is None else q)
+
+    def carry_v2(self, u, th, lowest=False, a=None):
         """v^2 at th on a carry that left -alpha at u: the closed form, or with pivot damping
         (or integrated_steps set) fourth-order steps in the angle (lowest: also the smallest
         v^2 on the way)."""
         kw = dict(gravity=self.gc, link_length=self.l, friction=self.f)
         if not self.steps:
-            v2 = phys.carry_speed_squared(u, self.a, th, **kw)
+            v2 = phys.carry_speed_squared(u, self.a if a is None else a, th, **kw)
             return (v2, None) if lowest else v2
         return phys.integrated_carry_speed_squared(u, self.a, th, damping=self.delta,
                                                    steps=self.steps, lowest=lowest, **kw)
@@ -271,53 +318,111 @@ class _Model:
         u1 = self.first_speed(self.fall_speed(0.0))
         return [S, ca.fmax(ca.fmin(u1, u_star), 0.0), ca.fmax(u1, u_star)]
 
-    def landing_ranges(self, tau, robust):
+    def landing_ranges(self, box, robust):
         """(o1_hi, o1_lo), (later o_hi versions, later o_lo versions): outer bounds of the landing
-        offset on palm 1 and on every palm (module docstring)."""
+        offset on palm 1 and on every palm (module docstring) over the box {quantity:
+        half-width}: pivot_y (tau below), pivot_x and feed_x (the start's place: it moves
+        every landing place by its own error, docs/optimizer.md section 4a)."""
         vx0, C0, N = self.vx0, self.C0, self.stages
         if not robust:
             o = C0 + vx0 * self.flight_time(0.0)
             return (o, o), ([o], [o])
-        t_up, t_down = self.flight_time(-tau), self.flight_time(tau)  # palm lower: longer flight
-        if vx0 >= 0:
-            o1 = (C0 + vx0 * t_up + tau, C0 + vx0 * t_down - tau)
+        tau, t_x, t_f = (box.get(q, 0.0) for q in ("pivot_y", "pivot_x", "feed_x"))
+        stops = self.stops(box)
+        o1, (o_hi, o_lo) = self._landing_ranges(tau, t_x, N, self.vx0, stops)
+        if len(speeds := self.feed_speeds(box)) > 1:  # a bound for each end; the worst holds
+            ranges = [self._landing_ranges(tau, t_x, N, vx, stops) for vx in speeds]
+            o1 = (fmax_all([r[0][0] for r in ranges]), fmin_all([r[0][1] for r in ranges]))
+            o_hi = [o for r in ranges for o in r[1][0]]
+            o_lo = [o for r in ranges for o in r[1][1]]
+        shift = (lambda o, sign: o + sign * t_f) if _nonzero(t_f) else (lambda o, sign: o)
+        return ((shift(o1[0], 1), shift(o1[1], -1)),
+                ([shift(o, 1) for o in o_hi], [shift(o, -1) for o in o_lo]))
+
+    def _landing_ranges(self, tau, t_x, N, vx0, stops):
+        """landing_ranges without the feed place's error: tau the pivots' heights, t_x their
+        places, vx0 the start speed (a number, or an expression of unknown sign: then both
+        cases' bounds, the larger and the smaller of them), stops the back stops' angles
+        (docs/optimizer.md section 4a: palm 1's top and every palm's centre move with them)."""
+        a, b, l = self.a, self.b, self.l
+        stopped = stops[0] is not stops[1]
+        C0 = self.C0
+        # palm 1's top raised by [lo, hi]: its pivot's error and its stop's
+        lo, hi = (-tau, tau) if not stopped else (-tau + l * (ca.cos(stops[1]) - ca.cos(a)),
+                                                  tau + l * (ca.cos(stops[0]) - ca.cos(a)))
+        # each palm's centre moves l (sin a_K - sin a) - cot b l (cos a_K - cos a) = h(a_K)
+        # along its landing place, once per palm up to K (increasing in a_K)
+        cot_b = ca.cos(b) / ca.sin(b)
+        h_end = [0.0, 0.0] if not stopped else [
+            l * ((ca.sin(s) - ca.sin(a)) - cot_b * (ca.cos(s) - ca.cos(a))) for s in stops]
+        signed = isinstance(vx0, (int, float))
+        t_up, t_down = self.flight_time(lo), self.flight_time(hi)  # palm lower: longer flight
+        shift1 = [0.0, 0.0] if not stopped else [l * (ca.sin(s) - ca.sin(a)) for s in stops]
+        if not signed:  # vx0 t over t in [t_down, t_up]: at an end
+            o1 = (fmax_all([vx0 * t_up, vx0 * t_down]) + C0 + t_x + shift1[1],
+                  fmin_all([vx0 * t_up, vx0 * t_down]) + C0 - t_x + shift1[0])
+        elif vx0 >= 0:
+            o1 = (C0 + vx0 * t_up + t_x + shift1[1], C0 + vx0 * t_down - t_x + shift1[0])
         else:
-            o1 = (C0 + vx0 * t_down + tau, C0 + vx0 * t_up - tau)
+            o1 = (C0 + vx0 * t_down + t_x + shift1[1], C0 + vx0 * t_up - t_x + shift1[0])
         if N < 2:
             return o1, ([o1[0]], [o1[1]])
-        b, l = self.b, self.l
-        cot_b = ca.cos(b) / ca.sin(b)
         phi0 = vx0 * self.flight_time(0.0)
         slope = cot_b - vx0 / self.fall_speed(0.0)  # d phi / d dy_1 at 0
-        phi_plus = vx0 * t_down + cot_b * tau
-        phi_minus = vx0 * t_up - cot_b * tau
-        if vx0 >= 0:  # phi concave: tangent above, ends below
-            phi_max = [phi0 + slope * tau, phi0 - slope * tau]
-            phi_min = [phi_plus, phi_minus]
+        phi_plus = vx0 * t_down + cot_b * hi
+        phi_minus = vx0 * t_up + cot_b * lo
+        tangent = [phi0 + slope * hi, phi0 + slope * lo]
+        if not signed:  # concave or convex: the tangent and the ends bound it either way
+            phi_max = phi_min = [*tangent, phi_plus, phi_minus]
+        elif vx0 >= 0:  # phi concave: tangent above, ends below
+            phi_max, phi_min = tangent, [phi_plus, phi_minus]
         else:  # phi convex: ends above, tangent below
-            phi_max = [phi_plus, phi_minus]
-            phi_min = [phi0 + slope * tau, phi0 - slope * tau]
-        cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
-        r_ends = [l * (ca.sqrt(1 - cp**2) - ca.sin(b)) + 2 * tau * cot_b,
-                  l * (ca.sqrt(1 - cm**2) - ca.sin(b)) - 2 * tau * cot_b]
-        spread = tau * (1 + cot_b)
-        o_hi = [C0 + p + spread for p in phi_max]
-        o_lo = [C0 + p - spread + d for p in phi_min for d in drift_worst(N, r_ends)]
+            phi_max, phi_min = [phi_plus, phi_minus], tangent
+        spread = tau * (1 + cot_b) if t_x is tau else t_x + tau * cot_b
+        if not stopped:
+            cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
+            r_ends = [l * (ca.sqrt(1 - cp**2) - ca.sin(b)) + 2 * tau * cot_b,
+                      l * (ca.sqrt(1 - cm**2) - ca.sin(b)) - 2 * tau * cot_b]
+            drifts = drift_worst(N, r_ends)
+        else:  # each step's r at the worse end of its own range: (N - 1) of them
+            ends = [-2 * tau + l * (ca.cos(stops[1]) - ca.cos(a)),
+                    2 * tau + l * (ca.cos(stops[0]) - ca.cos(a))]
+            drifts = [(N - 1) * (l * (ca.sqrt(1 - (ca.cos(b) + e / l) ** 2) - ca.sin(b))
+                                 + cot_b * e) for e in ends]
+        o_hi = [C0 + p + spread + N * h_end[1] for p in phi_max]
+        o_lo = [C0 + p - spread + N * h_end[0] + d for p in phi_min for d in drifts]
         return o1, (o_hi, o_lo)
 
     # -- the conditions -----------------------------------------------------------------------
-    def conditions(self, S, u_lo, u_hi, tau, robust):
+    def conditions(self, S, u_lo, u_hi, box, robust):
+        """Every condition over the box {quantity: half-width} (pivot_x, pivot_y, feed_x,
+        friction, object_width; a quantity left out is exact): outer bounds, module docstring
+        and docs/optimizer.md section 4a."""
         a, b, l, g = self.a, self.b, self.l, self.g
         body, palm = self.scene.body, self.scene.palm
-        mu, W, w, h = palm.friction, palm.width, body.width, body.height
+        tau = box.get("pivot_y", 0.0)  # the pivot heights: handover angles, fall, clearance
+        t_w = box.get("object_width", 0.0)
+        # every row is increasing in the friction (the stick rows: py > 0) and monotone in the
+        # width (wider: lands less fully on the palm, tips less over its own edges)
+        mu, W, h = palm.friction - box.get("friction", 0.0), palm.width, body.height
+        w, w_lo = body.width + t_w, body.width - t_w
         out: list[Condition] = []
 
         def add(keys, where, slack, scale=1.0, kind=MARGIN, **kw):
             out.append(Condition(tuple(keys) if isinstance(keys, (tuple, list)) else (keys,),
                                  where, slack, scale, kind, **kw))
 
+        a_lo, a_hi = self.stops(box)
+        stopped = a_lo is not a_hi
+        # palm K + 1's rest raises the handover by cos a_K+1 - cos a (its stop), the pivots by
+        # their heights' difference; palm 1's top by its pivot's and its stop's error
+        d_lo, d_hi = ((0.0, 0.0) if not stopped else
+                      (ca.cos(a_hi) - ca.cos(a), ca.cos(a_lo) - ca.cos(a)))
+        raise_lo, raise_hi = (-tau, tau) if not stopped else (-tau + l * d_lo, tau + l * d_hi)
         if robust:
             cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
+            if stopped:
+                cm, cp = cm + d_lo, cp + d_hi
             # a number wherever IPOPT may step: its push of tau off 0 (1 cm, say) can take
             # cos b + 2 tau / l past 1 where the handover drop l (1 - cos b) / 2 is smaller
             # (every start Invalid_Number_Detected); the palm_clearance row keeps the feasible
@@ -325,7 +430,8 @@ class _Model:
             edge = 1.0 - ACOS_EDGE
             th_hi, th_lo = ca.acos(ca.fmax(cm, -edge)), ca.acos(ca.fmin(cp, edge))
             thetas = [("smallest handover angle", th_lo), ("largest handover angle", th_hi)]
-            Qs = [("palm 1 high", self.fall_speed(tau)), ("palm 1 low", self.fall_speed(-tau))]
+            Qs = [("palm 1 high", self.fall_speed(raise_hi)),
+                  ("palm 1 low", self.fall_speed(raise_lo))]
         else:
             th_hi = th_lo = b
             thetas = [("at beta", b)]
@@ -340,7 +446,11 @@ class _Model:
         else:
             add((), "periodic handover speed: S (1 - c) = D", S * (1 - self.c) - self.D,
                 kind=MODEL, equality=True)
-        u1_lo, u1_hi = self.first_speed(Q_hi), self.first_speed(Qs[0][1])
+        speeds = self.feed_speeds(box)  # u_1 increases with the start speed and the mass ratio
+        qs = self.mass_ratios(box)
+        # u_1 = k (vx cos a_1 - Q sin a_1): decreasing in a_1 in [0, pi/2) for vx >= 0
+        u1_lo = self.first_speed(Q_hi, speeds[0], qs[0], a_hi)
+        u1_hi = self.first_speed(Qs[0][1], speeds[-1], qs[-1], a_lo)
         # The interval rows keep the backoff in speed units (sqrt(g l)): without it, an
         # interval met only to IPOPT's tolerance let the first landing stall 1e-4 rad short of
         # the top in 3 of 900 random specs; in m/s it would be a size-dependent 1e-6 m/s.
@@ -355,19 +465,26 @@ class _Model:
             # the same maximum over 1 / v^2 of g l cos th / v^2 - 2 (g l sin th - f)^2 / v^4)
             lean = ca.sin(th_lo) if phys.is_exact_zero(self.f) else (
                 ca.sin(th_lo) - self.f / (self.gc * l))
-            curv = (ca.cos(th_lo) / lean) ** 2 / 8 - 1 / ca.cos(a + th_lo) ** 2
-            curv = (curv + ca.sqrt(curv**2 + 1e-12)) / 2
+            def curvature(stop):  # the landing palm's stop angle enters the sec^2 term only
+                bound = (ca.cos(th_lo) / lean) ** 2 / 8 - 1 / ca.cos(stop + th_lo) ** 2
+                return (bound + ca.sqrt(bound**2 + 1e-12)) / 2
+
+            # F is decreasing in both palms' stop angles (the carry's start, the landing's
+            # angle): the low rows take a_hi, the high rows a_lo (docs/optimizer.md 4a)
+            curv = curvature(a_hi)
             # Low end: ln F >= chord - M+ (th - th_lo)(th_hi - th) / 2 >= min over the ends
             # - M+ (th_hi - th_lo)^2 / 8.
             sag = ca.exp(-curv * (th_hi - th_lo) ** 2 / 8)
             for where, th in thetas:
                 add((), f"interval invariant (low, {where})",
-                    self.next_speed(u_lo, th) * sag - u_lo, **model)
+                    self.next_speed(u_lo, th, qs[0], a_hi) * sag - u_lo, **model)
             # High end: ln F <= ln F(b) + lambda (th - b) + M+ (th - b)^2 / 2 (Taylor), convex in
             # th so largest at an end; lambda = d ln F / d th at b by CasADi AD.
             th_s = ca.SX.sym("th")
-            dlog = ca.substitute(ca.jacobian(ca.log(self.next_speed(u_hi, th_s)), th_s), th_s, b)
-            u_b = self.next_speed(u_hi, b)
+            dlog = ca.substitute(ca.jacobian(ca.log(self.next_speed(u_hi, th_s, a=a_lo)), th_s),
+                                 th_s, b)
+            u_b = self.next_speed(u_hi, b, qs[-1], a_lo)  # ln F's th-derivatives are free of q
+            curv = curvature(a_lo) if stopped else curv
             for where, th in thetas:
                 bound = u_b * ca.exp(dlog * (th - b) + curv * (th - b) ** 2 / 2)
                 add((), f"interval invariant (high, {where})", u_hi - bound, **model)
@@ -376,13 +493,28 @@ class _Model:
             add((), "interval invariant (high)", u_hi - self.next_speed(u_hi, b), **model)
 
         # Validity of the closed forms.
-        add(("forward_landing",), "first landing moves the palm forward", self.first_speed(Q_hi),
-            scale=self.k * ca.sqrt(self.vx0**2 + Q_hi**2), kind=VALIDITY)
+        add(("forward_landing",), "first landing moves the palm forward", u1_lo,
+            scale=self.k * ca.sqrt(speeds[0]**2 + Q_hi**2), kind=VALIDITY)
         add(("forward_landing",), "handover moves the next palm forward",
-            phys.landing_speed(ca.cos(th_hi), -ca.sin(th_hi), a, self.q), scale=self.k,
+            phys.landing_speed(ca.cos(th_hi), -ca.sin(th_hi), a_hi, self.q), scale=self.k,
             kind=VALIDITY)
         add(("start_height",), "",
-            self.H - tau - START_CLEARANCE * l, scale=l, kind=VALIDITY)
+            self.H - raise_hi - START_CLEARANCE * l, scale=l, kind=VALIDITY)
+        t_x = box.get("pivot_x", 0.0)
+        if t_x is not tau and _nonzero(t_x):  # the parked palms' count assumes 2 t_x <= l
+            add(("palm_clearance",), "pivots' places within half a link", l - 2 * t_x, l,
+                kind=VALIDITY)
+        if stopped:  # the bounds take the stops in [0, pi/2) and a start moving forward
+            add(("back_stop_range",), "every back stop at or behind the vertical", a_lo, 1.0,
+                kind=VALIDITY)
+            add(("forward_landing",), "the start moves forward", speeds[0],
+                ca.sqrt(g * l), kind=VALIDITY)
+        m_obj = body.mass
+        for name, mass, t_mass in (("object", m_obj, box.get("object_mass", 0.0)),
+                                   ("every palm", m_obj / self.q, box.get("palm_mass", 0.0))):
+            if _nonzero(t_mass):  # a build with no mass is none: the mass ratio's ends hold
+                add(("positive_mass",), f"{name} keeps a mass within its tolerance",
+                    (1.0 - MASS_KEPT) * mass - t_mass, mass, kind=VALIDITY)
         if robust and not phys.is_exact_zero(self.f):
             add(("over_the_top",), "gravity beats the pivot friction at the handover",
                 self.gc * l * ca.sin(th_lo) - self.f, self.gc * l, kind=VALIDITY)
@@ -392,19 +524,21 @@ class _Model:
             add(OVER_THE_TOP, "slowest landing on any palm, slowest point (integrated)",
                 self.carry_v2(u_lo, b, lowest=True)[1], u_lo**2)
         else:
+            top = self.top_needed if not stopped else phys.top_speed_squared_needed(
+                a_hi, gravity=self.gc, link_length=l, friction=self.f)
             add(OVER_THE_TOP, "slowest landing on any palm",
-                u_lo**2 - self.top_needed, u_lo**2)
-        v2 = self.carry_v2(u_hi, th_hi)
+                u_lo**2 - top, u_lo**2)
+        v2 = self.carry_v2(u_hi, th_hi, a=a_lo)
         if self.plain:
-            held = phys.lift_off_capacity(a, gravity=g, link_length=l)
+            held = phys.lift_off_capacity(a_hi, gravity=g, link_length=l)
             add(LIFT_OFF, "at the back stop, fastest landing",
                 held - u_hi**2, held)
             held = phys.lift_off_capacity(th_hi, gravity=g, link_length=l)
             add(LIFT_OFF, "at the handover, fastest carry", held - v2, held)
-            add("slip_carry", "at the back stop", mu - phys.friction_demand(a), mu)
+            add("slip_carry", "at the back stop", mu - phys.friction_demand(a_hi), mu)
             add("slip_carry", "at the largest handover angle",
                 mu - phys.friction_demand(th_hi), mu)
-            fp_back = phys.carry_force_point(-a, h)
+            fp_back = phys.carry_force_point(-a_hi, h)
             fp_front = -phys.carry_force_point(th_hi, h)
         else:  # the contact force's tangential part depends on the speed: both ends of each
             for where, th, speed2 in (("at the back stop, fastest landing", -a, u_hi**2),
@@ -418,22 +552,24 @@ class _Model:
                     mu - phys.friction_demand(None, r), mu)
             fp_back = fmax_all([phys.carry_force_point(-a, h, r) for r in back])
             fp_front = fmax_all([-phys.carry_force_point(None, h, r) for r in front])
+        # the object's base stays above palm K + 1 while cos th_K <= cos a_K
+        clearance = self.pitch_y if not stopped else l * (d_lo - d_hi) + self.pitch_y
         add("palm_clearance", "next palm below the object until the handover",
-            self.pitch_y - 2 * tau, l, epigraph=False)
+            clearance - 2 * tau, l, epigraph=False)
         if palm.front_stop < math.pi / 2:
             add("front_stop", "largest handover angle before the front stop",
                 palm.front_stop - th_hi, palm.front_stop, epigraph=False)
 
-        (o1_hi, o1_lo), (o_hi, o_lo) = self.landing_ranges(tau, robust)
+        (o1_hi, o1_lo), (o_hi, o_lo) = self.landing_ranges(box, robust)
         # Palms parked at their front stops behind the carrying one stay clear of the object
         # (physics.parked_palm_clearance; each palm's landing offset lies between the smallest
         # of the o_lo versions and the largest of the o_hi ones, each pivot within the box).
         # Deferred: on problems where they do not bind they cost IPOPT 2 of 14 iterations.
-        parked = {"alpha": a, "theta_end": th_hi, "link_length": l,
+        parked = {"alpha": a_hi, "theta_end": th_hi, "link_length": l,
                   "front_stop": palm.front_stop, "pitch_x": self.pitch_x,
                   "pitch_y": self.pitch_y, "offset_lo": fmin_all(o_lo),
                   "offset_hi": fmax_all(o_hi), "reach": (w + W) / 2,
-                  "depth": palm.thickness + h, "shift": 2 * tau}
+                  "depth": palm.thickness + h, "shift": 2 * _larger(tau, box.get("pivot_x", 0.0))}
         for n in range(1, self.parked + 1):
             add("parked_palms", f"palm {n} back, at its front stop",
                 phys.parked_palm_clearance(n, **parked), l, epigraph=False, deferred=True)
@@ -444,25 +580,38 @@ class _Model:
             add("landing", _v("object furthest behind", i, o_lo), W / 2 + o - w / 2, W / 2)
         # Tipping during the carry: the force point within the support (ahead of the centre at
         # the back stop, behind it at the handover).
-        add("tip_carry", "at the back stop, object's front edge", w / 2 - fp_back, w / 2)
+        add("tip_carry", "at the back stop, object's front edge", w_lo / 2 - fp_back, w_lo / 2)
         for i, o in enumerate(o_hi):
             add("tip_carry", _v("at the back stop, palm's front edge", i, o_hi),
                 W / 2 - o - fp_back, W / 2 - o)
-        add("tip_carry", "at the handover, object's rear edge", w / 2 - fp_front, w / 2)
+        add("tip_carry", "at the handover, object's rear edge", w_lo / 2 - fp_front, w_lo / 2)
         for i, o in enumerate(o_lo):
             add("tip_carry", _v("at the handover, palm's rear edge", i, o_lo),
                 W / 2 + o - fp_front, W / 2 + o)
 
         # Impacts: on palms 2.. (velocity along the handover tangent) and the first landing.
+        # The landing palm's stop angle: each row is a sinusoid in 2 a plus a term free of it,
+        # of amplitude k |c| / 2 per unit speed (|c| the row's coefficients of the impulse), so
+        # it lies above the chord between the stops' ends less k |c| (a_hi - a_lo)^2 / 4 / 2
+        # (docs/optimizer.md section 4a): rows at both ends, less that.
+        stop_ends = _ends([a_lo, a_hi] if stopped else [a], "back stop")
+        k_max = phys.momentum_fraction(qs[-1])
+        sag_a = 0.0 if not stopped else k_max * (a_hi - a_lo) ** 2 / 4
         if self.stages >= 2:
-            for where, th in thetas:
-                px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a, self.q)
-                impact_rows(add, self.scene, "slip_impact", "tip_impact", where, px, py, o_hi,
-                            o_lo)
-        for where, Q in Qs:
-            px, py = phys.landing_impulse(self.vx0, -Q, a, self.q)
-            impact_rows(add, self.scene, "first_slip_impact", "first_tip_impact", where, px, py,
-                        [o1_hi], [o1_lo])
+            # affine in m / (m + M): at both ends
+            for (where, th), (mass, q), (stop, a_k) in itertools.product(
+                    thetas, _ends(qs, "mass ratio"), stop_ends):
+                px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a_k, q)
+                impact_rows(add, (mu, W, w, w_lo, h), "slip_impact", "tip_impact",
+                            _join(where, mass, stop), px, py, o_hi, o_lo, sag_a)
+        # multilinear in (start speed, fall speed, m / (m + M)): each row holds on the box iff
+        # at its corners
+        sag_1 = 0.0 if not stopped else sag_a * ca.sqrt(speeds[-1] ** 2 + Q_hi**2)
+        for (where, Q), (feed, vx), (mass, q), (stop, a_k) in itertools.product(
+                Qs, _ends(speeds, "feed"), _ends(qs, "mass ratio"), stop_ends):
+            px, py = phys.landing_impulse(vx, -Q, a_k, q)
+            impact_rows(add, (mu, W, w, w_lo, h), "first_slip_impact", "first_tip_impact",
+                        _join(where, feed, mass, stop), px, py, [o1_hi], [o1_lo], sag_1)
         return out
 
 
@@ -476,25 +625,61 @@ def drift_worst(stages: int, r_ends) -> list:
     return [both + r for r in r_ends] if odd else [both]
 
 
-def impact_rows(add, scene, slip, tip, where, px, py, o_hi, o_lo):
+def scene_sizes(scene):
+    """impact_rows' sizes of a scene as specified (no tolerance box)."""
+    body, palm = scene.body, scene.palm
+    return palm.friction, palm.width, body.width, body.width, body.height
+
+
+def impact_rows(add, sizes, slip, tip, where, px, py, o_hi, o_lo, sag=0.0):
     """Stick (|px| <= mu py) and no tip (impulse line through the support) at a landing with
     impulse (px, py) and landing offsets o_hi (furthest ahead) and o_lo (furthest behind):
-    add(key, where, slack, scale) once per row."""
-    body, palm = scene.body, scene.palm
-    mu, W, w, h = palm.friction, palm.width, body.width, body.height
+    add(key, where, slack, scale) once per row. sizes: (mu, W, w, w_lo, h), the friction, the
+    palm's width, the object's widest and narrowest width and its height (the rows over the
+    object's own edges ask most of the narrowest; the palm's edges' rows do not involve it).
+    sag: each row c . (px, py) >= 0 asks sag |c| more (a bound between the back stops' ends)."""
+    mu, W, _, w, h = sizes
+
+    def less(c1, c2):  # what a row with impulse coefficients (c1, c2) asks more
+        return 0.0 if not _nonzero(sag) else sag * ca.sqrt(c1**2 + c2**2)
+
     sep = ", " if where else ""
-    add(slip, f"{where}{sep}sliding back", mu * py - px, mu * py)
-    add(slip, f"{where}{sep}sliding forward", mu * py + px, mu * py)
+    add(slip, f"{where}{sep}sliding back", mu * py - px - less(1.0, mu), mu * py)
+    add(slip, f"{where}{sep}sliding forward", mu * py + px - less(1.0, mu), mu * py)
     # Force point -(h/2) px/py from the centre: ahead (px < 0) within min(w/2, W/2 - o),
     # behind within min(w/2, W/2 + o). Multiplied by py > 0 (implied by the stick rows).
-    add(tip, f"{where}{sep}over the object's front edge", w / 2 * py + h / 2 * px, w / 2 * py)
-    add(tip, f"{where}{sep}over the object's rear edge", w / 2 * py - h / 2 * px, w / 2 * py)
+    edge = less(h / 2, w / 2)
+    add(tip, f"{where}{sep}over the object's front edge", w / 2 * py + h / 2 * px - edge,
+        w / 2 * py)
+    add(tip, f"{where}{sep}over the object's rear edge", w / 2 * py - h / 2 * px - edge,
+        w / 2 * py)
     for i, o in enumerate(o_hi):
         add(tip, _v(f"{where}{sep}over the palm's front edge", i, o_hi),
-            (W / 2 - o) * py + h / 2 * px, (W / 2 - o) * py)
+            (W / 2 - o) * py + h / 2 * px - less(h / 2, W / 2 - o), (W / 2 - o) * py)
     for i, o in enumerate(o_lo):
         add(tip, _v(f"{where}{sep}over the palm's rear edge", i, o_lo),
-            (W / 2 + o) * py - h / 2 * px, (W / 2 + o) * py)
+            (W / 2 + o) * py - h / 2 * px - less(h / 2, W / 2 + o), (W / 2 + o) * py)
+
+
+def _ends(values, what):
+    """(label, value) of one value or of both ends of an interval."""
+    return [("", values[0])] if len(values) == 1 else [(f"{what} low", values[0]),
+                                                       (f"{what} high", values[-1])]
+
+
+def _join(*words) -> str:
+    return ", ".join(w for w in words if w)
+
+
+def _nonzero(value) -> bool:
+    return not (isinstance(value, (int, float)) and value == 0.0)
+
+
+def _larger(a, b):
+    """The larger of two half-widths (one of them itself when they are the same expression)."""
+    if a is b or not _nonzero(b):
+        return a
+    return b if not _nonzero(a) else ca.fmax(a, b)
 
 
 def _v(text, i, versions):

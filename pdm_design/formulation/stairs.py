@@ -53,8 +53,10 @@ import math
 
 import casadi as ca
 
+from ..errors import SpecError
 from ..physics import stairs as phys
 from ..scenes import StairsDesign
+from . import allocation
 from .common import (
     MARGIN,
     MODEL,
@@ -95,6 +97,8 @@ EXACT_LAUNCH = ("comes down: gap while falling", "comes down: height over the no
 
 
 def build(spec):
+    if allocation.allocating(spec):  # refused in words where no bound is derived
+        allocation.check(spec)
     scene = spec.scene
     values, symbols, bounds = design_inputs(spec, StairsDesign.VARIABLES, DEFAULTS)
     robust = float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0
@@ -102,6 +106,12 @@ def build(spec):
     # the exact nose rows when the reported nose margins must reach something: the epigraph, or
     # a required nose clearance (the smooth rows measure another quantity, section 2)
     exact = epigraph or requires_rows(spec)
+    if exact and any(t.quantity == "launch_x" for t in spec.tolerances) and \
+            allocation.allocating(spec):
+        raise SpecError(spec.source or "<spec>", "tolerances.launch_x",
+                        "no max_min_margin and no nose requirement with an allocated box (the "
+                        "exact launch rows' worst launch place is not derived)",
+                        found="the exact nose rows")
     tau = ca.SX.sym("tolerance") if robust else 0.0
     t = ca.SX.sym("min_margin") if epigraph else None
     top = tolerance_bound(scene.initial.drop_height, values, bounds)
@@ -122,7 +132,9 @@ def build(spec):
 
     model = SceneModel(
         kind="stairs", design_symbols=symbols, aux=tuple(aux),
-        conditions=tuple(m.conditions(tau, robust, exact)),
+        conditions=tuple(allocation.box_conditions(
+            spec, lambda box: m.conditions(box, robust, exact),
+            {"rise": tau, "tread": tau}, tau)),
         objective_terms={
             "max_offset_tolerance": tau if robust else ca.SX(0.0),
             "max_min_margin": t if epigraph else ca.SX(0.0),
@@ -228,20 +240,22 @@ class _Model:
             ends = [("passes over the nose", dist)]
         return [(where, self.eps * v * vx * z - g * z**2 / 2) for where, z in ends]
 
-    def launch_slack(self):
+    def launch_slack(self, back=0.0):
         """The launch clears the top landing (step 0, one design rise above the designed tread 1;
         neither it nor the launcher has construction errors). The ball starts at its apex,
         a = h0 - rise above that landing, horizontal speed v0, and the landing's nose is
         x_n = v0 t(0) - landing_offset ahead. The lowest point falls for x > 0, so it is above the
         nose level while the centre is within r of the nose iff it is at x_n + r (nothing to
         check when x_n + r <= 0): a v0^2 - g max(x_n + r, 0)^2 / 2 >= 0 (the height times v0^2;
-        C1). Conservative when the launch is below the top landing (a < 0) but already past it."""
+        C1). Conservative when the launch is below the top landing (a < 0) but already past it.
+        back: the launcher that far further back (the slack decreases with x_n: a launch_x
+        tolerance's worst end)."""
         h0, r = self.scene.initial.drop_height, self.scene.ball.radius
         a = h0 - self.rise
-        x = self.v0 * self.vy1 / self.g - self.L1 + r
+        x = self.v0 * self.vy1 / self.g - self.L1 + back + r
         return a * self.v0**2 - self.g * ca.fmax(x, 0.0) ** 2 / 2
 
-    def conditions(self, tau, robust, exact=False):
+    def conditions(self, box, robust, exact=False):
         """Every row. exact (max_min_margin asked, or a nose clearance required): the smooth
         nose rows keep the ball off the noses, as always, but the exact gaps (the analysis' nose
         margins, gap / tread) hold the requirement and bound the epigraph t: the smooth rows'
@@ -251,6 +265,10 @@ class _Model:
         the smooth ones."""
         g, r = self.g, self.scene.ball.radius
         length, speed = self.length, self.speed
+        # the box {quantity: half-width}: every step's rise and tread errors (docs/optimizer.md
+        # sections 4, 4a); tau the rise's, t_t the tread's
+        tau, t_t = box.get("rise", 0.0), box.get("tread", 0.0)
+        t_x = box.get("launch_x", 0.0)  # every landing moves with the launcher, alike
         out: list[Condition] = []
 
         def add(key, where, slack, scale=1.0, kind=MARGIN, unit=1.0, keys=None, **kw):
@@ -287,7 +305,7 @@ class _Model:
                 kind=VALIDITY, unit=length)
 
         tread = self.tread
-        add(None, "launch: comes down beyond the top landing's nose", self.launch_slack(),
+        add(None, "launch: comes down beyond the top landing's nose", self.launch_slack(t_x),
             tread * self.v0**2, unit=length * speed**2, keys=LAUNCH_KEYS, epigraph=not exact)
         if exact:  # the analysis' first_nose_clearance: one design rise above tread 1 (to land
             # a rise tau higher at worst: the longer flight's gap is the smaller)
@@ -297,8 +315,10 @@ class _Model:
                 add(None, f"launch, exact {phase}", gap, tread, unit=length, keys=LAUNCH_KEYS)
         scale = tread * self.vx**2
         if robust:
-            L_long, _ = self.trajectory(tau, -tau)
-            L_short, v_short = self.trajectory(-tau, tau)
+            L_long, _ = self.trajectory(tau, -t_t)
+            L_short, v_short = self.trajectory(-tau, t_t)
+            if not (isinstance(t_x, float) and t_x == 0.0):
+                L_long, L_short = [L + t_x for L in L_long], [L - t_x for L in L_short]
         else:
             L_long, v_short = self.trajectory(0.0, 0.0)
             L_short = L_long
@@ -309,8 +329,8 @@ class _Model:
             add("riser_clearance", where, L_short[n] - phys.riser_reach(self.rise + tau, r),
                 tread, unit=length)
             ends = [("", tread - L_long[n])] if not robust else [
-                (", nose nearest", tread - tau - L_long[n]),
-                (", nose furthest", tread + tau - L_short[n]),
+                (", nose nearest", tread - t_t - L_long[n]),
+                (", nose furthest", tread + t_t - L_short[n]),
             ]
             # exact gaps: the flights the analysis judges (a simulation of N bounces flies N - 1)
             judged = exact and (stage < self.stages or self.stages == 1)

@@ -56,6 +56,7 @@ def optimize_document(outcome: DesignOutcome) -> dict:
         "approach": _complete(analysis.approach, APPROACH[kind]),
         "objective": _objective(outcome),
         "tolerance": outcome.tolerance,
+        "tolerances": _tolerances(outcome.tolerances),
         "verification": _verification(outcome.verification),
         "solver": outcome.solver,
     })
@@ -98,3 +99,12 @@ def _verification(verification: dict | None) -> dict | None:
     if isinstance(out["outcome"], dict):
         out["outcome"] = _complete(out["outcome"], OUTCOME)
     return out
+
+
+def _tolerances(entries) -> list[dict] | None:
+    """optimize's allocated tolerance list ({quantity, applies_to, value (SI), unit,
+    limited_by}, docs/json-schema.md), None when the spec allocates none."""
+    if entries is None:
+        return None
+    keys = ("quantity", "applies_to", "value", "unit", "allocated", "limited_by")
+    return [{k: e[k] for k in keys} for e in entries]

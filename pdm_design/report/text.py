@@ -96,6 +96,9 @@ def optimize_text(outcome: DesignOutcome) -> str:
         lines += _tolerance_rows(outcome.tolerance)
         if outcome.tolerance.get("limited_by"):
             lines.append(_limited_by(outcome.tolerance["limited_by"]))
+    if outcome.tolerances:
+        lines += ["", "allocated tolerances (worst case: every build inside them works):",
+                  *allocation_rows(outcome.spec.kind, outcome.tolerances)]
     if outcome.verification is not None:
         v = outcome.verification
         accuracy = f" (accuracy {outcome.accuracy.describe()})" if outcome.accuracy else ""
@@ -123,3 +126,23 @@ def _built_parts(geometry: dict) -> dict:
     if any(geometry.get(k) for k in MECHANISM if k != "link_count"):
         return geometry
     return {k: v for k, v in geometry.items() if k not in MECHANISM}
+
+
+def allocation_rows(kind: str, entries) -> list[str]:
+    """The allocated tolerance table in build units (mm, degrees, g, %), with what limits each
+    (optimize's `tolerances`, docs/optimizer.md section 4a)."""
+    from ..solve.binding import SHARED, in_words
+    from ..tolerances.model import QUANTITIES
+
+    rows = []
+    for e in entries:
+        q = QUANTITIES[kind][e["quantity"]]
+        value, unit = e["value"] * q.build_factor, q.build_unit
+        if unit == "1":  # a ratio (friction): in per cent of itself is no build unit; plain
+            shown = f"+-{value:.4g}"
+        else:
+            shown = f"+-{value:.4g} {unit}"
+        how = (("limited by: " + (in_words(e["limited_by"]) or SHARED)) if e["allocated"]
+               else "given")
+        rows.append(f"  {e['quantity']:<13} {shown:<14} {e['applies_to']:<5} {how}")
+    return rows

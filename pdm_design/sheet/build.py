@@ -102,6 +102,7 @@ def sheet_for(path: str | Path, *, count: int | None = None,
     path = Path(path)
     if path.suffix.lower() == ".json":
         spec, values, status, tol, violations, verification = _from_json(path)
+        extra = ()
     else:
         from ..api import design
 
@@ -110,6 +111,7 @@ def sheet_for(path: str | Path, *, count: int | None = None,
         values = dict(outcome.analysis.design)
         status, tol = outcome.status.value, outcome.tolerance
         violations, verification = tuple(outcome.violations), outcome.verification
+        extra = allocated_entries(outcome.tolerances)
     fixed = fixed_spec(spec, values, source=str(path))
     if verification is None and _is_success(status):  # saved with --no-verify: simulate it now
         verification = _verify_now(fixed)
@@ -119,10 +121,38 @@ def sheet_for(path: str | Path, *, count: int | None = None,
         tol, note = None, f"tolerance not computed: the design's status is {status}"
     count = spec.verification.stages if count is None else count
     try:
-        return make_sheet(fixed, status, tol, note, count, source=str(path),
-                          violations=violations, verification=verification)
+        sheet = make_sheet(fixed, status, tol, note, count, source=str(path),
+                           violations=violations, verification=verification)
     except ValueError as exc:  # e.g. a staircase that cannot be built from this design
         raise PdmError(f"{path}: no build sheet: {exc}") from None
+    return dataclasses.replace(sheet, tolerances=(*sheet.tolerances, *extra)) if extra else sheet
+
+
+# the part each allocated quantity is built on, in the words sheet/parts.py puts on a part
+ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot bracket",
+                  "feed_x": "the feed (start place)", "friction": "every palm's surface",
+                  "object_width": "the objects carried", "feed_speed": "the feed (start speed)",
+                  "palm_mass": "every palm", "object_mass": "the objects carried",
+                  "launch_x": "the launcher (release place)"}
+
+
+def allocated_entries(entries) -> tuple:
+    """ToleranceEntry of every allocated or given tolerance of an optimize answer other than
+    the pivots' (the sheet's own box lists those), on its part, with what limits it."""
+    from ..solve.binding import SHARED, in_words
+    from .parts import ToleranceEntry
+
+    out = []
+    for e in entries or ():
+        if e["quantity"] in ("pivot_x", "pivot_y"):
+            continue
+        lot = " (one lot)" if e["applies_to"] == "lot" else ""
+        why = ("allocated; limited by " + (in_words(e["limited_by"]) or SHARED)
+               if e["allocated"] else "given in the spec")
+        out.append(ToleranceEntry(e["quantity"].replace("_", " "),
+                                  ALLOCATED_PART.get(e["quantity"], e["quantity"]) + lot,
+                                  e["value"], "" if e["unit"] == "1" else e["unit"], why))
+    return tuple(out)
 
 
 def _verify_now(spec: Spec) -> dict:

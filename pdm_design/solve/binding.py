@@ -70,3 +70,37 @@ def limited_by(spec, solution) -> list[dict]:
     x, lam_x = (np.asarray(v, dtype=float).ravel() for v in (solution.x, solution.lam_x))
     return rows + limiting_bounds(form.design_names, x[:n], lam_x[:n], form.lbx[:n],
                                   form.ubx[:n], total)
+
+
+def limits_of_quantities(spec, solution, entries) -> list[dict]:
+    """The tolerance list of an allocated answer (formulation/allocation.py values_at), each
+    entry with its `limited_by`: of the rows and bounds that hold the allocation back
+    (limited_by), those whose outer bound involves the quantity (Condition.quantities), and the
+    binding bounds (they hold every allocated quantity back); [] for a given tolerance."""
+    from ..formulation import formulate
+    from ..formulation.build import FULL
+
+    form = formulate(spec, full=solution.key.endswith(FULL))
+    uses: dict[tuple[str, str], set] = {}
+    for info in form.conditions:
+        uses.setdefault((info.name, info.where), set()).update(info.quantities)
+    limits = limited_by(spec, solution)
+    out = []
+    for entry in entries:
+        q = entry["quantity"]
+        mine = [r for r in limits if r["condition"] == "bound"
+                or q in uses.get((r["condition"], r["where"]), ())] if entry["allocated"] else []
+        out.append({k: v for k, v in entry.items()} | {"limited_by": mine})
+    return out
+
+
+# an allocated quantity no binding row involves: only the weights' proportion holds it back
+SHARED = "its weight's share of the others' (no binding row involves it)"
+
+
+def in_words(limits: list[dict]) -> str:
+    """A limited_by list in one line: 'lift_off (at the handover) 58 %; alpha at its min 0'."""
+    return "; ".join(
+        (e["where"] if e["condition"] == "bound" else
+         e["condition"] + (f" ({e['where']})" if e["where"] else ""))
+        + (f" {100 * e['share']:.0f} %" if e.get("share") is not None else "") for e in limits)

@@ -57,7 +57,10 @@ def sampled_offsets_check(form, x, p, tau: float, *, samples: int = 256, seed: i
     if hasattr(form.scenario_source, "stream"):  # a row of stage maps: streamed
         return _streamed_check(form, x, p, tau, samples, seed)
     sc = form.scenario
-    D = offset_samples(sc.offset_names, sc.groups, tau, samples, seed)
+    D = offset_samples(sc.offset_names, sc.groups, 1.0, samples, seed)
+    widths = np.broadcast_to(np.asarray(tau, dtype=float), (len(sc.groups),))
+    for width, columns in zip(widths, sc.groups.values()):  # each group's own half-width
+        D[:, list(columns)] *= width
     fn = sc.function.map(D.shape[0])
     slack, scale = (np.asarray(v, dtype=float) for v in fn(np.tile(np.asarray(x)[:, None],
                                                                    (1, D.shape[0])), D.T))
@@ -69,7 +72,8 @@ def sampled_offsets_check(form, x, p, tau: float, *, samples: int = 256, seed: i
     excess = np.where(np.isfinite(excess), excess, -np.inf)
     i, j = np.unravel_index(np.argmin(excess), excess.shape)
     worst = float(excess[i, j])
-    return {"passed": worst >= -CHECK_TOL, "samples": int(D.shape[0]), "tolerance": float(tau),
+    return {"passed": worst >= -CHECK_TOL, "samples": int(D.shape[0]),
+            "tolerance": float(tau) if np.ndim(tau) == 0 else dict(zip(sc.groups, widths)),
             "worst_excess_margin": worst, "worst_condition": sc.conditions[i].label,
             "worst_offsets": dict(zip(sc.offset_names, D[j].tolist()))}
 
@@ -88,10 +92,12 @@ def _pattern_value(sign, K: int) -> float:
     return {"alt": alt, "-alt": -alt}.get(sign, sign)
 
 
-def _streamed_check(form, x, p, tau: float, samples: int, seed: int) -> dict:
+def _streamed_check(form, x, p, tau, samples: int, seed: int) -> dict:
     """sampled_offsets_check of a manipulators row, streamed stage by stage through its stage
     maps (formulation/manipulator_offsets.py): the fixed patterns, random corners and uniform
-    points, each pivot's offsets drawn when the row reaches it. Memory flat in the stages."""
+    points, each pivot's offsets drawn when the row reaches it. Memory flat in the stages.
+    tau: the box's half-width, or (dx, dy) half-widths of an allocated box."""
+    half = np.broadcast_to(np.asarray(tau, dtype=float), (2,))
     stages = form.scenario_source
     count = max(samples, len(PATTERNS))
     corners = count // 2
@@ -103,7 +109,7 @@ def _streamed_check(form, x, p, tau: float, samples: int, seed: int) -> dict:
                             for _, sx, sy in PATTERNS])
         drawn = np.vstack([rng.choice([-1.0, 1.0], size=(corners, 2)),
                            rng.uniform(-1.0, 1.0, size=(uniform, 2))])
-        both = tau * np.vstack([pattern, drawn])
+        both = half * np.vstack([pattern, drawn])
         return both[:, 0], both[:, 1]
 
     required = dict(zip(form.p_names, np.asarray(p, dtype=float).ravel()))
@@ -111,7 +117,8 @@ def _streamed_check(form, x, p, tau: float, samples: int, seed: int) -> dict:
     j = worst["sample"]
     which = (PATTERNS[j][0] if j < len(PATTERNS) else f"random corner {j - len(PATTERNS) + 1}"
              if j < len(PATTERNS) + corners else f"uniform point {j - len(PATTERNS) - corners + 1}")
-    return {"passed": worst["value"] >= -CHECK_TOL, "samples": count, "tolerance": float(tau),
+    return {"passed": worst["value"] >= -CHECK_TOL, "samples": count,
+            "tolerance": float(tau) if np.ndim(tau) == 0 else dict(zip(("dx", "dy"), half)),
             "worst_excess_margin": worst["value"], "worst_condition": worst["label"],
             "worst_sample": which, "worst_stage": worst["stage"]}
 

@@ -8,6 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..formulation import formulate
+from ..formulation.allocation import allocating, pivot_box, values_at
 from ..formulation.build import FULL
 from ..formulation.common import BACKOFF_FACTOR, MODEL, OBJECTIVE_SENSE
 from ..status import Status
@@ -125,10 +126,13 @@ def optimize(
     # Only an answer IPOPT converged to claims a box, a score or a linearised set; a stopped or
     # failed run's last point claims nothing (a solver error reported a box of 0 mm).
     answered = status in (Status.OPTIMAL, Status.ACCEPTABLE)
-    tolerance = None
+    tolerance, allocated = None, None
     if robust and answered:
         tol_value = float(x[form.tolerance_index])
         tolerance = {axis: tol_value for axis in form.tolerance_axes}
+        if allocating(spec):  # one half-width per quantity (formulation/allocation.py)
+            allocated = tuple(values_at(spec, tol_value))
+            tolerance = pivot_box(spec.kind, allocated)
     robust_margins = _robust_margins(form, x, p, slack, scale)
     score = None
     if answered:
@@ -142,7 +146,8 @@ def optimize(
                                                  "failures": closed["failures"]}}
     if robust and tolerance and check_samples > 0:
         checks["sampled_offsets"] = check.sampled_offsets_check(
-            form, x, p, float(x[form.tolerance_index]), samples=check_samples, seed=seed)
+            form, x, p, tuple(tolerance.values()) if allocated else
+            float(x[form.tolerance_index]), samples=check_samples, seed=seed)
 
     linearised = None
     if linearise and answered and robust:
@@ -178,7 +183,7 @@ def optimize(
         robust_margins=robust_margins, periodic=periodic, violations=tuple(violations),
         checks=checks, stats=stats, message=_message(status, violations, at_bounds),
         at_bounds=tuple(at_bounds) if violations else (),
-        solution=Solution(form.key, x, chosen.lam_x, chosen.lam_g),
+        solution=Solution(form.key, x, chosen.lam_x, chosen.lam_g), tolerances=allocated,
     )
 
 

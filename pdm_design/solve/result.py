@@ -113,6 +113,9 @@ class OptimizeResult:
     message: str
     solution: Solution | None = field(default=None, repr=False)
     at_bounds: tuple[str, ...] = ()  # design variables at a bound of the least-violation design
+    # the allocated and given tolerances of a spec whose [tolerances] allocates (formulation/
+    # allocation.py): {quantity, applies_to, value (SI), unit, allocated}; None otherwise
+    tolerances: tuple[dict, ...] | None = None
 
     @property
     def success(self) -> bool:
@@ -127,6 +130,7 @@ class OptimizeResult:
             "objectives": self.objectives,
             "tolerance": self.tolerance,
             "linearised_tolerance": self.linearised.to_json() if self.linearised else None,
+            "tolerances": list(self.tolerances) if self.tolerances is not None else None,
             "margins": self.margins,
             "robust_margins": self.robust_margins,
             "periodic": self.periodic,

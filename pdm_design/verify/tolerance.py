@@ -24,6 +24,7 @@ import itertools
 
 import numpy as np
 
+from ..formulation.allocation import AXES
 from ..progress import progress_bar
 from ..sim.core import SimulationRefused
 from ..spec.model import ManipulatorOffset, Spec, StepError
@@ -55,25 +56,35 @@ def corner_patterns(stages: int) -> list[tuple[str, list[tuple[float, float]]]]:
 
 
 def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accuracy=None,
-                     seed: int = 0) -> dict:
+                     seed: int = 0, lots=None) -> dict:
     """Simulate the corner patterns and `samples` uniform random builds inside the box (fewer
-    on rows longer than RANDOM_ROW: `random_builds`)."""
+    on rows longer than RANDOM_ROW: `random_builds`). lots: an allocated tolerance list
+    (formulation/allocation.py); its quantities other than the pivots' (feed_x, feed_speed,
+    friction, object_width, object_mass: one value a build; palm_mass: every palm alike) take
+    every sign corner with every pivot pattern, and a uniform value in each random build."""
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
-    builds = [(name, [(sx * half[0], sy * half[1]) for sx, sy in signs])
-              for name, signs in corner_patterns(stages)]
+    per_stage = {q for _, q in AXES[spec.kind]}  # the corner patterns' own quantities
+    lot = {e["quantity"]: e["value"] for e in (lots or ()) if e["quantity"] not in per_stage}
+    builds = [(name + _lot_name(signs_l), [(sx * half[0], sy * half[1]) for sx, sy in signs],
+               {q: sl * lot[q] for q, sl in zip(lot, signs_l)})
+              for name, signs in corner_patterns(stages)
+              for signs_l in itertools.product((1.0, -1.0), repeat=len(lot))]
     for i in range(random_builds(samples, stages)):
         draws = rng.uniform(-1.0, 1.0, size=(stages, 2)) * np.asarray(half)
-        builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws]))
+        built = {q: float(rng.uniform(-t, t)) for q, t in lot.items()}
+        builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws], built))
 
     failures = []
     with progress_bar(len(builds), "verifying the tolerance box") as advance:
-        for name, errors in builds:
+        for name, errors, deviations in builds:
             try:
-                result = simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
-            except SimulationRefused as refusal:  # e.g. a rise error larger than the rise
-                failures.append({"build": name, "errors": errors, "stages_passed": 0,
+                result = _simulate(spec, design, errors, deviations, accuracy)
+            except (SimulationRefused, ValueError) as refusal:  # e.g. a rise error larger
+                # than the rise; a lot no scene can hold (a negative friction)
+                failures.append({"build": name, "errors": errors, "lots": deviations,
+                                 "stages_passed": 0,
                                  "failure": f"the simulator refuses this build: {refusal}"})
                 continue
             finally:
@@ -81,10 +92,42 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
             if not result.outcome.completed:
                 f = result.outcome.failure
                 what = f"{f.kind} at stage {f.stage}" if f else "incomplete"
-                failures.append({"build": name, "errors": errors, "failure": what,
+                failures.append({"build": name, "errors": errors, "lots": deviations,
+                                 "failure": what,
                                  "stages_passed": result.outcome.stages_passed})
     return {"passed": not failures, "samples": len(builds), "failures": failures,
             "box": dict(zip(_axes(spec), half, strict=True))}
+
+
+def _lot_name(signs) -> str:
+    return "" if not signs else " with " + ", ".join(f"{s:+.0f}" for s in signs)
+
+
+def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
+    """One build: the spec's own path (offsets or step errors), or, with deviations of other
+    quantities (an allocated box), the yield's per-part build (tolerances.manipulators.
+    simulate_build: a part quantity such as palm_mass at one value on every palm)."""
+    if not deviations:
+        return simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
+    from ..accuracy import accuracy as accuracy_preset
+
+    stages = spec.verification.stages
+    accuracy = accuracy_preset(accuracy or spec.verification.accuracy)
+    if spec.kind == "stairs":  # one build's values: K per step, a number for a lot
+        from ..tolerances.stairs import simulate_build as simulate_steps
+
+        built = {"rise": [e[0] for e in errors], "tread": [e[1] for e in errors], **deviations}
+        return simulate_steps(spec.scene, design, built, stages, accuracy=accuracy)
+    from ..tolerances.manipulators import simulate_build
+
+    built = {"pivot_x": np.array([[e[0] for e in errors]]),
+             "pivot_y": np.array([[e[1] for e in errors]])}
+    for q, dev in deviations.items():
+        built[q] = np.full((1, stages), dev) if q in PER_PART else np.array([dev])
+    return simulate_build(spec.scene, design, built, stages, accuracy=accuracy)
+
+
+PER_PART = ("palm_mass", "link_length", "back_stop")  # quantities of every manipulator
 
 
 def _axes(spec: Spec) -> tuple[str, str]:

@@ -1,0 +1,154 @@
+"""Worst-case tolerance allocation: which quantities of a spec's `[tolerances]` the robust NLP
+allocates, and the box half-width each gets (docs/optimizer.md section 4a).
+
+The rule: one scale variable s (the NLP's `tolerance`, maximised by `max_offset_tolerance`) and
+
+    t_q = s * w_min / w_q        for every quantity q with `allocate = true`, weight w_q,
+
+w_min the smallest of those weights: a quantity twice as cheap to hold tight (weight 2) gets half
+the tolerance, and s is the tolerance of the quantity that is dearest to hold tight (the
+smallest weight). With equal weights every allocated quantity gets t = s, whatever the weight's
+value, so pivot_x and pivot_y allocated alike are today's pivot box, the same NLP. Quantities
+with a given `value` enter the bounds as fixed half-widths t_q = value. The weights compare
+half-widths in SI units: between a length and a ratio (friction) a weight is also a choice of
+scale (weight 1000 on pivot_x against 1 on friction: a millimetre of pivot costs as much as 0.001
+of friction).
+
+A quantity enters the NLP only where a sound outer bound of every condition over its box is
+proven (docs/optimizer.md section 4a): ALLOCATABLE. A spec that allocates, or gives a value to,
+any other quantity while allocating is refused in words (exit 2), never guessed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import casadi as ca
+
+from ..errors import SpecError
+
+# Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
+ALLOCATABLE = {
+    "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
+                     "palm_mass", "object_mass", "back_stop"),
+    "stairs": ("rise", "tread", "launch_x"),
+}
+# Why the others are refused: what a sound bound of them would need (the words of the error).
+NOT_YET = {
+    "link_length": "every stage's handover angle, speed map and landing place move with each "
+                   "link's own length; no outer bound of the speed interval over a box of link "
+                   "lengths is derived yet",
+    "link_mass": "no outer bound over a box of link masses is derived yet",
+    "pivot_friction": "no outer bound over a box of pivot frictions is derived yet",
+}
+STAIRS_NOT_YET = ("restitution and launch speed move the periodic orbit itself, and friction "
+                  "the rolling speed of every flight; no outer bound over their box is "
+                  "derived yet")
+
+
+def allocating(spec) -> bool:
+    """Whether the spec's [tolerances] asks the optimizer to allocate a tolerance."""
+    return any(t.allocate for t in getattr(spec, "tolerances", ()))
+
+
+def coefficients(spec) -> dict[str, float]:
+    """{quantity: w_min / w_q} of every allocated quantity (t_q = s * coefficient)."""
+    allocated = [t for t in spec.tolerances if t.allocate]
+    w_min = min(t.weight for t in allocated)
+    return {t.quantity: w_min / t.weight for t in allocated}
+
+
+def given(spec) -> dict[str, float]:
+    """{quantity: value} of the quantities with a given tolerance (fixed half-widths)."""
+    return {t.quantity: float(t.value) for t in spec.tolerances if not t.allocate}
+
+
+def check(spec) -> None:
+    """Refuse (SpecError, exit 2) an allocation the robust rows cannot bound soundly."""
+    source = spec.source or "<spec>"
+    if float(spec.objective.get("max_offset_tolerance", 0.0)) <= 0.0:
+        name = next(t.quantity for t in spec.tolerances if t.allocate)
+        raise SpecError(source, f"tolerances.{name}.allocate",
+                        "an [objective] with max_offset_tolerance > 0 (allocation maximises "
+                        "the weighted tolerances)", found="no max_offset_tolerance")
+    allowed = ALLOCATABLE[spec.kind]
+    if spec.kind == "manipulators" and spec.scene.initial.velocity[1] != 0.0 and any(
+            t.quantity == "feed_speed" for t in spec.tolerances):
+        raise SpecError(source, "tolerances.feed_speed", "a horizontal start (initial."
+                        "velocity[1] = 0) to bound the feed speed's tolerance (along a sloped "
+                        "start it moves the fall speed as well; not derived yet)",
+                        found=f"initial.velocity[1] = {spec.scene.initial.velocity[1]:g}")
+    masses = [t.quantity for t in spec.tolerances
+              if t.quantity in ("palm_mass", "object_mass", "back_stop")]
+    if spec.kind == "manipulators" and masses and not spec.scene.plain_mechanism:
+        raise SpecError(source, f"tolerances.{masses[0]}", "the paper's device (massless "
+                        "links, frictionless pivots) to bound a mass's or a stop's tolerance "
+                        "(with links or pivot friction they enter the carry; not derived yet)",
+                        found="scene.links or scene.pivots")
+    for tol in spec.tolerances:
+        if tol.quantity in allowed:
+            continue
+        key = "allocate" if tol.allocate else "value"
+        why = STAIRS_NOT_YET if spec.kind == "stairs" else NOT_YET.get(
+            tol.quantity, "no outer bound over its box is derived yet")
+        raise SpecError(source, f"tolerances.{tol.quantity}.{key}",
+                        "a quantity the worst-case allocation can bound: "
+                        + ", ".join(allowed) + f" ({why})",
+                        found=tol.quantity)
+
+
+def half_widths(spec, s) -> dict[str, object]:
+    """{quantity: half-width} of every toleranced quantity of an allocating spec: s times its
+    coefficient when allocated, its value when given (quantities not listed: exact)."""
+    out = {q: s * c if c != 1.0 else s for q, c in coefficients(spec).items()}
+    out.update(given(spec))
+    return out
+
+
+def values_at(spec, s: float) -> list[dict]:
+    """The tolerance list of an answer with scale s: one entry per toleranced quantity, the
+    allocated first ({quantity, applies_to, value (SI), unit, allocated})."""
+    from ..tolerances.model import QUANTITIES
+
+    coeff = coefficients(spec)
+    entries = []
+    for tol in sorted(spec.tolerances, key=lambda t: not t.allocate):
+        value = s * coeff[tol.quantity] if tol.allocate else float(tol.value)
+        entries.append({"quantity": tol.quantity, "applies_to": tol.applies_to,
+                        "value": float(value), "unit": QUANTITIES[spec.kind][tol.quantity].unit,
+                        "allocated": tol.allocate})
+    return entries
+
+
+# the optimizer's box axes of the quantities the scenario samples (solve/check.py) and the
+# simulator's corner patterns take per stage (verify/tolerance.py)
+AXES = {"manipulators": (("dx", "pivot_x"), ("dy", "pivot_y")),
+        "stairs": (("rise", "rise"), ("tread", "tread"))}
+
+
+def pivot_box(kind: str, entries) -> dict[str, float]:
+    """{"dx", "dy"} (manipulators) or {"rise", "tread"} (stairs): the per-stage half-widths of a
+    tolerance list (0 where exact), the box the offsets or step errors are checked in."""
+    value = {e["quantity"]: e["value"] for e in entries}
+    return {axis: float(value.get(q, 0.0)) for axis, q in AXES[kind]}
+
+
+def box_conditions(spec, rows_of, today: dict, s) -> list:
+    """The conditions over the tolerance box: rows_of(box) with box = `today` (the scene's box
+    of max_offset_tolerance alone, every axis s), or, when the spec allocates, one half-width
+    per quantity (half_widths). Allocated, each row is first built on a symbol per quantity, to
+    record which quantities it depends on (Condition.quantities: the rows that can limit each
+    quantity), then the symbols are replaced by their half-widths."""
+    if not allocating(spec):
+        return rows_of(today)
+    widths = half_widths(spec, s)
+    symbols = {q: ca.SX.sym(f"t_{q}") for q in widths}
+    subs = [list(symbols.values()), [ca.SX(widths[q]) for q in symbols]]
+    out = []
+    for c in rows_of(symbols):
+        slack, scale = (ca.SX(e) for e in (c.slack, c.scale))
+        used = tuple(q for q, t in symbols.items()
+                     if ca.depends_on(slack, t) or ca.depends_on(scale, t))
+        out.append(replace(c, slack=ca.substitute([slack], *subs)[0],
+                           scale=ca.substitute([scale], *subs)[0], quantities=used))
+    return out
