@@ -138,8 +138,9 @@ def _parts(sheet) -> str:
         rows.append(f"<tr><td>{html.escape(e.quantity)}</td><td>{html.escape(e.applies_to)}"
                     f"</td><td class=num>&plusmn;{value:.4g} {unit}</td>"
                     f"<td>{html.escape(e.limited_by)}</td></tr>")
-    table = ("<table><tr><th>tolerance</th><th>applies to</th><th>value</th>"
-             "<th>limited by</th></tr>" + "".join(rows) + "</table>" if rows else
+    table = ("<p class=note>(spec): the spec's statistical tolerances; (box): the worst-case "
+             "box the optimizer computed.</p><table><tr><th>tolerance</th><th>applies to</th><th>value</th>"
+             "<th>what it is</th></tr>" + "".join(rows) + "</table>" if rows else
              f"<p>No tolerance: {html.escape(sheet.tolerance_note)}.</p>")
     parts, _ = parts_list(sheet)
     listed = "".join(
