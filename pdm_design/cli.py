@@ -488,14 +488,17 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
 @click.option("--no-tolerance", is_flag=True, help="Do not solve for the tolerance.")
 @click.option("--yield", "yield_path", type=click.Path(dir_okay=False, path_type=str),
               default=None, help="A yield analysis saved as JSON, shown on the page.")
+@click.option("--no-yield", is_flag=True,
+              help="Do not compute the yield of the spec's [tolerances] for the page.")
 @_guarded
-def report(source, out, count, no_tolerance, yield_path):
+def report(source, out, count, no_tolerance, yield_path, no_yield):
     """One self-contained HTML page of a design (docs/report.md): design, margins, tolerances,
     parts, the drawing and the simulated run animated. Exit 1 (page still written) when the
     design does not work."""
     from .report.page import report_command
 
-    works = report_command(source, out, count, no_tolerance, click.echo, yield_path)
+    works = report_command(source, out, count, no_tolerance, click.echo, yield_path,
+                           no_yield)
     return EXIT_OK if works else EXIT_FAILED
 
 

@@ -198,3 +198,61 @@ def test_a_saved_yield_analysis_goes_on_the_page(tmp_path):
                                        "--yield", str(analysis)])
     assert result.exit_code == 2 and "yield.json" in result.stderr
     assert not (tmp_path / "b").exists()
+
+
+def _toleranced_spec(tmp_path, builds=300):
+    """paper_manipulators with small statistical tolerances: every build works."""
+    spec = tmp_path / "toleranced.toml"
+    spec.write_text(MANIP.read_text().replace(
+        "[verification]", f"[tolerances]\nbuilds = {builds}\npivot_x = {{ value = 0.02 }}\n"
+        "pivot_y = { value = 0.02 }\nback_stop = { value = 0.005 }\n\n[verification]"))
+    return spec
+
+
+def test_the_report_computes_the_yield_of_the_specs_tolerances(tmp_path):
+    spec = _toleranced_spec(tmp_path)
+    result = CliRunner().invoke(main, ["report", str(spec), "--out", str(tmp_path / "out"),
+                                       "--no-tolerance"])
+    assert result.exit_code == 0, result.output
+    page = (tmp_path / "out" / "report.html").read_text()
+    # all 300 builds pass: the Wilson 95 % interval's low end is n / (n + z^2)
+    z = 1.959963984540054
+    assert f"100.00 % (95 % interval {100 * 300 / (300 + z * z):.2f} % to 100.00 %)" in page
+    for plot in ("survival.png", "yield_scale.png", "sensitivity.png"):
+        assert f'alt="{plot}"' in page
+    assert "No build failed" in page
+    result = CliRunner().invoke(main, ["report", str(spec), "--out", str(tmp_path / "no"),
+                                       "--no-tolerance", "--no-yield"])
+    assert result.exit_code == 0 and "<h2>Yield</h2>" not in (
+        tmp_path / "no" / "report.html").read_text()
+
+
+def test_the_yield_commands_document_goes_on_the_page_whole(tmp_path):
+    spec = _toleranced_spec(tmp_path, builds=200)
+    doc = json.loads(CliRunner().invoke(main, ["yield", str(spec), "--format", "json"]).stdout)
+    doc["failures"] = {"tip": 7, "stall": 2}  # as the yield command lists them
+    saved = tmp_path / "y.json"
+    saved.write_text(json.dumps(doc))
+    result = CliRunner().invoke(main, ["report", str(MANIP), "--out", str(tmp_path / "out"),
+                                       "--no-tolerance", "--yield", str(saved)])
+    assert result.exit_code == 0, result.output
+    page = (tmp_path / "out" / "report.html").read_text()
+    y = doc["yield"]
+    assert (f"{100 * y['estimate']:.2f} % (95 % interval {100 * y['ci_low']:.2f} % to "
+            f"{100 * y['ci_high']:.2f} %)") in page
+    assert "<td>tip</td><td>7</td>" in page and "<td>stall</td><td>2</td>" in page
+    for plot in ("survival.png", "yield_scale.png", "sensitivity.png"):
+        assert f'alt="{plot}"' in page
+
+
+def test_the_geometry_rows_carry_their_units_and_only_the_parts_built(tmp_path):
+    from pdm_design.report.html import _values
+    from pdm_design.report.units import built_parts
+
+    table = _values(built_parts({"pitch_x": 0.5, "link_mass": 0.2, "link_inertia": 0.01,
+                                 "pivot_friction_torque": 0.0, "pivot_damping": 0.0}), set())
+    assert "<td>kg</td>" in table and "<td>kg m^2</td>" in table and "N m s/rad" in table
+    assert "500 mm" in table
+    bare = built_parts({"pitch_x": 0.5, "link_mass": 0.0, "link_inertia": None,
+                        "link_count": 2, "pivot_friction_torque": 0.0, "pivot_damping": 0.0})
+    assert bare == {"pitch_x": 0.5}

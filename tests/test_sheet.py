@@ -380,3 +380,28 @@ def test_a_design_that_does_not_work_gets_no_tolerance_search(tmp_path):
     sheet = sheet_for(spec)
     assert sheet.tolerance is None
     assert sheet.tolerance_note == "tolerance not computed: the design's status is infeasible"
+
+
+def test_the_specs_tolerances_go_on_their_parts_apart_from_the_box(tmp_path):
+    from pdm_design.sheet.parts import parts_list
+
+    spec = tmp_path / "toleranced.toml"
+    spec.write_text(MANIP.read_text().replace(
+        "[verification]", "[tolerances]\npivot_x = { value = 0.09 }\npivot_y = { value = 0.09 }"
+        "\nback_stop = { value = 0.01745, distribution = \"uniform\" }\n"
+        "palm_mass = { value = 0.01 }\nfriction = { value = 0.1, applies_to = \"lot\" }\n\n"
+        "[verification]"))
+    sheet = sheet_for(spec, tolerance=False)
+    parts, _ = parts_list(sheet)
+    on = {p.name: {e.quantity: e for e in p.tolerances} for p in parts}
+    assert on["pivot bracket"]["pivot x (spec)"].shown() == "+-90 mm"
+    assert on["pivot bracket"]["pivot y (spec)"].shown() == "+-90 mm"
+    assert on["back stop"]["back stop (spec)"].shown() == f"+-{math.degrees(0.01745):.4g} deg"
+    assert on["palm"]["palm mass (spec)"].shown() == "+-10 g"
+    assert "uniform" in on["back stop"]["back stop (spec)"].limited_by
+    assert "normal" in on["palm"]["palm mass (spec)"].limited_by
+    code, out, _ = run("sheet", spec, "--out", tmp_path / "s")
+    page = (tmp_path / "s" / "sheet.md").read_text()
+    assert code == 0 and "pivot x (spec) | every pivot bracket | +-90 mm" in page
+    box = next(line for line in page.splitlines() if line.startswith("| pivot x (box)"))
+    assert "worst-case box the optimizer computed" in box

@@ -10,7 +10,7 @@ import pytest
 
 from pdm_design.sheet import make_sheet
 from pdm_design.sheet.drawing import draw
-from pdm_design.sheet.labels import figure_texts, overlapping_texts
+from pdm_design.sheet.labels import figure_texts, labels_on_lines, overlapping_texts
 from pdm_design.sheet.parts import ToleranceEntry
 from pdm_design.spec import load_spec
 
@@ -45,10 +45,13 @@ def texts(figure):
 def test_no_two_labels_overlap(path, count, tol):
     figure = draw(sheet_of(path, count, tol, EXTRA))
     assert overlapping_texts(figure) == []
+    plain = draw(sheet_of(path, count, tol))  # labels of the spec's own parts: off the lines
+    assert overlapping_texts(plain) == [] and labels_on_lines(plain, plain.sheet_labels) == []
     pages = [draw(sheet_of(path, count, tol), first, min(first + 5, count), notes=False)
              for first in range(1, count + 1, 6)][:3]
     for page in pages:
         assert overlapping_texts(page) == []
+        assert labels_on_lines(page, page.sheet_labels) == []
 
 
 def test_every_manipulator_is_drawn_in_millimetres_and_degrees():
@@ -65,29 +68,29 @@ def test_every_manipulator_is_drawn_in_millimetres_and_degrees():
     assert len([p for p in page.axes[0].patches if isinstance(p, Rectangle) and p.get_fill()]) == 6
     # 24 pitches on: l (sin a + sin b), -l (cos a - cos b) each; past verification.stages = 6,
     # so no tolerance on it
-    assert "pivot 25 (36638.967, -7427.086) mm" in texts(page)
+    assert "pivot 25 (36639.0, -7427.1) mm" in texts(page)
     words = " ".join(texts(draw(sheet_of(MANIP, 6, None))))
-    assert "link l = 2000.000 mm" in words and "back stop -11.46 deg" in words
-    assert "handover beta 34.38 deg" in words and "pitch x 1526.624 mm" in words
+    assert "link l = 2000.0 mm" in words and "back stop -11.46 deg" in words
+    assert "handover beta 34.38 deg" in words and "pitch x 1526.6 mm" in words
     assert " rad" not in words and ax.get_xlabel() == "x (mm)"
 
 
 def test_every_tolerance_is_shown_on_its_part():
     figure = draw(sheet_of(MANIP, 6, {"dx": 0.083, "dy": 0.05}, EXTRA))
     words = "\n".join(texts(figure))
-    assert "link l = 2000.000 mm, link length +-0.5 mm" in words
+    assert "link l = 2000.0 mm, link length +-0.5 mm" in words
     assert "back stop -11.46 deg, back stop angle +-0.2292 deg" in words
-    assert "palm mass +-0.002 kg" in words
-    assert "pivot x +-83 mm; pivot y +-50 mm" in words
+    assert "palm mass +-2 g" in words
+    assert "pivot x (box) +-83 mm; pivot y (box) +-50 mm" in words
     assert "friction +-0.05: the material lot" in words  # no part of its own: in the list
 
 
 def test_the_feed_is_dimensioned_from_pivot_one():
     words = texts(draw(sheet_of(MANIP, 6, None)))
-    assert "1250.000 mm" in words and "3050.000 mm" in words  # start (-1.25, 3.05) m
+    assert "1250.0 mm" in words and "3050.0 mm" in words  # start (-1.25, 3.05) m
     assert any("velocity (3000.0, 0.0) mm/s" in w for w in words)
     stairs = texts(draw(sheet_of(STAIRS, 5, None)))
-    assert "1000.000 mm above tread 1" in stairs  # h0 = 1 m
+    assert "1000.0 mm above tread 1" in stairs  # h0 = 1 m
     assert any("launch 2000.0 mm/s" in w for w in stairs)
 
 

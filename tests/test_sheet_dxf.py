@@ -83,7 +83,7 @@ def test_palms_stops_dimensions_and_notes_are_on_their_layers(manip):
     assert len(msp.query('LINE[layer=="STOPS"]')) == 18
     assert len(msp.query('DIMENSION[layer=="DIMENSIONS"]')) >= 4
     notes = " ".join(e.plain_text() for e in msp.query('MTEXT[layer=="NOTES"]'))
-    assert "18 x link: hole spacing 2000.000 mm" in notes and "9 x palm" in notes
+    assert "18 x link: hole spacing 2000.00 mm" in notes and "9 x palm" in notes
 
 
 def test_every_step_corner_is_where_the_periodic_bounce_puts_it():

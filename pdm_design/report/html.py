@@ -7,8 +7,10 @@ given (its numbers as a table, its curves as plots), the build sheet's drawing, 
 animated simulated run (report/animation.py).
 
 A yield analysis is given as plain data (a mapping, or an object with `to_json()` or a
-dataclass): its scalar entries are listed; each entry that is a curve, {"x": [...], "y": [...]}
-(optionally with "xlabel", "ylabel") or a list of [x, y] pairs, is plotted.
+dataclass). The `pdm-design yield` document (docs/json-schema.md) is shown as that command
+shows it (report/yield_section.py); of any other table the scalar entries are listed, and each
+entry that is a curve, {"x": [...], "y": [...]} (optionally with "xlabel", "ylabel") or a list
+of [x, y] pairs, is plotted. A string says why there is none.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import html
 import math
 
 from .animation import animation_data, animation_html
+from .units import UNITS, built_parts
 
 _STYLE = """
 body{font-family:system-ui,sans-serif;margin:1.5em auto;max-width:1200px;color:#222;
@@ -44,7 +47,7 @@ def report_page(sheet, *, margins: dict, run=None, refused: str = "",
     body += ["<h2>Simulated run</h2>", _animation(spec, run, refused)]
     body += ["<h2>Design</h2>", _values(sheet.design, set(spec.free_variables))]
     body += ["<h2>Geometry and periodic orbit</h2>",
-             _values({**sheet.geometry, **sheet.periodic}, set())]
+             _values({**built_parts(sheet.geometry), **sheet.periodic}, set())]
     body += ["<h2>Margins</h2>", _margins(margins, spec)]
     body += ["<h2>Tolerances and parts</h2>", _parts(sheet)]
     if yield_result is not None:
@@ -91,13 +94,6 @@ def _cell(value) -> str:
     return html.escape(str(value))
 
 
-_UNITS = {"alpha": "rad", "beta": "rad", "link_length": "m", "first_pivot_x": "m",
-          "first_pivot_y": "m", "launch_speed": "m/s", "rise": "m", "tread": "m",
-          "landing_offset": "m", "pitch_x": "m", "pitch_y": "m", "palm_mass": "kg",
-          "nose_clearance": "m", "handover_speed": "m/s", "landing_speed": "m/s",
-          "drop_per_stage": "m", "impact_speed": "m/s", "vertical_impact_speed": "m/s",
-          "horizontal_speed": "m/s", "spin": "rad/s", "flight_time": "s",
-          "drift_per_bounce": "m"}
 
 
 def _values(values: dict, free: set) -> str:
@@ -105,7 +101,7 @@ def _values(values: dict, free: set) -> str:
 
     rows = []
     for key, value in values.items():
-        unit = _UNITS.get(key, "")
+        unit = UNITS.get(key, "")
         shown = "-"
         if isinstance(value, (int, float)) and unit and math.isfinite(value):
             number, words = workshop_value(float(value), unit)
@@ -142,8 +138,9 @@ def _parts(sheet) -> str:
         rows.append(f"<tr><td>{html.escape(e.quantity)}</td><td>{html.escape(e.applies_to)}"
                     f"</td><td class=num>&plusmn;{value:.4g} {unit}</td>"
                     f"<td>{html.escape(e.limited_by)}</td></tr>")
-    table = ("<table><tr><th>tolerance</th><th>applies to</th><th>value</th>"
-             "<th>limited by</th></tr>" + "".join(rows) + "</table>" if rows else
+    table = ("<p class=note>(spec): the spec's statistical tolerances; (box): the worst-case "
+             "box the optimizer computed.</p><table><tr><th>tolerance</th><th>applies to</th><th>value</th>"
+             "<th>what it is</th></tr>" + "".join(rows) + "</table>" if rows else
              f"<p>No tolerance: {html.escape(sheet.tolerance_note)}.</p>")
     parts, _ = parts_list(sheet)
     listed = "".join(
@@ -159,7 +156,13 @@ def _parts(sheet) -> str:
 def _yield(result) -> str:
     from .jsonable import jsonable
 
+    from .yield_section import is_yield_document, yield_html
+
     data = jsonable(result)
+    if isinstance(data, str):  # why the report computed none
+        return f"<p>Not computed: {html.escape(data)}.</p>"
+    if is_yield_document(data):
+        return yield_html(data, _data_uri)
     if not isinstance(data, dict):
         return f"<p>{_cell(data)}</p>"
     scalars = {k: v for k, v in data.items() if isinstance(v, (int, float, str, bool))}

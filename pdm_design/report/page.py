@@ -8,8 +8,10 @@ PAGE = "report.html"
 
 
 def report_for(source, *, count: int | None = None, tolerance: bool = True,
-               yield_result=None) -> tuple[str, object]:
-    """(the page, its build sheet) of a spec (solved first) or a saved design JSON."""
+               yield_result=None, compute_yield: bool = True) -> tuple[str, object]:
+    """(the page, its build sheet) of a spec (solved first) or a saved design JSON. Without a
+    yield_result, the yield of the spec's [tolerances] is computed when it gives them all a
+    value and compute_yield is true (docs/report.md)."""
     from ..analysis import analyse
     from ..sheet import sheet_for
     from ..sheet.drawing import draw
@@ -27,10 +29,24 @@ def report_for(source, *, count: int | None = None, tolerance: bool = True,
         run = simulate_spec(spec, point, record_trajectory=True)
     except SimulationRefused as refusal:
         refused = f"the simulator refuses this design: {refusal}"
+    if yield_result is None and compute_yield and spec.tolerances:
+        yield_result = _own_yield(spec, str(source))
     drawing = render_figure(draw(sheet), "png", dpi=90)
     page = report_page(sheet, margins=margins, run=run, refused=refused, drawing_png=drawing,
                        yield_result=yield_result)
     return page, sheet
+
+
+def _own_yield(spec, source: str):
+    """The yield document of the spec's design, or why there is none (a string)."""
+    from ..errors import PdmError
+    from .yield_section import spec_yield
+
+    try:
+        found, why = spec_yield(spec, source)
+    except PdmError as exc:
+        return str(exc)
+    return found if found is not None else why
 
 
 def write_report(source, folder, **options) -> tuple[Path, object]:
@@ -60,13 +76,14 @@ def read_yield(path) -> dict:
     return data
 
 
-def report_command(source, out, count, no_tolerance, echo, yield_path=None) -> bool:
+def report_command(source, out, count, no_tolerance, echo, yield_path=None,
+                   no_yield=False) -> bool:
     """The body of `pdm-design report`: write the page, say where; True when the design works
     (else its failures go to stderr: the page is written with them at its top)."""
     folder = out or f"{Path(source).stem}-report"
     analysis = read_yield(yield_path) if yield_path else None
     path, sheet = write_report(source, folder, count=count, tolerance=not no_tolerance,
-                               yield_result=analysis)
+                               yield_result=analysis, compute_yield=not no_yield)
     echo(f"report of {sheet.spec.name or source} (status {sheet.status}): {path}")
     for failure in sheet.failures:
         echo(f"warning: {failure}", err=True)

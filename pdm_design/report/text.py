@@ -5,17 +5,9 @@ from __future__ import annotations
 from ..analysis.result import required
 from ..api import DesignOutcome
 from ..status import Status
+from .units import UNITS as _UNITS
+from .units import built_parts as _built_parts
 
-_UNITS = {
-    "alpha": "rad", "beta": "rad", "link_length": "m", "mass_ratio": "", "first_pivot_x": "m",
-    "first_pivot_y": "m", "restitution": "", "launch_speed": "m/s", "rise": "m", "tread": "m",
-    "landing_offset": "m", "pitch_x": "m", "pitch_y": "m", "palm_mass": "kg",
-    "nose_clearance": "m", "handover_speed": "m/s", "landing_speed": "m/s", "contraction": "",
-    "drop_per_stage": "m", "impact_speed": "m/s", "vertical_impact_speed": "m/s",
-    "horizontal_speed": "m/s", "spin": "rad/s", "flight_time": "s", "drift_per_bounce": "m",
-    "effective_mass": "kg", "link_mass": "kg", "link_inertia": "kg m^2", "link_count": "",
-    "pivot_friction_torque": "N m", "pivot_damping": "N m s/rad",
-}
 
 
 def _rows(values: dict) -> list[str]:
@@ -115,17 +107,6 @@ def optimize_text(outcome: DesignOutcome) -> str:
     if outcome.violations:
         lines += ["", "why it does not work:", *(f"  - {v}" for v in outcome.violations)]
     return "\n".join(lines) + "\n"
-
-
-MECHANISM = ("link_mass", "link_inertia", "link_count", "pivot_friction_torque", "pivot_damping")
-
-
-def _built_parts(geometry: dict) -> dict:
-    """The geometry to print: the links' and pivots' lines only where the scene has links or
-    pivots (massless links and free pivots print none; the JSON keeps every key)."""
-    if any(geometry.get(k) for k in MECHANISM if k != "link_count"):
-        return geometry
-    return {k: v for k, v in geometry.items() if k not in MECHANISM}
 
 
 def allocation_rows(kind: str, entries) -> list[str]:

@@ -102,7 +102,7 @@ def sheet_for(path: str | Path, *, count: int | None = None,
     path = Path(path)
     if path.suffix.lower() == ".json":
         spec, values, status, tol, violations, verification = _from_json(path)
-        extra = ()
+        extra = spec_entries(spec)
     else:
         from ..api import design
 
@@ -111,7 +111,8 @@ def sheet_for(path: str | Path, *, count: int | None = None,
         values = dict(outcome.analysis.design)
         status, tol = outcome.status.value, outcome.tolerance
         violations, verification = tuple(outcome.violations), outcome.verification
-        extra = allocated_entries(outcome.tolerances)
+        extra = (allocated_entries(outcome.tolerances) if outcome.tolerances
+                 else spec_entries(spec))
     fixed = fixed_spec(spec, values, source=str(path))
     if verification is None and _is_success(status):  # saved with --no-verify: simulate it now
         verification = _verify_now(fixed)
@@ -133,7 +134,12 @@ ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot brac
                   "feed_x": "the feed (start place)", "friction": "every palm's surface",
                   "object_width": "the objects carried", "feed_speed": "the feed (start speed)",
                   "palm_mass": "every palm", "object_mass": "the objects carried",
-                  "launch_x": "the launcher (release place)"}
+                  "launch_x": "the launcher (release place)", "link_length": "every link",
+                  "back_stop": "every back stop", "link_mass": "every link",
+                  "pivot_friction": "every pivot bracket's joints", "rise": "every step",
+                  "tread": "every step", "restitution": "every step's surface (the ball's "
+                  "bounce)", "launch_speed": "the launcher (launch speed)"}
+SPEC_WORDS = "the spec's statistical tolerance"
 
 
 def allocated_entries(entries) -> tuple:
@@ -152,6 +158,28 @@ def allocated_entries(entries) -> tuple:
         out.append(ToleranceEntry(e["quantity"].replace("_", " "),
                                   ALLOCATED_PART.get(e["quantity"], e["quantity"]) + lot,
                                   e["value"], "" if e["unit"] == "1" else e["unit"], why))
+    return tuple(out)
+
+
+def spec_entries(spec) -> tuple:
+    """ToleranceEntry of every tolerance the spec's [tolerances] gives a value, pivots too,
+    on its part: statistical tolerances (the yield draws each build's error from their
+    distribution), not the worst-case box the optimizer computes (the sheet's own)."""
+    from ..tolerances.model import SIGMAS_PER_TOLERANCE
+    from .parts import ToleranceEntry
+
+    out = []
+    for t in spec.tolerances or ():
+        if t.value is None:
+            continue
+        unit = t.to_json(spec.kind)["unit"]
+        spread = (f"normal, +-t = {SIGMAS_PER_TOLERANCE:g} sigma" if t.distribution == "normal"
+                  else "uniform over +-t")
+        lot = " (one lot)" if t.applies_to == "lot" else ""
+        out.append(ToleranceEntry(t.quantity.replace("_", " ") + " (spec)",
+                                  ALLOCATED_PART.get(t.quantity, t.quantity) + lot, t.value,
+                                  "" if unit == "1" else unit,
+                                  f"{SPEC_WORDS} ({spread})"))
     return tuple(out)
 
 

@@ -43,7 +43,7 @@ def draw_manipulators(ax, labels, sheet, items, detail=True):
     _path(ax, sheet, items)
     if detail:
         _first_dimensions(ax, labels, sheet, items[0])
-    if len(items) > 1:
+    if detail and len(items) > 1:  # a longer view: too small to read; the parts list has it
         _pitch(ax, labels, items[0], items[1], l)
     if items[0]["manipulator"] == 1:
         _feed(ax, labels, sheet, items[0])
@@ -70,7 +70,7 @@ def _first_dimensions(ax, labels, sheet, item):
     (bracket, hole), _ = link_holes((x, y), -a, l, hole_spacing(sheet), palm.thickness)
     extra = f", {tol['link']}" if tol.get("link") else ""
     dimension(ax, labels, (bracket[0] * MM, bracket[1] * MM), (hole[0] * MM, hole[1] * MM),
-              f"link l = {l * MM:.3f} mm{extra}", offset=0.08 * l * MM, side=1.0)
+              f"link l = {l * MM:.1f} mm{extra}", offset=0.08 * l * MM, side=1.0)
     from matplotlib.patches import Arc
 
     px, py = x * MM, y * MM
@@ -89,7 +89,7 @@ def _first_dimensions(ax, labels, sheet, item):
         more = f", {tol[part]}" if tol.get(part) else ""
         labels.add(ax, text + more, at, (60 * math.copysign(1, angle), 14), line=True,
                    color=color)
-    pivot = f"pivot {item['manipulator']} ({px:.3f}, {py:.3f}) mm"
+    pivot = f"pivot {item['manipulator']} ({px:.1f}, {py:.1f}) mm"
     # the placement box holds for the first verification.stages pivots only
     placed = tol.get("pivot bracket") if item["pivot_x_tolerance_m"] is not None else None
     if placed:
@@ -108,11 +108,11 @@ def _pitch(ax, labels, first, second, l):
     x1, y1 = first["pivot_x_m"] * MM, first["pivot_y_m"] * MM
     x2, y2 = second["pivot_x_m"] * MM, second["pivot_y_m"] * MM
     below = min(y1, y2) - 0.2 * l * MM
-    dimension(ax, labels, (x1, below), (x2, below), f"pitch x {x2 - x1:.3f} mm", side=-1.0)
+    dimension(ax, labels, (x1, below), (x2, below), f"pitch x {x2 - x1:.1f} mm", side=-1.0)
     ax.plot([x1, x1], [y1, below], color="0.55", lw=0.5, ls=":")
     ax.plot([x2, x2], [y2, below], color="0.55", lw=0.5, ls=":")
     side = x2 + 0.12 * l * MM
-    dimension(ax, labels, (side, y2), (side, y1), f"pitch y {y1 - y2:.3f} mm", side=-1.0)
+    dimension(ax, labels, (side, y2), (side, y1), f"pitch y {y1 - y2:.1f} mm", side=-1.0)
     ax.plot([x1, side], [y1, y1], color="0.55", lw=0.5, ls=":")
 
 
@@ -128,16 +128,16 @@ def _feed(ax, labels, sheet, first):
         arrow = 0.3 * l * MM / speed
         ax.annotate("", xy=(sx + vx * arrow, sy + vy * arrow), xytext=(sx, sy),
                     arrowprops={"arrowstyle": "->", "lw": 1.0, "color": "tab:green"})
-    labels.add(ax, f"feed: start ({sx:.3f}, {sy:.3f}) mm, velocity ({vx * MM:.1f}, "
+    labels.add(ax, f"feed: start ({sx:.1f}, {sy:.1f}) mm, velocity ({vx * MM:.1f}, "
                f"{vy * MM:.1f}) mm/s", (sx, sy), (0, 22), color="tab:green", line=True)
     top = sy + 0.1 * l * MM
     if abs(x1 - sx) > 1e-9:
-        dimension(ax, labels, (sx, top), (x1, top), f"{abs(x1 - sx):.3f} mm", color="tab:green")
+        dimension(ax, labels, (sx, top), (x1, top), f"{abs(x1 - sx):.1f} mm", color="tab:green")
         ax.plot([x1, x1], [y1, top], color="0.55", lw=0.5, ls=":")
     left = sx - 0.1 * l * MM
     if abs(y1 - sy) > 1e-9:
         dimension(ax, labels, (left, min(y1, sy)), (left, max(y1, sy)),
-                  f"{abs(sy - y1):.3f} mm", color="tab:green")
+                  f"{abs(sy - y1):.1f} mm", color="tab:green")
         ax.plot([left, x1], [y1, y1], color="0.55", lw=0.5, ls=":")
 
 

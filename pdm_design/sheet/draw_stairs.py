@@ -40,20 +40,22 @@ def draw_stairs(ax, labels, sheet, items, detail=True):
     depth = dim["level_m"] * MM - 0.3 * max(dim["rise_m"] * MM, 0.1 * tread0)
     if detail:
         dimension(ax, labels, (dim["back_x_m"] * MM, depth), (dim["nose_x_m"] * MM, depth),
-                  f"tread {tread0:.3f} mm{more['tread']}", side=-1.0)
+                  f"tread {tread0:.1f} mm{more['tread']}", side=-1.0)
     if detail and len(items) > 2:  # the riser of the third step drawn, beside it
         upper, riser = items[1], items[2]
         x = riser["back_x_m"] * MM - 0.05 * tread0
         dimension(ax, labels, (x, riser["level_m"] * MM), (x, upper["level_m"] * MM),
-                  f"rise {rise0:.3f} mm{more['rise']}", side=1.0)
+                  f"rise {rise0:.1f} mm{more['rise']}", side=1.0)
     if start:
-        _feed(ax, labels, sheet, first, r)
+        _feed(ax, labels, sheet, first, r, left)
     for item in items:  # numbers last: the first to give way
         labels.add(ax, str(item["step"]), (item["back_x_m"] * MM, item["level_m"] * MM),
                    (8, 7), optional=True)
 
 
-def _feed(ax, labels, sheet, first, r):
+def _feed(ax, labels, sheet, first, r, left):
+    """The launch: its speed, its height above tread 1 (dimensioned left of the staircase's
+    wall, at x = left) and its distance to tread 1's back."""
     h0 = sheet.spec.scene.initial.drop_height * MM
     level = first["level_m"] * MM
     speed = sheet.design["launch_speed"] * MM
@@ -63,12 +65,12 @@ def _feed(ax, labels, sheet, first, r):
                 arrowprops={"arrowstyle": "->", "lw": 1.0, "color": "tab:green"})
     labels.add(ax, f"feed: launch {speed:.1f} mm/s horizontally", (0.0, level + h0 + r),
                (0, 16), color="tab:green", ha="left")
-    x = -0.15 * tread
-    dimension(ax, labels, (x, level), (x, level + h0), f"{h0:.3f} mm above tread 1",
+    x = left - 0.1 * tread
+    dimension(ax, labels, (x, level), (x, level + h0), f"{h0:.1f} mm above tread 1",
               color="tab:green", side=1.0)
     ax.plot([x, first["back_x_m"] * MM], [level, level], color="0.55", lw=0.5, ls=":")
     ax.plot([x, 0.0], [level + h0, level + h0], color="0.55", lw=0.5, ls=":")
     if abs(first["back_x_m"]) > 1e-12:
         y = level + h0 + r + 0.25 * max(h0, tread)
         dimension(ax, labels, (0.0, y), (first["back_x_m"] * MM, y),
-                  f"{first['back_x_m'] * MM:.3f} mm to tread 1", color="tab:green")
+                  f"{first['back_x_m'] * MM:.1f} mm to tread 1", color="tab:green")

@@ -73,6 +73,7 @@ def draw(sheet: BuildSheet, first: int = 1, last: int | None = None, *, notes: b
         figure.text(0.01, notes_top, "\n".join(lines), fontsize=FONT - 0.5,
                     family="monospace", va="top", ha="left")
     labels.settle(figure)
+    figure.sheet_labels = labels  # the labels placed (tests check them against the lines)
     return figure
 
 
@@ -131,12 +132,13 @@ def _notes(sheet) -> list[str]:
             f"   TOLERANCE {tol}" if tol else "")
         lines += textwrap.wrap(text, NOTE_WIDTH, subsequent_indent=" " * 9)
     entries = tolerance_entries(sheet)
-    lines += ["", "TOLERANCES (+-, build each part within this of its nominal)"]
+    lines += ["", "TOLERANCES (+-, build each part within this of its nominal). (spec): the "
+              "spec's statistical tolerances; (box): the worst-case box the optimizer computed"]
     if not entries:
         lines += textwrap.wrap(f"none: {sheet.tolerance_note}", NOTE_WIDTH)
     for e in entries:
-        lines += textwrap.wrap(f"{e.quantity} {e.shown()}: {e.applies_to}; limited by "
-                               f"{e.limited_by}", NOTE_WIDTH, subsequent_indent="    ")
+        lines += textwrap.wrap(f"{e.quantity} {e.shown()}: {e.applies_to}; {e.limited_by}",
+                               NOTE_WIDTH, subsequent_indent="    ")
     if other:
         lines.append("(tolerances above that name no part of the list apply as stated)")
     return lines

@@ -5,7 +5,9 @@ can be moved without moving what it points at. `Labels.settle` measures each lab
 with the figure's renderer (in the order they were made: the first ones stay where they are),
 moves a label that runs into one already placed (or into any other text of the figure: tick
 labels, titles, notes) to the nearest free place around its point (with a thin line back to
-it), and hides an optional label (an item's number) instead.
+it), and hides an optional label (an item's number) instead. A label that is not optional also
+keeps off the drawing's lines (links, palms, dimension and leader lines, the axes' frame) where
+a place free of them is found near its point; else it keeps off the texts only.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from dataclasses import dataclass, field
 
 FONT = 7.5
 SHIFTS = 40   # places tried around a label's point: rings of 8, 1.1 text heights apart
+LINE_SHIFTS = 20  # of those, the rings searched for a place off the drawing's lines too
 GAP = 3.0     # pixels: labels are placed this far apart (another renderer's fonts may differ)
 
 
@@ -45,12 +48,23 @@ class Labels:
         placed = [_extent(t, renderer) for t in figure_texts(figure)
                   if id(t) not in mine]
         frame = figure.bbox
+        leaders = {id(note): note.arrow_patch.get_visible() for note, _ in self.made}
+        for note, _ in self.made:  # a leader is a line to keep off once its label is placed
+            note.arrow_patch.set_visible(False)
         for note, optional in self.made:
+            note.arrow_patch.set_visible(leaders[id(note)])
+            lines = drawn_segments(figure, renderer, skip=note) if not optional else None
             box = _extent(note, renderer)
-            if not _hits(box, placed, -GAP) and _inside(box, frame):
+            clear = not _hits(box, placed, -GAP) and _inside(box, frame)
+            if clear and (optional or not _text_crosses(note, box, lines)):
                 placed.append(box)
                 continue
-            spot = None if optional else self._free_spot(note, renderer, placed, frame)
+            spot = None if optional else self._free_spot(note, renderer, placed, frame, lines)
+            if spot is None and clear:  # no place off the lines near it: where it is
+                placed.append(box)
+                continue
+            if spot is None and not optional:
+                spot = self._free_spot(note, renderer, placed, frame)
             if spot is None:
                 if optional:
                     note.set_visible(False)
@@ -61,20 +75,33 @@ class Labels:
             placed.append(_extent(note, renderer))
 
     @staticmethod
-    def _free_spot(note, renderer, placed, frame):
+    def _free_spot(note, renderer, placed, frame, lines=None):
         x0, y0 = note.xyann
         box = _extent(note, renderer)
         step = 1.1 * box.height * 72.0 / note.figure.dpi
-        for ring in range(1, SHIFTS + 1):
+        for ring in range(1, (SHIFTS if lines is None else LINE_SHIFTS) + 1):
             for k in range(8):
                 angle = math.pi / 2 + k * math.pi / 4
                 note.xyann = (x0 + ring * step * 2.5 * math.cos(angle),
                               y0 + ring * step * math.sin(angle))
                 box = _extent(note, renderer)
-                if not _hits(box, placed, -GAP) and _inside(box, frame):
+                if (not _hits(box, placed, -GAP) and _inside(box, frame)
+                        and (lines is None or not _text_crosses(note, box, lines))
+                        and not _leader_crosses(note, box, placed)):
                     return note.xyann
         note.xyann = (x0, y0)
         return None
+
+
+def _leader_crosses(note, box, placed) -> bool:
+    """Whether the line from the label (its centre) back to its point runs through a label
+    placed before it."""
+    import numpy as np
+
+    px, py = note.axes.transData.transform(note.xy) if note.axes else note.xy
+    cx, cy = (box.x0 + box.x1) / 2, (box.y0 + box.y1) / 2
+    segment = np.array([[cx, cy, px, py]])
+    return any(_crosses(b, segment) for b in placed)
 
 
 def _leader(note) -> None:
@@ -134,6 +161,97 @@ def overlapping_texts(figure) -> list[tuple[str, str]]:
             if _hits(boxes[i], [boxes[j]]):
                 pairs.append((texts[i].get_text(), texts[j].get_text()))
     return pairs
+
+
+def drawn_segments(figure, renderer, skip=None):
+    """Every straight piece of the axes' lines, patches (outlines), annotation arrows and
+    frames, in display pixels: an (n, 4) array x0, y0, x1, y1 (curves as polylines); the
+    annotation `skip`'s own leader left out."""
+    import numpy as np
+    from matplotlib.text import Annotation
+
+    pieces = []
+    for ax in figure.axes:
+        if not ax.get_visible():
+            continue
+        paths = [line.get_transform().transform_path(line.get_path()) for line in ax.lines
+                 if line.get_visible() and line.get_linestyle() not in ("None", "", " ")]
+        paths += [p.get_transform().transform_path(p.get_path()) for p in ax.patches
+                  if p.get_visible()]
+        for t in ax.texts:
+            if (isinstance(t, Annotation) and t is not skip and t.get_visible()
+                    and t.arrow_patch is not None and t.arrow_patch.get_visible()):
+                t.update_positions(renderer)
+                paths.append(t.arrow_patch.get_path())
+        for path in paths:
+            for poly in path.to_polygons(closed_only=False):
+                if len(poly) > 1:
+                    pieces.append(np.hstack([poly[:-1], poly[1:]]))
+        b = ax.bbox
+        corners = np.array([[b.x0, b.y0], [b.x1, b.y0], [b.x1, b.y1], [b.x0, b.y1], [b.x0, b.y0]])
+        pieces.append(np.hstack([corners[:-1], corners[1:]]))
+    return np.vstack(pieces) if pieces else np.zeros((0, 4))
+
+
+def _text_crosses(text, box, segments) -> bool:
+    """Whether any segment runs through the text's letters: its extent `box` for level text;
+    for a rotated text the rectangle of its letters, turned with it (the extent, a box around
+    that rectangle, is larger)."""
+    import numpy as np
+    from matplotlib.transforms import Bbox
+
+    angle = math.radians(text.get_rotation())
+    c, s = abs(math.cos(angle)), abs(math.sin(angle))
+    if abs(c * c - s * s) < 0.2 or s < 1e-6 or not len(segments):  # near 45 degrees or level
+        return _crosses(box, segments)
+    w = (box.width * c - box.height * s) / (c * c - s * s)
+    h = (box.height * c - box.width * s) / (c * c - s * s)
+    if w <= 0 or h <= 0:
+        return _crosses(box, segments)
+    cx, cy = (box.x0 + box.x1) / 2, (box.y0 + box.y1) / 2
+    ca, sa = math.cos(-angle), math.sin(-angle)
+    turned = np.empty_like(segments)
+    for i in (0, 2):
+        x, y = segments[:, i] - cx, segments[:, i + 1] - cy
+        turned[:, i], turned[:, i + 1] = ca * x - sa * y, sa * x + ca * y
+    return _crosses(Bbox([[-w / 2, -h / 2], [w / 2, h / 2]]), turned)
+
+
+def _crosses(box, segments, pad: float = 1.0) -> bool:
+    """Whether any segment runs through the box (shrunk by pad pixels): an end inside it, or
+    a crossing of one of its sides (Liang-Barsky clipping, vectorised)."""
+    import numpy as np
+
+    if not len(segments):
+        return False
+    x0, y0, x1, y1 = box.x0 + pad, box.y0 + pad, box.x1 - pad, box.y1 - pad
+    if x1 <= x0 or y1 <= y0:
+        return False
+    px, py = segments[:, 0], segments[:, 1]
+    dx, dy = segments[:, 2] - px, segments[:, 3] - py
+    lo, hi = np.zeros(len(px)), np.ones(len(px))
+    ok = np.ones(len(px), dtype=bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for p, q in ((-dx, px - x0), (dx, x1 - px), (-dy, py - y0), (dy, y1 - py)):
+            parallel = p == 0
+            ok &= ~(parallel & (q < 0))
+            t = q / p
+            lo = np.where(~parallel & (p < 0), np.maximum(lo, t), lo)
+            hi = np.where(~parallel & (p > 0), np.minimum(hi, t), hi)
+    return bool(np.any(ok & (lo <= hi)))
+
+
+def labels_on_lines(figure, labels) -> list[str]:
+    """The texts of the shown, not optional labels that a drawn line runs through."""
+    renderer = figure.canvas.get_renderer()
+    out = []
+    for note, optional in labels.made:
+        if optional or not note.get_visible():
+            continue
+        lines = drawn_segments(figure, renderer, skip=note)  # its own leader ends at its edge
+        if _text_crosses(note, _extent(note, renderer), lines):
+            out.append(note.get_text())
+    return out
 
 
 def dimension(ax, labels, p, q, text, *, offset=0.0, side=1.0, color="black"):

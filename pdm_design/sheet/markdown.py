@@ -81,7 +81,9 @@ def _parts_markdown(sheet: BuildSheet) -> list[str]:
               for p in parts]
     entries = tolerance_entries(sheet)
     if entries:
-        lines += ["", "## Tolerances", "", "| quantity | applies to | value | limited by |",
+        lines += ["", "## Tolerances", "", "(spec): the spec's statistical tolerances; (box): "
+                  "the worst-case box the optimizer computed.", "",
+                  "| quantity | applies to | value | what it is |",
                   "|---|---|---|---|"]
         lines += [f"| {e.quantity} | {e.applies_to} | {e.shown()} | {e.limited_by} |"
                   for e in entries]

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 
 MM = 1e3
 HOLE_SPACING_FRACTION = 0.5   # link holes on the palm: half the palm's width apart
+BOX_WORDS = ("worst-case box the optimizer computed (every build with all its errors inside it "
+             "works)")
 _RUNS: dict[int, tuple] = {}  # id(sheet) -> (sheet, its nominal run or None)
 
 
@@ -70,13 +72,16 @@ PART_WORDS = {
 
 
 def workshop_value(value: float, unit: str) -> tuple[float, str]:
-    """(value, unit) in workshop units: m -> mm, rad -> degrees, m/s -> mm/s; others as given."""
+    """(value, unit) in workshop units: m -> mm, rad -> degrees, m/s -> mm/s, kg -> g; others
+    as given."""
     if unit == "m":
         return value * MM, "mm"
     if unit == "rad":
         return math.degrees(value), "deg"
     if unit == "m/s":
         return value * MM, "mm/s"
+    if unit == "kg":
+        return value * 1e3, "g"
     return value, unit
 
 
@@ -97,8 +102,8 @@ def _number(value: float) -> str:
 
 
 def mm(value: float) -> str:
-    """A length in m shown in mm to 0.001 mm."""
-    return f"{value * MM:.3f}"
+    """A length in m shown in mm to 0.01 mm (the CSV and the DXF keep every digit)."""
+    return f"{value * MM:.2f}"
 
 
 def deg(value: float) -> str:
@@ -115,14 +120,15 @@ def tolerance_entries(sheet) -> tuple[ToleranceEntry, ...]:
     tol = sheet.tolerance
     if tol:
         covers = sheet.tolerance_covers
+        why = f"{BOX_WORDS}: {sheet.tolerance_note}"
         if sheet.kind == "manipulators":
             where = f"pivot bracket of manipulators 1 to {covers}"
-            own = [ToleranceEntry("pivot x", where, tol["dx"], "m", sheet.tolerance_note),
-                   ToleranceEntry("pivot y", where, tol["dy"], "m", sheet.tolerance_note)]
+            own = [ToleranceEntry("pivot x (box)", where, tol["dx"], "m", why),
+                   ToleranceEntry("pivot y (box)", where, tol["dy"], "m", why)]
         else:
             where = f"step 1 to {covers}"
-            own = [ToleranceEntry("rise", where, tol["rise"], "m", sheet.tolerance_note),
-                   ToleranceEntry("tread", where, tol["tread"], "m", sheet.tolerance_note)]
+            own = [ToleranceEntry("rise (box)", where, tol["rise"], "m", why),
+                   ToleranceEntry("tread (box)", where, tol["tread"], "m", why)]
     return (*own, *getattr(sheet, "tolerances", ()))
 
 
