@@ -98,6 +98,10 @@ def test_simulate_build_reports_an_unbuildable_part_as_its_failure(tmp_path):
     assert "FAILED, 0 stages passed" in result.output
     assert "failure: invalid_part at stage 1" in result.output
     assert "palm_mass = -" in result.output and "cannot be built (needs > 0)" in result.output
+    plotted = CliRunner().invoke(main, ["simulate", path, "--build", f"0:{index}", "--stages",
+                                        "2", "--plot", str(tmp_path / "run.png")])
+    assert plotted.exit_code == 1 and "internal error" not in plotted.output, plotted.output
+    assert "no figures" in plotted.output
 
 
 def test_a_friction_torque_drawn_below_zero_is_a_frictionless_bearing(tmp_path):
