@@ -327,6 +327,9 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
 
             result = simulate_build_of_spec(loaded, spec, point, build, row, accuracy=accuracy,
                                             record_trajectory=plot is not None)
+            if plot is not None and result.events and result.events[0].kind == "invalid_part":
+                click.echo("no figures: the build has a part that cannot be made", err=True)
+                plot = None
         else:
             result = simulate_spec(loaded, point, stages=stages, accuracy=accuracy,
                                    record_trajectory=plot is not None, **kwargs)

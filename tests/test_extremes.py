@@ -533,7 +533,7 @@ def test_restitution_near_0_with_the_default_landing_is_a_named_double_landing()
     scene, design = stairs(1e-6)
     result = simulate_stairs(scene, design, stages=5)
     failure = result.outcome.failure
-    assert (failure.kind, failure.stage) == ("double_landing", 0)
+    assert (failure.kind, failure.after["step"]) == ("double_landing", 0)
 
 
 @pytest.mark.parametrize("eps", [1 - 1e-15, 1 - 1e-9, 1.0])

@@ -353,7 +353,16 @@ def test_runs_that_never_lift_off_are_unchanged_bit_for_bit(before_and_after):
     for i in never:  # json keeps every float's repr: equal text is equal bits (the events'
         # words are left out: their wording is not the physics, and it has been improved since)
         assert json.dumps(_numbers(new[i]), sort_keys=True) == \
-            json.dumps(_numbers(old[i]), sort_keys=True), i
+            json.dumps(_numbers(_failing_stage(old[i])), sort_keys=True), i
+
+
+def _failing_stage(run: dict) -> dict:
+    """A failure in the feed's flight, at stage 0 before, is now at the stage that fails (1:
+    stages passed + 1, docs/tolerances.md); every other number is as it was."""
+    def moved(e):
+        return {**e, "stage": 1} if e["stage"] == 0 else e
+
+    return {**run, "events": [moved(e) if e["failure"] else e for e in run["events"]]}
 
 
 def _numbers(run: dict) -> dict:

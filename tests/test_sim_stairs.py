@@ -321,7 +321,7 @@ def test_long_tread_makes_the_ball_land_twice_on_that_step():
     delta = x_same - tread + 0.01
     result = simulate_stairs(*paper1(), stages=6, step_errors=[StepError(step=3, tread=delta)])
     f = result.outcome.failure
-    assert (f.kind, f.stage, f.failure) == ("double_landing", 3, True)
+    assert (f.kind, f.after["step"], f.failure) == ("double_landing", 3, True)
     assert result.outcome.stages_passed == 3 and not result.outcome.completed
     assert f.before["x"] - result.stages[2]["x"] == pytest.approx(x_same - s, rel=1e-9)
 
@@ -338,7 +338,7 @@ def test_nose_just_short_of_the_same_height_return_is_hit(short, hit):
     result = simulate_stairs(*paper1(radius=r), stages=6,
                              step_errors=[StepError(step=3, tread=nose - tread)])
     if hit:
-        assert failure_kind(result) == "nose_hit" and result.outcome.failure.stage == 3
+        assert failure_kind(result) == "nose_hit" and result.outcome.failure.after["step"] == 3
     else:
         assert result.outcome.completed
         # it travels one periodic tread from s on tread 3; tread 4 starts at the moved nose
@@ -362,7 +362,7 @@ def test_short_tread_is_skipped():
     result = simulate_stairs(*paper1(radius=r), stages=6,
                              step_errors=[StepError(step=3, tread=delta)])
     f = result.outcome.failure
-    assert (f.kind, f.stage) == ("skipped_step", 4)
+    assert (f.kind, f.after["step"]) == ("skipped_step", 4)
     assert f.before["x"] - result.stages[1]["x"] == pytest.approx(tread + x - s, rel=1e-9)
 
 
@@ -414,7 +414,7 @@ def test_mid_tread_landing_needs_restitution_above_one_third(eps, lands_twice):
     result = simulate_stairs(scene, design, stages=3)
     if lands_twice:
         f = result.outcome.failure
-        assert (f.kind, f.stage) == ("double_landing", 0)
+        assert (f.kind, f.after["step"]) == ("double_landing", 0)
         v = math.sqrt(2 * G * H0)
         assert f.before["x"] == pytest.approx(2.0 * eps * v / G, rel=1e-12)
     else:
@@ -428,7 +428,7 @@ def test_restitution_zero_stops_bouncing():
     result = simulate_stairs(scene, design, stages=2)
     assert result.outcome.stages_passed == 1
     assert result.stages[0]["landing_x"] == pytest.approx(0.5, abs=1e-12)
-    assert failure_kind(result) == "no_rebound" and result.outcome.failure.stage == 1
+    assert failure_kind(result) == "no_rebound" and result.outcome.failure.after["step"] == 1
 
 
 def test_backspin_drives_the_ball_into_the_riser_behind():
@@ -446,7 +446,7 @@ def test_backspin_drives_the_ball_into_the_riser_behind():
     t = (0.8 - 0.5) / -vx
     assert 0.5 + up * t - 0.5 * G * t * t < 2.0
     f = result.outcome.failure
-    assert (f.kind, f.stage) == ("riser_hit", 1)
+    assert (f.kind, f.after["step"]) == ("riser_hit", 1)
     assert f.time == pytest.approx(math.sqrt(2 * 3.0 / G) + t, rel=1e-12)
 
 
@@ -465,7 +465,7 @@ def test_backspin_over_a_low_riser_lands_on_the_top_landing():
     up = EPS * math.sqrt(2 * G * H0)
     t = (up + math.sqrt(up**2 - 2 * G * 0.05)) / G
     f = result.outcome.failure
-    assert (f.kind, f.stage) == ("bounced_back", 0)
+    assert (f.kind, f.after["step"]) == ("bounced_back", 0)
     assert f.before["x"] - result.stages[0]["x"] == pytest.approx(-2.0 * t, rel=1e-9)
 
 
@@ -488,7 +488,7 @@ def test_a_slow_launch_just_past_the_top_nose_comes_down_on_its_corner(past):
     scene, design = paper1(radius=r, launch_speed=v0, rise=H0, tread=1.0,
                            landing_offset=v0 * math.sqrt(2 * H0 / G) + past)
     failure = simulate_stairs(scene, design, stages=3).outcome.failure
-    assert failure is not None and (failure.kind, failure.stage) == ("nose_hit", 0)
+    assert failure is not None and (failure.kind, failure.after["step"]) == ("nose_hit", 0)
 
 
 def test_geometry_matches_the_closed_forms():
@@ -521,7 +521,7 @@ def test_a_failure_beyond_the_record_limit_keeps_the_impact_before_it():
     result = simulate_stairs(*paper1(), stages=500, record_limit=50,
                              step_errors=[StepError(step=300, tread=delta)])
     f = result.outcome.failure
-    assert (f.kind, f.stage, result.outcome.stages_passed) == ("double_landing", 300, 300)
+    assert (f.kind, f.after["step"], result.outcome.stages_passed) == ("double_landing", 300, 300)
     assert [st["step"] for st in result.stages[-2:]] == [50, 300]
     assert [e.kind for e in result.events[-2:]] == ["impact", "double_landing"]
 
@@ -623,7 +623,7 @@ def test_vectorised_failures_agree_with_sampling_and_the_event_simulator(frictio
                                  step_errors=[StepError(step=2, tread=half - s)])
         assert (failure_kind(result) or "") == want
         if want:
-            assert result.outcome.failure.stage == 2
+            assert result.outcome.failure.after["step"] == 2
         else:
             assert result.stages[2]["landing_x"] == pytest.approx(s, abs=1e-9)
     assert len(counts) == 3

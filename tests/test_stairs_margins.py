@@ -44,9 +44,10 @@ def stairs(design, *, stages=6, friction=None, requirements=None, radius=R):
 
 
 def simulated(spec):
-    """(completed, (failure kind, stage) or None) of the spec's nominal run."""
+    """(completed, (failure kind, the step where it happens) or None) of the spec's nominal
+    run."""
     out = simulate_stairs(spec.scene, spec.design_at(), stages=spec.verification.stages).outcome
-    return out.completed, (out.failure.kind, out.failure.stage) if out.failure else None
+    return out.completed, (out.failure.kind, out.failure.after["step"]) if out.failure else None
 
 
 def flip(holds, lo, hi, steps=60):

@@ -49,13 +49,12 @@ def test_map_and_simulator_agree_build_by_build_on_real_links(real):
     dev = draw(PARTS, builds, stages, seed=5)
     out = run_builds(scene, design, dev, stages)
     closed = np.flatnonzero(out.closed_form)
-    assert len(closed) > 100 and {"", "invalid_part"} <= set(out.failure[closed])
-    assert len(set(out.failure[closed]) - {"", "invalid_part"}) >= 1  # a physical failure too
+    assert len(closed) > 100 and "" in set(out.failure[closed])
+    assert len(set(out.failure[closed]) - {""}) >= 1  # a physical failure too
+    # torques drawn below 0 are taken at 0 by both (the sample holds builds that have them)
+    assert (dev["pivot_friction"] < -0.2).any(axis=1)[closed].sum() > 10
     for i in closed:
         one = {k: v[i:i + 1] for k, v in dev.items()}
-        if out.failure[i] == "invalid_part":  # a negative link mass or friction torque
-            assert (one["link_mass"] < -0.5).any() or (one["pivot_friction"] < -0.2).any()
-            continue
         sim = simulate_build(scene, design, one, stages, accuracy="precise").outcome
         name = "" if sim.completed else sim.failure.kind
         assert (sim.stages_passed, name) == (out.stages_passed[i], out.failure[i]), i
@@ -105,23 +104,23 @@ def _first_stall_torque(scene, design):
 
 @pytest.mark.parametrize("distribution, t", [("normal", 9.0), ("uniform", 10.0)])
 def test_yield_of_a_pivot_friction_lot_is_its_exact_probability(real, distribution, t):
-    """One stage, only the lot's pivot friction varies: the build fails below 0 (a torque no
-    bearing has: invalid_part) and above the stall torque, so the yield is the probability of
-    the deviation lying in [-tau_0, tau_stall - tau_0]."""
+    """One stage, only the lot's pivot friction varies: a torque drawn below 0 is taken at 0
+    (a frictionless bearing, which carries the object on), and the build fails above the stall
+    torque, so the yield is the probability of the deviation lying below tau_stall - tau_0."""
     scene, design = real
     tau0 = scene.pivots.friction_torque
     stall = _first_stall_torque(scene, design)
     low, high = -tau0, stall - tau0
-    assert -t < low < 0.0 < high < t
+    assert -t < low < 0.0 < high < t  # (a tenth of the builds or more have a torque below 0)
     if distribution == "normal":
-        exact = ndtr(high / (t / 3)) - ndtr(low / (t / 3))
+        exact = ndtr(high / (t / 3))
     else:
-        exact = (high - low) / (2 * t)
+        exact = (high + t) / (2 * t)
     tols = Tolerances((Tolerance("pivot_friction", "lot", t, 1.0, distribution),))
     r = yield_of(scene, design, tols, builds=20_000, stages=1, seed=2, confirm=0, scales=())
     assert r.ci_low <= exact <= r.ci_high
     assert r.ci_high - r.ci_low < 0.02
-    assert set(r.failures) == {"stall", "invalid_part"}
+    assert set(r.failures) == {"stall"}
 
 
 def test_a_palm_that_friction_can_hold_short_of_its_front_stop_is_left_to_the_simulator(real):

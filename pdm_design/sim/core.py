@@ -52,8 +52,9 @@ def check_scales(reference: tuple[str, float], quantities: dict[str, float]) -> 
 @dataclass(frozen=True)
 class Event:
     """One event of a run. stage numbers the manipulator carrying the object (from 1) or the
-    step the ball is over (from 1). before/after: the state just before and after the reset,
-    by name (SI units). A failure event ends the run."""
+    step the ball lands on (from 1); a failure is in the stage that fails, stages passed + 1
+    (on stairs its state's "step" is the step where it happens). before/after: the state just
+    before and after the reset, by name (SI units). A failure event ends the run."""
 
     time: float
     kind: str

@@ -26,7 +26,31 @@ def spec_tolerances(spec, source: str):
             raise SpecError(source, "tolerances.friction", "no friction tolerance for a point "
                             "ball (a ball of radius 0 cannot roll: give scene.ball a radius)",
                             "scene.ball.radius = 0")
+        _refuse_zero_nominal(spec, source, tol.quantity)
     return spec.tolerances
+
+
+# Quantities whose nominal may be 0, where a +- tolerance around it means nothing (half the
+# parts below a physical limit): (scene kind, quantity) -> (the nominal, the key that sets it)
+_ZERO_NOMINALS = {
+    ("manipulators", "link_mass"): (lambda s: s.scene.links.mass, "a [scene.links] mass"),
+    ("manipulators", "pivot_friction"): (lambda s: s.scene.pivots.friction_torque,
+                                         "a [scene.pivots] friction_torque"),
+    ("manipulators", "friction"): (lambda s: s.scene.palm.friction, "a scene.palm.friction"),
+    ("stairs", "friction"): (lambda s: s.scene.friction, "a scene.friction"),
+}
+
+
+def _refuse_zero_nominal(spec, source, quantity):
+    """A tolerance on a quantity whose nominal is 0 (exit 2): links of no mass, pivots with no
+    friction, a frictionless material; every part drawn from it would be below 0 or at 0."""
+    found = _ZERO_NOMINALS.get((spec.kind, quantity))
+    if found is None or found[0](spec) > 0.0:
+        return
+    name = quantity.replace("_", " ")
+    raise SpecError(source, f"tolerances.{quantity}", f"{found[1]} > 0: the nominal {name} is "
+                    "0, and a tolerance around 0 draws half the parts below it (give the "
+                    "nominal, or drop the tolerance)", f"nominal {name} = 0")
 
 
 def design_point(spec, source: str):
@@ -113,6 +137,18 @@ def _pct(x: float) -> str:
     return f"{100.0 * x:.2f} %"
 
 
+NEGLIGIBLE_INDEX = 1e-3  # a Sobol' index below this, or below its confidence, prints as ~0
+
+
+def _index_text(row: dict) -> str:
+    """A Sobol' total index as text: "~0" where it cannot be told from 0 (below its 95 %
+    confidence half width or below NEGLIGIBLE_INDEX: sampling and rounding noise)."""
+    index = row["index"]
+    if not index >= max(NEGLIGIBLE_INDEX, row.get("confidence", 0.0) or 0.0):
+        return "~0"
+    return f"{index:.3g}"
+
+
 def yield_text(result: YieldResult, name: str) -> str:
     r = result
     lines = [f"{name} ({r.kind}): {r.builds} builds of {r.stages} stages, seed {r.seed}",
@@ -127,15 +163,18 @@ def yield_text(result: YieldResult, name: str) -> str:
     lines.append("tolerances (build units):")
     for t in r.tolerances:
         q = QUANTITIES[r.kind][t["quantity"]]
-        size = f"+-{t['value'] * q.build_factor:.4g} {q.build_unit}"
+        size = f"+-{t['value'] * q.build_factor:.4g}" + (
+            "" if q.build_unit == "1" else f" {q.build_unit}")  # dimensionless: no unit
         lines.append(f"  {t['quantity']:<14} {size:<16} {t['applies_to']:<5} {t['distribution']}")
     c = r.confirmed
+    curve = sum(p["simulated"] for p in r.scale_curve if p["scale"] != 1.0)
     lines.append(f"event simulator: {c['agreed']} of {c['random']} random builds agree with "
                  f"the closed forms; {c['left_closed_form']} builds outside the closed forms "
-                 "simulated")
+                 f"simulated; {c['simulated'] + curve} builds simulated in all"
+                 + (f" ({curve} of them for the yield against tolerance scale)" if curve else ""))
     if r.sensitivity:
         lines.append("sensitivity (Sobol' total index of the smallest margin): " + ", ".join(
-            f"{s['quantity']} {s['index']:.3g}" for s in r.sensitivity))
+            f"{s['quantity']} {_index_text(s)}" for s in r.sensitivity))
     elif r.sensitivity_note:
         lines.append(f"sensitivity: {r.sensitivity_note}")
     if r.failing:
@@ -173,8 +212,11 @@ def yield_figures(result: YieldResult) -> dict[str, bytes]:
         err = [[max(0.0, y - s["ci_low"]) for y, s in zip(ys, r.scale_curve)],
                [max(0.0, s["ci_high"] - y) for y, s in zip(ys, r.scale_curve)]]
         ax.errorbar(xs, ys, yerr=err, marker="o", capsize=3)
+        counts = sorted({s["builds"] for s in r.scale_curve})
         ax.set(xlabel="tolerance scale (1 = the spec's)", ylabel=f"yield over {r.stages} stages",
-               title=f"yield against tolerance scale ({r.scale_curve[0]['builds']} builds a point)")
+               title="yield against tolerance scale ("
+               + (f"{counts[0]} builds a point, {r.builds} at 1" if len(counts) > 1
+                  else f"{counts[0]} builds a point") + ")")
         out["yield_scale.png"] = render_figure(fig, "png")
     if r.sensitivity:
         from .sensitivity import sensitivity_figure

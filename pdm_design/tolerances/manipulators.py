@@ -41,6 +41,17 @@ import numpy as np
 from ..physics import manipulators as phys
 from .outcome import BuildOutcome
 
+INVALID = "invalid_part"
+# Parts no workshop can make, (build_values' key, test on its values, what it needs); friction
+# coefficients and torques are taken at 0 instead (build_values): a part at that limit exists
+UNBUILDABLE = (
+    ("link_length", lambda x: x <= 0.0, "> 0"),
+    ("palm_mass", lambda x: x <= 0.0, "> 0"),
+    ("back_stop", lambda x: np.abs(x) >= 0.5 * math.pi, "within +-pi/2"),
+    ("link_mass", lambda x: x < 0.0, ">= 0"),
+    ("object_mass", lambda x: x <= 0.0, "> 0"),
+    ("object_width", lambda x: x <= 0.0, "> 0"),
+)
 PARKED_CAP = 16  # palms parked behind the carrying one checked, at most
 INSIDE_ANGLES = 32  # angles inside a carry on real links where its guards are compared
 AHEAD = 2  # palms beyond the one the object goes to checked one by one; the rest by a bound
@@ -80,8 +91,9 @@ def build_values(scene, design, deviations: dict, stages: int, count: int) -> di
         "back_stop": each("back_stop", a),
         "palm_mass": each("palm_mass", scene.body.mass / design.mass_ratio),
         "link_mass": each("link_mass", scene.links.mass),
-        "pivot_friction": each("pivot_friction", scene.pivots.friction_torque),
-        "friction": lot("friction", scene.palm.friction),
+        # a dissipation below its physical limit is taken at it (docs/tolerances.md, 1.)
+        "pivot_friction": np.maximum(each("pivot_friction", scene.pivots.friction_torque), 0.0),
+        "friction": np.maximum(lot("friction", scene.palm.friction), 0.0),
         "object_mass": lot("object_mass", scene.body.mass),
         "object_width": lot("object_width", scene.body.width),
         "feed_x": lot("feed_x", x0),
@@ -147,8 +159,8 @@ class _Builds:
         # the closed forms' landings are plastic, and viscous pivot damping has no closed form:
         # with either, none applies
         if self.restitution > 0.0 or self.scene.pivots.damping > 0.0:
-            self.closed[self.code != self.names.index("invalid_part")
-                        if "invalid_part" in self.names else slice(None)] = False
+            self.closed[self.code != self.names.index(INVALID)
+                        if INVALID in self.names else slice(None)] = False
         failure = np.array(self.names, dtype=object)[self.code]
         return BuildOutcome(self.passed, failure, np.where(np.isinf(self.worst), 1.0,
                                                            self.worst), self.closed)
@@ -183,15 +195,13 @@ class _Builds:
         return self.names.index(kind)
 
     def invalid(self, v):
-        """Parts no workshop can make (a link of length <= 0, a negative friction, ...): the
-        build fails before it starts, as the simulator would refuse it."""
+        """Parts no workshop can make (a link of length <= 0, a palm of no mass, ...): the
+        build fails before it starts (invalid_part), as the simulator reports it."""
         bad = np.zeros(self.n, bool)
-        for key in ("link_length", "palm_mass"):
-            bad |= (v[key] <= 0.0).any(axis=0)
-        bad |= (np.abs(v["back_stop"]) >= 0.5 * math.pi).any(axis=0)
-        bad |= ((v["link_mass"] < 0.0) | (v["pivot_friction"] < 0.0)).any(axis=0)
-        bad |= (v["object_mass"] <= 0.0) | (v["object_width"] <= 0.0) | (v["friction"] < 0.0)
-        self.group(0, [("invalid_part", np.where(bad, -1.0, 1.0), True)])
+        for key, test, _ in UNBUILDABLE:
+            value = test(v[key])
+            bad |= value.any(axis=0) if value.ndim == 2 else value
+        self.group(0, [(INVALID, np.where(bad, -1.0, 1.0), True)])
 
     def rest_top(self, k):
         """Top-surface centre of palm k resting on its back stop."""
@@ -507,6 +517,34 @@ def meets_another_palm(run) -> bool:
     return False
 
 
+def unbuildable_part(values: dict):
+    """(stage, what) of one build's first part no workshop can make (UNBUILDABLE; stage 0 for
+    a lot's), or None. values: build_values of that build alone."""
+    from .model import QUANTITIES
+
+    for key, test, needs in UNBUILDABLE:
+        row = np.ravel(values[key])
+        bad = np.flatnonzero(test(row))
+        if len(bad):
+            k, unit = int(bad[0]), QUANTITIES["manipulators"][key].unit
+            whose = f"manipulator {k + 1}'s " if np.ndim(values[key]) == 2 else "the lot's "
+            return (k + 1 if np.ndim(values[key]) == 2 else 0,
+                    f"{whose}{key} = {row[k]:.6g} {unit} cannot be built (needs {needs})")
+    return None
+
+
+def invalid_result(unbuilt, accuracy):
+    """The run of a build with a part no workshop can make: it fails before it starts, 0 stages
+    passed, as the map counts it (invalid_part)."""
+    from ..accuracy import accuracy as resolve
+    from ..sim.core import Event, Outcome, SimulationResult
+
+    stage, detail = unbuilt
+    event = Event(0.0, INVALID, stage, {}, {}, detail, failure=True)
+    return SimulationResult(scene="manipulators", outcome=Outcome(False, 0, event), stages=[],
+                            events=[event], accuracy=resolve(accuracy))
+
+
 def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="default",
                    record_trajectory: bool = False):
     """The event simulator on one build (deviations of one build: arrays of 1 row), every
@@ -524,6 +562,9 @@ def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="de
     from ..spec.model import ManipulatorOffset
 
     v = build_values(scene, design, deviations, stages, 1)
+    unbuilt = unbuildable_part(v)
+    if unbuilt is not None:
+        return invalid_result(unbuilt, accuracy)
     dx = deviations.get("pivot_x", np.zeros((1, stages)))
     dy = deviations.get("pivot_y", np.zeros((1, stages)))
     dx, dy = (np.broadcast_to(np.reshape(d, (1, -1)), (1, stages))[0] for d in (dx, dy))

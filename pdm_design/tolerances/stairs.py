@@ -341,6 +341,7 @@ def simulate_build(scene: StairsScene, design: StairsDesign, deviations: dict, s
         return result
     step = bad[0]
     state = result.events[-1].after if result.events else {}
+    state = {**state, "step": step}
     event = Event(result.events[-1].time if result.events else 0.0, UNBUILDABLE, step, state,
                   dict(state), f"step {step} cannot be built: rise "
                   f"{per_step['rise'][step - 1]:.6g} m, tread {per_step['tread'][step - 1]:.6g} m",

@@ -163,7 +163,8 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
         confirmed=confirmed, tolerances=tuple(t.to_json(scene.kind) for t in tolerances),
         sensitivity=tuple(sensitivity), sensitivity_note=note,
         scale_curve=tuple(_scale_curve(scene, design, tolerances, builds, stages, seed,
-                                       scales, accuracy)), source=source)
+                                       scales, accuracy, headline=(int(whole.sum()), confirmed))),
+        source=source)
 
 
 def _confirm(scene, design, tolerances, outcome, passed, failure, *, seed, stages, confirm,
@@ -199,21 +200,29 @@ def _simulated(scene, design, tolerances, seed, index, stages, accuracy) -> tupl
 
     try:
         result = simulate_one(scene, design, tolerances, seed, index, stages, accuracy=accuracy)
-    except SimulationRefused:
-        return 0, "refused"
+    except SimulationRefused:  # a build the simulator cannot hold is no part a workshop makes
+        return 0, "invalid_part"
     outcome = result.outcome
     if outcome.completed:
         return outcome.stages_passed, ""
     return outcome.stages_passed, outcome.failure.kind if outcome.failure else "incomplete"
 
 
-def _scale_curve(scene, design, tolerances, builds, stages, seed, scales, accuracy
-                 ) -> list[dict]:
+def _scale_curve(scene, design, tolerances, builds, stages, seed, scales, accuracy, *,
+                 headline) -> list[dict]:
     """Yield against a common scale of every tolerance, on the first SCALE_BUILDS builds (at
-    most): the closed-form map, and the event simulator for every build outside its regime."""
+    most): the closed-form map, and the event simulator for every build outside its regime.
+    At scale 1 the point is the headline's own (headline: builds that passed, its
+    confirmation), on all its builds."""
     count = min(builds, SCALE_BUILDS)
     out = []
     for scale in scales:
+        if scale == 1.0:
+            low, high = wilson(headline[0], builds)
+            out.append({"scale": scale, "estimate": headline[0] / builds, "ci_low": float(low),
+                        "ci_high": float(high), "builds": builds,
+                        "simulated": headline[1]["left_closed_form"]})
+            continue
         scaled = tolerances.scaled(scale)
         o = map_builds(scene, design, scaled, count, stages, seed)
         passed, failure = o.stages_passed.copy(), o.failure.copy()

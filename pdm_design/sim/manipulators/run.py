@@ -225,12 +225,12 @@ class Run(OdePhases, LiftOffPhases):
         state = {"x": xe, "y": ye, "vx": vxe, "vy": vye}
         if entry is None:  # (after a lift-off with no landing since: the object missed)
             kind = "missed" if self.events and self.events[-1].kind == "lift_off" else "fell_clear"
-            return self._fail(t_hit, kind, stage, state,
+            return self._fail(t_hit, kind, self.passed + 1, state,  # the stage that fails
                               f"fell {FALL_DEPTH:g} link lengths below the lowest pivot")
         j = entry.palm
         if entry.kind != "top":
             where = "side" if entry.kind == "side" else "inside"
-            return self._fail(t_hit, "blocked", stage, state,
+            return self._fail(t_hit, "blocked", self.passed + 1, state,
                               f"hit the {where} of palm {j + 1} in flight")
         return self._impact(t_hit, j, self.rest_angle[j], 0.0, xe, ye, vxe, vye,
                             log_as="landing", stage=stage, before=state, at_rest=True)

@@ -33,11 +33,14 @@ Event kinds:
     impact          the ball lands on the next step (stage = that step); reset by the impact map
     slip            not a failure: an impact that ends with the contact point still sliding
                     (friction too small to reach rolling); logged right after its impact
-    nose_hit        failure: the ball touches a step's nose corner (stage = that step)
-    riser_hit       failure: the ball touches a riser face (stage = the step whose riser it is)
-    skipped_step    failure: the ball lands on a step beyond the next one (stage = where it lands)
-    double_landing  failure: the ball lands again on the step it left (stage = that step; for the
-                    launch, landing on the top landing, step 0)
+A failure's stage is the bounce that fails (stages passed + 1, as on the manipulators: the
+ball left step k = stages passed for step k + 1); its state's "step" and its detail name the
+step where it happens.
+    nose_hit        failure: the ball touches a step's nose corner
+    riser_hit       failure: the ball touches a riser face
+    skipped_step    failure: the ball lands on a step beyond the next one
+    double_landing  failure: the ball lands again on the step it left (for the launch, on the
+                    top landing, step 0)
     bounced_back    failure: the ball flies back up and lands on an earlier step
     no_rebound      failure: the ball leaves a tread with no vertical speed (restitution 0); it
                     would roll or slide along the tread, which the model does not cover
@@ -184,9 +187,9 @@ def simulate_stairs(scene: StairsScene, design: StairsDesign, *, stages: int,
     raw = None
     while passed < stages:
         if vy <= 0.0 and y0 <= geo.relative(k, step_under(geo, k, x0))[2]:
-            failure = _failure(geo, k, t_sum, x0, y0, vx, vy, omega, "no_rebound", k,
-                               "the ball is on a tread with no vertical speed: it would roll "
-                               "or slide along it (outside the model)")
+            failure = _failure(geo, k, t_sum, x0, y0, vx, vy, omega, "no_rebound", passed + 1,
+                               f"the ball is on tread {k} with no vertical speed: it would "
+                               "roll or slide along it (outside the model)", k)
             break
         c = next_contact(geo, k, x0, y0, vx, vy, r, g, tol)
         if record_trajectory and passed < trajectory_limit:
@@ -199,8 +202,8 @@ def simulate_stairs(scene: StairsScene, design: StairsDesign, *, stages: int,
         kind = _classify(c, k)
         if kind != "impact":
             y_contact = y0 + vy * c.t - 0.5 * g * c.t * c.t
-            failure = _failure(geo, k, t_sum, c.x, y_contact, vx, c.vy, omega, kind, c.step,
-                               _failure_detail(kind, c, geo, k, r))
+            failure = _failure(geo, k, t_sum, c.x, y_contact, vx, c.vy, omega, kind, passed + 1,
+                               _failure_detail(kind, c, geo, k, r), c.step)
             break
         j = c.step
         back, nose, level = geo.relative(k, j)
@@ -229,7 +232,7 @@ def simulate_stairs(scene: StairsScene, design: StairsDesign, *, stages: int,
         events.append(failure)
     outcome = Outcome(completed=failure is None and passed == stages, stages_passed=passed,
                       failure=failure)
-    last_step = (failure.stage if failure else k) + 1
+    last_step = (failure.after["step"] if failure else k) + 1
     staircase = [{"step": s, "back": geo.back_x(s), "nose": geo.nose_x(s), "level": geo.level(s)}
                  for s in range(0, min(last_step, 10_000) + 1)]
     return StairsSimulationResult(
@@ -338,9 +341,11 @@ def _slip_detail(slip_after, demand, mu):
             f"would need friction >= {demand:.4g}, the tread has {mu:g}")
 
 
-def _failure(geo, k, t, x, y, vx, vy, omega, kind, stage, detail):
+def _failure(geo, k, t, x, y, vx, vy, omega, kind, stage, detail, step):
+    """The failure event of bounce `stage` (stages passed + 1), at `step` (its state's
+    "step": the step whose nose, riser or tread the ball meets)."""
     xg, yg = geo.nose_x(k) + x, geo.level(k) + y
-    state = {"x": xg, "y": yg, "vx": vx, "vy": vy, "omega": omega}
+    state = {"x": xg, "y": yg, "vx": vx, "vy": vy, "omega": omega, "step": step}
     return Event(t, kind, stage, state, dict(state), detail, failure=True)
 
 

@@ -46,7 +46,7 @@ def plot_stairs_run(result, path, *, title: str | None = None, dpi: int = 120) -
     if result.outcome.failure is not None:
         f = result.outcome.failure
         apath.plot([f.before["x"]], [f.before["y"]], "x", ms=10, mew=2, color="tab:red",
-                   label=f"{f.kind} (step {f.stage})")
+                   label=f"{f.kind} (stage {f.stage})")
     apath.set(xlabel="x (m)", ylabel="y (m)", title="path of the lowest point")
     apath.set_aspect("equal", adjustable="datalim")
     apath.legend(loc="upper right", fontsize=8)
