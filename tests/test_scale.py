@@ -222,6 +222,23 @@ def test_optimize_table_and_sheet_give_one_design(tmp_path):
         assert float(row[name]) == pytest.approx(want, rel=1e-6), name
         assert sheet.design[name] == pytest.approx(want, rel=1e-6), name
     assert float(row["tolerance"]) == pytest.approx(alone.tolerance["dx"], rel=1e-7)
+    # the row's box is simulated at the 12 corner patterns (4 sign corners x every pivot, the
+    # pivots alternating, the second pivot alone) and a quarter of the spec's 16 random builds
+    assert "confirmed by 28 simulated builds" in alone.verification["summary"]
+    assert "confirmed by 16 simulated builds" in row["verification"]
+
+
+@pytest.mark.parametrize("asked, kept", [(16, 4), (5, 2), (1, 1), (0, 0)])
+def test_a_table_row_simulates_a_quarter_of_the_random_builds(asked, kept):
+    from pdm_design.formulation.common import spec_key
+    from pdm_design.sweep.run import table_verification
+
+    data = flat_data()
+    data["verification"]["samples"] = asked
+    spec = parse_spec(data)
+    row_spec = table_verification(spec)
+    assert row_spec.verification.samples == kept
+    assert spec_key(row_spec) == spec_key(spec)  # the same NLP, so the same design
 
 
 # -- bounded caches -------------------------------------------------------------------------------

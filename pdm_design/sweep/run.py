@@ -8,6 +8,8 @@ start: the spec's `initial`, which picks one design of a flat optimum, is left a
 is the design `optimize` gives its point: solve/tiebreak.py). Chains run in parallel. The chains
 do not depend on the number of workers or on the scheduler, so neither do the results.
 
+Verification: a row simulates a quarter of the spec's random builds (`table_verification`).
+
 Files in the output folder:
     table.csv     one row per grid point; appended row by row while the sweep runs (a row is a
                   whole line or absent), rewritten in grid order at the end
@@ -57,6 +59,7 @@ SCHEMA = "pdm-design/table/1"
 CSV_NAME, MARKDOWN_NAME, META_NAME = "table.csv", "table.md", "sweep.json"
 PLOT_NAMES = tuple(f"{n}.{e}" for n in ("optimum", "tolerance") for e in ("png", "svg"))
 DEFAULT_CHAIN = 4
+TABLE_SAMPLE_DIVISOR = 4  # a row's random builds: the spec's / 4 (table_verification)
 WARM_STATUSES = ("optimal", "evaluated", "acceptable")
 DASK_CONNECT_TIMEOUT = 5  # seconds to reach the Dask scheduler before --scheduler is refused
 POLL_SECONDS = 0.1  # how often the main process looks for a Ctrl-C while local workers solve
@@ -80,10 +83,25 @@ def solve_point(task: PointTask) -> dict[str, str]:
     from ..api import design
 
     try:
-        spec = parse_spec(point_data(task.data, task.paths, task.values), task.source)
+        spec = table_verification(parse_spec(point_data(task.data, task.paths, task.values),
+                                             task.source))
         return tables.outcome_cells(design(spec, start_from=task.warm), spec.kind)
     except Exception as error:  # one point's failure must not end the sweep
         return tables.error_cells(error)
+
+
+def table_verification(spec):
+    """The spec a table row is verified with: the spec's random builds divided by
+    TABLE_SAMPLE_DIVISOR (at least one when it asks for any); the nominal run and every corner
+    pattern as `optimize` simulates them, and the design itself unchanged (the random builds
+    are drawn after it is found). docs/tables.md, "Verification in a table"."""
+    from dataclasses import replace
+
+    asked = spec.verification.samples
+    samples = -(-asked // TABLE_SAMPLE_DIVISOR)  # rounded up: 0 stays 0, 1 stays 1
+    if samples == asked:
+        return spec
+    return replace(spec, verification=replace(spec.verification, samples=samples))
 
 
 @dataclass(frozen=True)
