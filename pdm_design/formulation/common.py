@@ -40,6 +40,7 @@ OBJECTIVE_SENSE = {  # +1: larger is better, -1: smaller is better
     "max_min_margin": 1.0,
     "min_drop": -1.0,
     "fastest_convergence": -1.0,
+    "max_yield": 1.0,
 }
 
 MARGIN, VALIDITY, MODEL = "margin", "validity", "model"
@@ -413,8 +414,9 @@ def spec_key(spec) -> str:
     pivots = getattr(spec.scene, "pivots", None)  # damping: the carry's steps follow accuracy
     steps = (spec.verification.accuracy.agreement if pivots is not None and pivots.damping
              else None)
+    tolerances = repr(spec.tolerances) if spec.objective.get("max_yield") else None
     return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages,
-                 required, steps))
+                 required, steps, tolerances))
 
 
 # objective terms measured in metres (the others are pure numbers)

@@ -1,0 +1,273 @@
+"""The manipulators' yield by statistical linearisation (first-order reliability, RSS).
+
+Every condition the closed-form yield map judges (tolerances/manipulators.py: lift-off, slip,
+tip and stall at the back stop, over the top, the handover's lift-off, slip and tip, the next
+palm met, the landing's stick and tip) is a row g_i(x, d) >= 0 of the design x and the build's
+deviations d (every part's pivot, link length, back stop and palm mass, the lot's friction,
+object mass and width, feed place and speed). Linearised at d = 0,
+    g_i(x, d) ~ g_i(x, 0) + J_i(x) d,   d ~ N(0, Sigma)  (sigma = t / 3 normal, t / sqrt 3 uniform)
+so the row fails with probability Phi(-beta_i), beta_i = g_i / sqrt(J_i Sigma J_i^T) (exact for
+a row linear in normal deviations), and the yield is at least 1 - sum_i Phi(-beta_i) (the
+union bound: exact for one row, conservative for several).
+
+The row is a chain of stages: stage k reads the state s_k = (u_k, o_k) (landing speed and
+place on palm k), the parts of palms k and k + 1 and the lot. Linearised,
+    ds_{k+1} = A ds_k + B_k e_k + B_{k+1} e_{k+1} + B_L e_lot,
+and each part's deviation e_k is independent of every other part's, so ds_k is carried as
+rest (independent of e_k, the later parts and the lot: covariance R), a coefficient C on e_k
+and one L on the lot; one stage is
+    R' = A R A^T + (A C + B_k) S_e (A C + B_k)^T,   C' = B_{k+1},   L' = A L + B_L
+and a row's variance Gs R Gs^T + |(Gs C + G_k) S_e^1/2|^2 + |G_{k+1} S_e^1/2|^2
++ |(Gs L + G_L) S_L^1/2|^2: exact first-order covariance in O(stages), each stage a small
+CasADi Function (built once) of the design, so the yield is a smooth function of the design
+for IPOPT. A quantity toleranced per lot that is a part's (every link alike, say) is a lot
+deviation added to every part.
+
+What it leaves out: the parked palms' clearance (a clearance held, not a drift: the nominal
+row of the NLP keeps it) and second-order drift (the concave handover map's r(delta) of
+docs/optimizer.md section 4, which the worst case accumulates linearly); a slip, a lift-off
+and a miss count as failures, as the map counts them, though the event simulator sometimes
+carries such a build on: the linearised yield is conservative there.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+
+from ..physics import manipulators as phys
+
+PARTS = ("pivot_x", "pivot_y", "link_length", "back_stop", "palm_mass")
+LOTS = ("friction", "object_mass", "object_width", "feed_x", "feed_speed") + tuple(
+    f"{q}_lot" for q in PARTS)
+DESIGN = ("alpha", "beta", "link_length", "mass_ratio", "first_pivot_x", "first_pivot_y")
+FAILURE_FLOOR = 1e-300  # the union bound never below this: its logarithm stays finite
+VARIANCE_FLOOR = 1e-24  # added to every row's variance: a row no deviation moves has sd 1e-12
+
+
+def sigmas(tolerances, scale=1.0):
+    """(sigma of each part quantity (5,), sigma of each lot quantity (10,)) as lists of
+    floats or SX (scale: a common factor, a number or a symbol) from the tolerances."""
+    each, lot = [0.0] * len(PARTS), [0.0] * len(LOTS)
+    for tol in tolerances:
+        s = tol.sigma * scale
+        if tol.applies_to == "each":
+            each[PARTS.index(tol.quantity)] = s
+        elif tol.quantity in PARTS:
+            lot[LOTS.index(f"{tol.quantity}_lot")] = s
+        else:
+            lot[LOTS.index(tol.quantity)] = s
+    return each, lot
+
+
+class Chain:
+    """The linearised stage maps of one scene (design symbols DESIGN, as a vector)."""
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.x = ca.SX.sym("design", len(DESIGN))
+        self.ek, self.ek1 = ca.SX.sym("e_k", len(PARTS)), ca.SX.sym("e_k1", len(PARTS))
+        self.el = ca.SX.sym("e_lot", len(LOTS))
+        self.s = ca.SX.sym("s", 2)
+        self.first = self._linearised(*self._first())
+        self.middle = self._linearised(*self._stage(last=False))
+        self.last = self._linearised(*self._stage(last=True))
+
+    # -- the physics: the map of tolerances/manipulators.py, one build, symbols ---------------
+    def _design(self):
+        a, b, l, q, fpx, fpy = (self.x[i] for i in range(len(DESIGN)))
+        return a, b, l, q, fpx, fpy
+
+    def _part(self, e, offset):
+        """Palm values (pivot x, y, link, stop, mass) with deviations e (+ the lot's)."""
+        a, _, l, q, _, _ = self._design()
+        lot = self.el[5:10]
+        d = [e[i] + lot[i] for i in range(len(PARTS))]
+        return (offset[0] + d[0], offset[1] + d[1], l + d[2], a + d[3],
+                self.scene.body.mass / q + d[4])
+
+    def _lot(self):
+        body, palm = self.scene.body, self.scene.palm
+        e = self.el
+        return palm.friction + e[0], body.mass + e[1], body.width + e[2]
+
+    def _first(self):
+        """Rows of the first landing and the state on palm 1."""
+        scene, g = self.scene, self.scene.gravity
+        a, b, l, q, fpx, fpy = self._design()
+        px, py, lk, ak, mk = self._part(self.ek, (fpx, fpy))
+        mu, m, w = self._lot()
+        (x0, y0), (vx, vy) = scene.initial.position, scene.initial.velocity
+        speed = math.hypot(vx, vy)
+        ux, uy = (vx / speed, vy / speed) if speed > 0.0 else (1.0, 0.0)
+        feed = speed + self.el[4]
+        vx0, vy0 = feed * ux, feed * uy
+        cx, cy = phys.palm_centre(px, py, -ak, lk)
+        fall = y0 - cy
+        rows = [fall / l]  # blocked
+        fall_speed = ca.sqrt(vy0**2 + 2.0 * g * fall)
+        o = x0 + self.el[3] + vx0 * (vy0 + fall_speed) / g - cx
+        rows += self._meets(o, w)
+        u, landing = self._land(vx0, -fall_speed, o, ak, m / mk, mu, w)
+        return rows + landing, ca.vertcat(u, o), [self.x, self.ek, self.el]
+
+    def _meets(self, o, w):
+        reach = 0.5 * (w + self.scene.palm.width)
+        return [reach - o, reach + o]  # fell_clear
+
+    def _tips(self, point, o, w):
+        half_palm = 0.5 * self.scene.palm.width
+        return [0.5 * w - point, half_palm - o - point, point + 0.5 * w, point + half_palm + o]
+
+    def _land(self, vx, vy, o, a, q, mu, w):
+        u = phys.landing_speed(vx, vy, a, q)
+        px, py = phys.landing_impulse(vx, vy, a, q)
+        h = self.scene.body.height
+        return u, [u / ca.sqrt(vx**2 + vy**2), mu * py - px, mu * py + px,
+                   *self._tips(-0.5 * h * px / py, o, w)]
+
+    def _carry_rows(self, u2, theta, o, mu, w, l):
+        g, h = self.scene.gravity, self.scene.body.height
+        return [phys.lift_off_capacity(theta, gravity=g, link_length=l) - u2,
+                *self._tips(phys.carry_force_point(theta, h), o, w),
+                mu - ca.tan(theta), mu + ca.tan(theta)]
+
+    def _stage(self, last: bool):
+        """Rows of the carry on palm k (and the handover to k + 1, the landing on it)."""
+        g = self.scene.gravity
+        a, b, l, q, _, _ = self._design()
+        u, o = self.s[0], self.s[1]
+        px, py, lk, ak, mk = self._part(self.ek, (0.0, 0.0))
+        mu, m, w = self._lot()
+        rows = self._carry_rows(u**2, -ak, o, mu, w, lk)
+        rows.append(u**2 - phys.top_speed_squared_needed(ak, gravity=g, link_length=lk))
+        inputs = [self.x, self.s, self.ek, self.el]
+        if last:
+            theta = b
+        else:
+            pitch_x, pitch_y = phys.pitch(a, b, l)
+            qx, qy, lk1, ak1, mk1 = self._part(self.ek1, (pitch_x, -pitch_y))
+            nx, ny = phys.palm_centre(qx, qy, -ak1, lk1)
+            rows.append((py + lk * ca.cos(ak) - ny) / l)  # blocked
+            theta = ca.acos((ny - py) / lk)
+            inputs.insert(3, self.ek1)
+        rows.append(self.scene.palm.front_stop - theta)  # stranded
+        v2 = phys.carry_speed_squared(u, ak, theta, gravity=g, link_length=lk)
+        rows += self._carry_rows(v2, theta, o, mu, w, lk)
+        if last:
+            return rows, None, inputs
+        o_next = px + o + lk * ca.sin(theta) - nx
+        rows += self._meets(o_next, w)
+        v = ca.sqrt(v2)
+        u_next, landing = self._land(v * ca.cos(theta), -v * ca.sin(theta), o_next, ak1,
+                                     m / mk1, mu, w)
+        return rows + landing, ca.vertcat(u_next, o_next), inputs
+
+    # -- linearised at zero deviation, with the second-order mean -------------------------
+    def _linearised(self, rows, state, inputs):
+        """Function (x, s, Sz) -> (g + tr(H_g Sz) / 2, dg/dz[, s' + tr(H_s Sz) / 2, ds'/dz])
+        at e = 0, z = (s, e_k, e_k1, e_lot), Sz the covariance of z."""
+        z = ca.vertcat(self.s, self.ek, self.ek1, self.el)
+        Sz = ca.SX.sym("Sz", z.numel(), z.numel())
+        outs = []
+        for f in ([ca.vertcat(*rows)] + ([state] if state is not None else [])):
+            J = ca.jacobian(f, z)
+            second = ca.vertcat(*[0.5 * ca.sum1(ca.sum2(ca.jacobian(J[i, :].T, z) * Sz))
+                                  for i in range(f.numel())])
+            outs += [f + second, J]
+        deviations = [self.ek, self.ek1, self.el]
+        outs = ca.substitute(outs, deviations, [ca.DM.zeros(v.shape) for v in deviations])
+        return ca.Function("stage_linearised", [self.x, self.s, Sz], outs)
+
+
+def reliability(chain: Chain, x, stages: int, sigma_each, sigma_lot):
+    """(g, sd) of every row of a row of `stages` palms: mean values (to second order) and
+    standard deviations (first order), CasADi expressions of x (DM for a number x)."""
+    Se = ca.diag(ca.vertcat(*[s**2 for s in sigma_each]))
+    Sl = ca.diag(ca.vertcat(*[s**2 for s in sigma_lot]))
+    ne, nl = Se.shape[0], Sl.shape[0]
+    R, C, L = ca.DM.zeros(2, 2), ca.DM.zeros(2, ne), ca.DM.zeros(2, nl)
+    g, Gz, s, Fz = chain.first(x, ca.DM.zeros(2), _covariance(R, C, L, Se, Sl))
+    gs, vs = [g], [_variance(Gz, R, C, L, Se, Sl)]
+    R, C, L = ca.DM.zeros(2, 2), Fz[:, 2:2 + ne], Fz[:, 2 + 2 * ne:]
+    for k in range(stages):
+        fn = chain.last if k == stages - 1 else chain.middle
+        out = fn(x, s, _covariance(R, C, L, Se, Sl))
+        g, Gz = out[:2]
+        gs.append(g)
+        vs.append(_variance(Gz, R, C, L, Se, Sl))
+        if k < stages - 1:
+            s, Fz = out[2:]
+            A, Bk, Bk1, BL = Fz[:, :2], Fz[:, 2:2 + ne], Fz[:, 2 + ne:2 + 2 * ne], Fz[:, 2 + 2 * ne:]
+            AC = A @ C + Bk
+            R = A @ R @ A.T + AC @ Se @ AC.T
+            C, L = Bk1, A @ L + BL
+    return ca.vertcat(*gs), ca.sqrt(ca.vertcat(*vs) + VARIANCE_FLOOR)
+
+
+def _covariance(R, C, L, Se, Sl):
+    """Covariance of z = (s, e_k, e_k1, e_lot) from the state's parts (R, C on e_k, L on
+    the lot)."""
+    ne, nl = Se.shape[0], Sl.shape[0]
+    Z = ca.DM.zeros
+    Ss = R + C @ Se @ C.T + L @ Sl @ L.T
+    CS, LS = C @ Se, L @ Sl
+    return ca.blockcat([[Ss, CS, Z(2, ne), LS],
+                        [CS.T, Se, Z(ne, ne), Z(ne, nl)],
+                        [Z(ne, 2), Z(ne, ne), Se, Z(ne, nl)],
+                        [LS.T, Z(nl, ne), Z(nl, ne), Sl]])
+
+
+def _variance(Gz, R, C, L, Se, Sl):
+    ne = Se.shape[0]
+    Gs, Gk, Gk1, GL = Gz[:, :2], Gz[:, 2:2 + ne], Gz[:, 2 + ne:2 + 2 * ne], Gz[:, 2 + 2 * ne:]
+    return (_quad(Gs, R) + _quad(Gs @ C + Gk, Se) + _quad(Gk1, Se) + _quad(Gs @ L + GL, Sl))
+
+
+def _quad(G, S):
+    """diag(G S G^T) for a symmetric S."""
+    return ca.sum2((G @ S) * G)
+
+
+def failure_bound(g, sd):
+    """sum_i Phi(-beta_i), beta_i = g_i / sd_i (a row of no spread: 0 if it holds, else 1)."""
+    beta = g / sd
+    return ca.sum1(0.5 * (1.0 - ca.erf(beta / math.sqrt(2.0))))  # no erfc in CasADi
+
+
+def nines(bound):
+    """-log10 of the failure bound: 3 for a linearised yield of 99.9 %."""
+    return -ca.log10(ca.fmax(bound, FAILURE_FLOOR))
+
+
+def design_vector(values: dict):
+    """The DESIGN vector from a design's values (by name; first pivot 0 when left out)."""
+    return ca.vertcat(*[values.get(n, 0.0) for n in DESIGN])
+
+
+def yield_term(scene, values: dict, tolerances, stages: int, scale=1.0):
+    """The max_yield objective term: nines of the linearised yield's union bound."""
+    chain = Chain(scene)
+    each, lot = sigmas(tolerances, scale)
+    g, sd = reliability(chain, design_vector(values), stages, each, lot)
+    return nines(failure_bound(g, sd))
+
+
+def linearised_yield(scene, design, tolerances, stages: int) -> dict:
+    """The linearised yield of a fixed design (scenes.ManipulatorsDesign): the union bound's
+    yield, the smallest reliability index and the row count, as numbers."""
+    chain = Chain(scene)
+    each, lot = sigmas(tolerances)
+    values = {n: float(getattr(design, n)) for n in DESIGN}
+    g, sd = reliability(chain, design_vector(values), stages, each, lot)
+    g, sd = np.asarray(g).ravel(), np.asarray(sd).ravel()
+    with np.errstate(divide="ignore"):
+        beta = np.where(sd > 0.0, g / np.where(sd > 0.0, sd, 1.0), np.where(g >= 0, np.inf,
+                                                                            -np.inf))
+    from scipy.special import ndtr
+
+    bound = float(np.sum(ndtr(-beta)))
+    return {"yield": max(0.0, 1.0 - bound), "failure_bound": bound,
+            "min_beta": float(beta.min()), "rows": int(beta.size)}
