@@ -167,16 +167,23 @@ class Chain:
 
     # -- linearised at zero deviation, with the second-order mean -------------------------
     def _linearised(self, rows, state, inputs):
-        """Function (x, s, Sz) -> (g + tr(H_g Sz) / 2, dg/dz[, s' + tr(H_s Sz) / 2, ds'/dz])
-        at e = 0, z = (s, e_k, e_k1, e_lot), Sz the covariance of z."""
+        """Function (x, s, Sz) -> (g + tr(H Sz) / 2, dg/dz, tr((H Sz)^2) / 2 of each row[,
+        s' + tr(H Sz) / 2, ds'/dz, tr(H_a Sz H_b Sz) / 2 of the state's two]) at e = 0,
+        z = (s, e_k, e_k1, e_lot), Sz the covariance of z: the second-order mean and the
+        quadratic term's own variance (exact for a quadratic of normal z)."""
         z = ca.vertcat(self.s, self.ek, self.ek1, self.el)
         Sz = ca.SX.sym("Sz", z.numel(), z.numel())
         outs = []
-        for f in ([ca.vertcat(*rows)] + ([state] if state is not None else [])):
+        for is_state, f in enumerate([ca.vertcat(*rows)] + ([state] if state is not None else [])):
             J = ca.jacobian(f, z)
-            second = ca.vertcat(*[0.5 * ca.sum1(ca.sum2(ca.jacobian(J[i, :].T, z) * Sz))
-                                  for i in range(f.numel())])
-            outs += [f + second, J]
+            HS = [ca.jacobian(J[i, :].T, z) @ Sz for i in range(f.numel())]
+            mean = ca.vertcat(*[0.5 * ca.trace(h) for h in HS])
+            if is_state:  # the 2 x 2 covariance of the state's quadratic terms
+                spread = ca.blockcat([[0.5 * ca.trace(HS[a] @ HS[b]) for b in range(2)]
+                                      for a in range(2)])
+            else:
+                spread = ca.vertcat(*[0.5 * ca.trace(h @ h) for h in HS])
+            outs += [f + mean, J, spread]
         deviations = [self.ek, self.ek1, self.el]
         outs = ca.substitute(outs, deviations, [ca.DM.zeros(v.shape) for v in deviations])
         return ca.Function("stage_linearised", [self.x, self.s, Sz], outs)
@@ -189,20 +196,20 @@ def reliability(chain: Chain, x, stages: int, sigma_each, sigma_lot):
     Sl = ca.diag(ca.vertcat(*[s**2 for s in sigma_lot]))
     ne, nl = Se.shape[0], Sl.shape[0]
     R, C, L = ca.DM.zeros(2, 2), ca.DM.zeros(2, ne), ca.DM.zeros(2, nl)
-    g, Gz, s, Fz = chain.first(x, ca.DM.zeros(2), _covariance(R, C, L, Se, Sl))
-    gs, vs = [g], [_variance(Gz, R, C, L, Se, Sl)]
-    R, C, L = ca.DM.zeros(2, 2), Fz[:, 2:2 + ne], Fz[:, 2 + 2 * ne:]
+    g, Gz, q, s, Fz, Q = chain.first(x, ca.DM.zeros(2), _covariance(R, C, L, Se, Sl))
+    gs, vs = [g], [_variance(Gz, R, C, L, Se, Sl) + q]
+    R, C, L = Q, Fz[:, 2:2 + ne], Fz[:, 2 + 2 * ne:]
     for k in range(stages):
         fn = chain.last if k == stages - 1 else chain.middle
         out = fn(x, s, _covariance(R, C, L, Se, Sl))
-        g, Gz = out[:2]
+        g, Gz, q = out[:3]
         gs.append(g)
-        vs.append(_variance(Gz, R, C, L, Se, Sl))
+        vs.append(_variance(Gz, R, C, L, Se, Sl) + q)
         if k < stages - 1:
-            s, Fz = out[2:]
+            s, Fz, Q = out[3:]
             A, Bk, Bk1, BL = Fz[:, :2], Fz[:, 2:2 + ne], Fz[:, 2 + ne:2 + 2 * ne], Fz[:, 2 + 2 * ne:]
             AC = A @ C + Bk
-            R = A @ R @ A.T + AC @ Se @ AC.T
+            R = A @ R @ A.T + AC @ Se @ AC.T + Q
             C, L = Bk1, A @ L + BL
     return ca.vertcat(*gs), ca.sqrt(ca.vertcat(*vs) + VARIANCE_FLOOR)
 
@@ -255,19 +262,40 @@ def yield_term(scene, values: dict, tolerances, stages: int, scale=1.0):
     return nines(failure_bound(g, sd))
 
 
-def linearised_yield(scene, design, tolerances, stages: int) -> dict:
-    """The linearised yield of a fixed design (scenes.ManipulatorsDesign): the union bound's
-    yield, the smallest reliability index and the row count, as numbers."""
-    chain = Chain(scene)
+_ROWS: dict = {}  # (scene, stages) -> Function (x, sigma_each, sigma_lot) -> (g, sd)
+
+
+def rows_function(scene, stages: int):
+    """Function (design vector, part sigmas, lot sigmas) -> (g, sd) of a row of `stages`
+    (MX calls of the stage maps: built in a fraction of a second, cached)."""
+    key = (repr(scene), stages)
+    if key not in _ROWS:
+        x = ca.MX.sym("x", len(DESIGN))
+        se, sl = ca.MX.sym("sigma_each", len(PARTS)), ca.MX.sym("sigma_lot", len(LOTS))
+        g, sd = reliability(Chain(scene), x, stages, ca.vertsplit(se), ca.vertsplit(sl))
+        _ROWS.clear()
+        _ROWS[key] = ca.Function("rows", [x, se, sl], [g, sd])
+    return _ROWS[key]
+
+
+def row_reliability(scene, design, tolerances, stages: int):
+    """(g, sd) of every row of a fixed design (scenes.ManipulatorsDesign) as numpy arrays:
+    each row's mean (second order) and standard deviation (first order and its quadratic
+    term's), the rows of the first landing and then stage by stage."""
     each, lot = sigmas(tolerances)
-    values = {n: float(getattr(design, n)) for n in DESIGN}
-    g, sd = reliability(chain, design_vector(values), stages, each, lot)
-    g, sd = np.asarray(g).ravel(), np.asarray(sd).ravel()
-    with np.errstate(divide="ignore"):
-        beta = np.where(sd > 0.0, g / np.where(sd > 0.0, sd, 1.0), np.where(g >= 0, np.inf,
-                                                                            -np.inf))
+    x = [float(getattr(design, n)) for n in DESIGN]
+    g, sd = rows_function(scene, stages)(x, each, lot)
+    return np.asarray(g).ravel(), np.asarray(sd).ravel()
+
+
+def linearised_yield(scene, design, tolerances, stages: int) -> dict:
+    """The linearised yield of a fixed design: the union bound's yield, the failure bound, the
+    smallest reliability index and the row count, as numbers."""
     from scipy.special import ndtr
 
-    bound = float(np.sum(ndtr(-beta)))
+    g, sd = row_reliability(scene, design, tolerances, stages)
+    with np.errstate(invalid="ignore"):  # a spread that leaves the closed forms: not a number
+        beta = g / sd
+    bound = float(np.sum(ndtr(-beta)))  # NaN then: no yield meets a target
     return {"yield": max(0.0, 1.0 - bound), "failure_bound": bound,
             "min_beta": float(beta.min()), "rows": int(beta.size)}

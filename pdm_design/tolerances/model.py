@@ -132,6 +132,7 @@ class Tolerances:
     builds: int = 10_000
     seed: int = 0
     confirm: int = 20
+    yield_target: float | None = None  # the yield allocated tolerances are sized for
 
     def __iter__(self):
         return iter(self.items)
@@ -144,4 +145,4 @@ class Tolerances:
 
     def scaled(self, factor: float) -> Tolerances:
         return Tolerances(tuple(t.scaled(factor) for t in self.items), self.builds, self.seed,
-                          self.confirm)
+                          self.confirm, self.yield_target)

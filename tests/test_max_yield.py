@@ -1,0 +1,84 @@
+"""The max_yield objective: the linearised yield (formulation/statistical.py) against exact
+probabilities and the closed-form map, and the optimised design's Monte Carlo yield against
+the worst-case optimum's on the same builds."""
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.special import ndtr
+
+from pdm_design.errors import SpecError
+from pdm_design.formulation.statistical import linearised_yield, row_reliability
+from pdm_design.spec import load_spec
+from pdm_design.spec.loader import parse_spec
+from pdm_design.tolerances import Tolerance, Tolerances, run_builds
+from pdm_design.tolerances.draw import draw
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+LONG_ROW = PROBLEMS / "manipulators_long_row.toml"
+
+
+@pytest.fixture(scope="module")
+def long_row():
+    spec = load_spec(LONG_ROW)
+    return spec.scene, spec.design_at()
+
+
+def _limit(scene, design, sign, stages, far=3.0):
+    """The feed-place deviation (sign +1 or -1) where the closed-form map's build first fails,
+    by bisection: an independent account of the rows the linearisation writes."""
+    def passes(dev):
+        out = run_builds(scene, design, {"feed_x": np.array([sign * dev])}, stages)
+        return bool(out.passed[0])
+
+    lo, hi = 0.0, far
+    assert passes(lo) and not passes(hi)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if passes(mid) else (lo, mid)
+    return sign * 0.5 * (lo + hi)
+
+
+def test_a_row_linear_in_one_normal_deviation_fails_with_probability_phi_of_minus_beta(
+        long_row):
+    # only the feed place varies (one lot, normal): every row it moves is linear in it (the
+    # landing place is), so the nearest limit's reliability index times sigma is that limit
+    # and Phi(-beta) the exact probability of passing it, found here by the map and the CDF.
+    scene, design = long_row
+    sigma, stages = 0.1, 3
+    tols = Tolerances((Tolerance("feed_x", "lot", 3.0 * sigma),))
+    g, sd = row_reliability(scene, design, tols, stages)
+    moved = sd > 1e-9
+    beta = (g / sd)[moved]
+    ahead, behind = _limit(scene, design, +1, stages), _limit(scene, design, -1, stages)
+    nearest = min(ahead, -behind)
+    assert beta.min() * sigma == pytest.approx(nearest, rel=1e-6)
+    exact_tail = ndtr(-nearest / sigma)  # P(the deviation passes the nearest limit)
+    assert ndtr(-beta.min()) == pytest.approx(exact_tail, rel=1e-5)
+    # and the Monte Carlo of the map agrees with that tail on that side
+    dev = draw(tols, 200_000, stages, seed=3)["feed_x"]
+    side = dev > 0 if ahead < -behind else dev < 0
+    beyond = np.mean(side & (np.abs(dev) > nearest))
+    assert beyond == pytest.approx(exact_tail, abs=4 * math.sqrt(exact_tail / 200_000))
+
+
+def test_max_yield_needs_values_and_a_row_of_manipulators():
+    spec = load_spec(LONG_ROW)
+    data = {"scene": {"kind": "manipulators", "body": {"mass": 1.0, "width": 0.4,
+                                                       "height": 0.2},
+                      "palm": {"width": 1.6, "thickness": 0.05, "friction": 0.8}},
+            "initial": {"position": [-1.25, 3.05], "velocity": [3.0, 0.0]},
+            "design": {"alpha": {"min": 0.0, "max": 0.6}, "beta": 0.5, "link_length": 2.0,
+                       "mass_ratio": 10.0},
+            "objective": {"max_yield": 1.0}}
+    with pytest.raises(SpecError, match="objective.max_yield"):
+        parse_spec(data)
+    data["tolerances"] = {"pivot_x": {"allocate": True}}
+    with pytest.raises(SpecError, match="a tolerance to allocate"):
+        parse_spec(data)
+    data["tolerances"] = {"pivot_x": {"value": 0.01}}
+    assert parse_spec(data).objective == {"max_yield": 1.0}
+    assert spec.tolerances  # the shipped long row has values
