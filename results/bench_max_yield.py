@@ -24,7 +24,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 SPEC = "problems/manipulators_long_row_yield.toml"
-BUILDS = 4000
+BUILDS = 10000
 
 
 def run(objective: str, builds: int) -> dict:

@@ -50,7 +50,7 @@ def test_a_row_linear_in_one_normal_deviation_fails_with_probability_phi_of_minu
     scene, design = long_row
     sigma, stages = 0.1, 3
     tols = Tolerances((Tolerance("feed_x", "lot", 3.0 * sigma),))
-    g, sd = row_reliability(scene, design, tols, stages)
+    g, sd, _ = row_reliability(scene, design, tols, stages)
     moved = sd > 1e-9
     beta = (g / sd)[moved]
     ahead, behind = _limit(scene, design, +1, stages), _limit(scene, design, -1, stages)

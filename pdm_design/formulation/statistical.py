@@ -44,6 +44,8 @@ LOTS = ("friction", "object_mass", "object_width", "feed_x", "feed_speed") + tup
     f"{q}_lot" for q in PARTS)
 DESIGN = ("alpha", "beta", "link_length", "mass_ratio", "first_pivot_x", "first_pivot_y")
 FAILURE_FLOOR = 1e-300  # the union bound never below this: its logarithm stays finite
+# Failures the event simulator carries on from (the map leaves them to it): not counted.
+SURVIVED = ("slip",)
 VARIANCE_FLOOR = 1e-24  # added to every row's variance: a row no deviation moves has sd 1e-12
 
 
@@ -106,7 +108,7 @@ class Chain:
         vx0, vy0 = feed * ux, feed * uy
         cx, cy = phys.palm_centre(px, py, -ak, lk)
         fall = y0 - cy
-        rows = [fall / l]  # blocked
+        rows = [("blocked", fall / l)]
         fall_speed = ca.sqrt(vy0**2 + 2.0 * g * fall)
         o = x0 + self.el[3] + vx0 * (vy0 + fall_speed) / g - cx
         rows += self._meets(o, w)
@@ -115,24 +117,25 @@ class Chain:
 
     def _meets(self, o, w):
         reach = 0.5 * (w + self.scene.palm.width)
-        return [reach - o, reach + o]  # fell_clear
+        return [("fell_clear", reach - o), ("fell_clear", reach + o)]
 
     def _tips(self, point, o, w):
         half_palm = 0.5 * self.scene.palm.width
-        return [0.5 * w - point, half_palm - o - point, point + 0.5 * w, point + half_palm + o]
+        return [("tip", e) for e in (0.5 * w - point, half_palm - o - point, point + 0.5 * w,
+                                     point + half_palm + o)]
 
     def _land(self, vx, vy, o, a, q, mu, w):
         u = phys.landing_speed(vx, vy, a, q)
         px, py = phys.landing_impulse(vx, vy, a, q)
         h = self.scene.body.height
-        return u, [u / ca.sqrt(vx**2 + vy**2), mu * py - px, mu * py + px,
-                   *self._tips(-0.5 * h * px / py, o, w)]
+        return u, [("stall", u / ca.sqrt(vx**2 + vy**2)), ("slip", mu * py - px),
+                   ("slip", mu * py + px), *self._tips(-0.5 * h * px / py, o, w)]
 
     def _carry_rows(self, u2, theta, o, mu, w, l):
         g, h = self.scene.gravity, self.scene.body.height
-        return [phys.lift_off_capacity(theta, gravity=g, link_length=l) - u2,
+        return [("lift_off", phys.lift_off_capacity(theta, gravity=g, link_length=l) - u2),
                 *self._tips(phys.carry_force_point(theta, h), o, w),
-                mu - ca.tan(theta), mu + ca.tan(theta)]
+                ("slip", mu - ca.tan(theta)), ("slip", mu + ca.tan(theta))]
 
     def _stage(self, last: bool):
         """Rows of the carry on palm k (and the handover to k + 1, the landing on it)."""
@@ -142,7 +145,8 @@ class Chain:
         px, py, lk, ak, mk = self._part(self.ek, (0.0, 0.0))
         mu, m, w = self._lot()
         rows = self._carry_rows(u**2, -ak, o, mu, w, lk)
-        rows.append(u**2 - phys.top_speed_squared_needed(ak, gravity=g, link_length=lk))
+        rows.append(("stall", u**2 - phys.top_speed_squared_needed(ak, gravity=g,
+                                                                   link_length=lk)))
         inputs = [self.x, self.s, self.ek, self.el]
         if last:
             theta = b
@@ -150,10 +154,10 @@ class Chain:
             pitch_x, pitch_y = phys.pitch(a, b, l)
             qx, qy, lk1, ak1, mk1 = self._part(self.ek1, (pitch_x, -pitch_y))
             nx, ny = phys.palm_centre(qx, qy, -ak1, lk1)
-            rows.append((py + lk * ca.cos(ak) - ny) / l)  # blocked
+            rows.append(("blocked", (py + lk * ca.cos(ak) - ny) / l))
             theta = ca.acos((ny - py) / lk)
             inputs.insert(3, self.ek1)
-        rows.append(self.scene.palm.front_stop - theta)  # stranded
+        rows.append(("stranded", self.scene.palm.front_stop - theta))
         v2 = phys.carry_speed_squared(u, ak, theta, gravity=g, link_length=lk)
         rows += self._carry_rows(v2, theta, o, mu, w, lk)
         if last:
@@ -174,7 +178,9 @@ class Chain:
         z = ca.vertcat(self.s, self.ek, self.ek1, self.el)
         Sz = ca.SX.sym("Sz", z.numel(), z.numel())
         outs = []
-        for is_state, f in enumerate([ca.vertcat(*rows)] + ([state] if state is not None else [])):
+        names = tuple(name for name, _ in rows)
+        rows = ca.vertcat(*[row for _, row in rows])
+        for is_state, f in enumerate([rows] + ([state] if state is not None else [])):
             J = ca.jacobian(f, z)
             HS = [ca.jacobian(J[i, :].T, z) @ Sz for i in range(f.numel())]
             mean = ca.vertcat(*[0.5 * ca.trace(h) for h in HS])
@@ -186,7 +192,8 @@ class Chain:
             outs += [f + mean, J, spread]
         deviations = [self.ek, self.ek1, self.el]
         outs = ca.substitute(outs, deviations, [ca.DM.zeros(v.shape) for v in deviations])
-        return ca.Function("stage_linearised", [self.x, self.s, Sz], outs)
+        fn = ca.Function("stage_linearised", [self.x, self.s, Sz], outs)
+        return fn, names
 
 
 def reliability(chain: Chain, x, stages: int, sigma_each, sigma_lot):
@@ -196,14 +203,16 @@ def reliability(chain: Chain, x, stages: int, sigma_each, sigma_lot):
     Sl = ca.diag(ca.vertcat(*[s**2 for s in sigma_lot]))
     ne, nl = Se.shape[0], Sl.shape[0]
     R, C, L = ca.DM.zeros(2, 2), ca.DM.zeros(2, ne), ca.DM.zeros(2, nl)
-    g, Gz, q, s, Fz, Q = chain.first(x, ca.DM.zeros(2), _covariance(R, C, L, Se, Sl))
-    gs, vs = [g], [_variance(Gz, R, C, L, Se, Sl) + q]
+    fn, names = chain.first
+    g, Gz, q, s, Fz, Q = fn(x, ca.DM.zeros(2), _covariance(R, C, L, Se, Sl))
+    gs, vs, labels = [g], [_variance(Gz, R, C, L, Se, Sl) + q], list(names)
     R, C, L = Q, Fz[:, 2:2 + ne], Fz[:, 2 + 2 * ne:]
     for k in range(stages):
-        fn = chain.last if k == stages - 1 else chain.middle
+        fn, names = chain.last if k == stages - 1 else chain.middle
         out = fn(x, s, _covariance(R, C, L, Se, Sl))
         g, Gz, q = out[:3]
         gs.append(g)
+        labels += names
         vs.append(_variance(Gz, R, C, L, Se, Sl) + q)
         if k < stages - 1:
             s, Fz, Q = out[3:]
@@ -211,7 +220,7 @@ def reliability(chain: Chain, x, stages: int, sigma_each, sigma_lot):
             AC = A @ C + Bk
             R = A @ R @ A.T + AC @ Se @ AC.T + Q
             C, L = Bk1, A @ L + BL
-    return ca.vertcat(*gs), ca.sqrt(ca.vertcat(*vs) + VARIANCE_FLOOR)
+    return ca.vertcat(*gs), ca.sqrt(ca.vertcat(*vs) + VARIANCE_FLOOR), tuple(labels)
 
 
 def _covariance(R, C, L, Se, Sl):
@@ -238,10 +247,16 @@ def _quad(G, S):
     return ca.sum2((G @ S) * G)
 
 
-def failure_bound(g, sd):
-    """sum_i Phi(-beta_i), beta_i = g_i / sd_i (a row of no spread: 0 if it holds, else 1)."""
+def counted(names) -> ca.DM:
+    """1 for the rows whose failure ends a run (every one but SURVIVED), else 0."""
+    return ca.DM([0.0 if n in SURVIVED else 1.0 for n in names])
+
+
+def failure_bound(g, sd, names):
+    """sum_i Phi(-beta_i) over the counted rows, beta_i = g_i / sd_i (a row of no spread: 0
+    if it holds, else 1)."""
     beta = g / sd
-    return ca.sum1(0.5 * (1.0 - ca.erf(beta / math.sqrt(2.0))))  # no erfc in CasADi
+    return ca.sum1(counted(names) * 0.5 * (1.0 - ca.erf(beta / math.sqrt(2.0))))  # no erfc in CasADi
 
 
 def nines(bound):
@@ -258,8 +273,8 @@ def yield_term(scene, values: dict, tolerances, stages: int, scale=1.0):
     """The max_yield objective term: nines of the linearised yield's union bound."""
     chain = Chain(scene)
     each, lot = sigmas(tolerances, scale)
-    g, sd = reliability(chain, design_vector(values), stages, each, lot)
-    return nines(failure_bound(g, sd))
+    g, sd, names = reliability(chain, design_vector(values), stages, each, lot)
+    return nines(failure_bound(g, sd, names))
 
 
 _ROWS: dict = {}  # (scene, stages) -> Function (x, sigma_each, sigma_lot) -> (g, sd)
@@ -272,20 +287,21 @@ def rows_function(scene, stages: int):
     if key not in _ROWS:
         x = ca.MX.sym("x", len(DESIGN))
         se, sl = ca.MX.sym("sigma_each", len(PARTS)), ca.MX.sym("sigma_lot", len(LOTS))
-        g, sd = reliability(Chain(scene), x, stages, ca.vertsplit(se), ca.vertsplit(sl))
+        g, sd, names = reliability(Chain(scene), x, stages, ca.vertsplit(se), ca.vertsplit(sl))
         _ROWS.clear()
-        _ROWS[key] = ca.Function("rows", [x, se, sl], [g, sd])
+        _ROWS[key] = (ca.Function("rows", [x, se, sl], [g, sd]), names)
     return _ROWS[key]
 
 
 def row_reliability(scene, design, tolerances, stages: int):
-    """(g, sd) of every row of a fixed design (scenes.ManipulatorsDesign) as numpy arrays:
+    """(g, sd, names) of every row of a fixed design (scenes.ManipulatorsDesign) as numpy arrays:
     each row's mean (second order) and standard deviation (first order and its quadratic
     term's), the rows of the first landing and then stage by stage."""
     each, lot = sigmas(tolerances)
     x = [float(getattr(design, n)) for n in DESIGN]
-    g, sd = rows_function(scene, stages)(x, each, lot)
-    return np.asarray(g).ravel(), np.asarray(sd).ravel()
+    fn, names = rows_function(scene, stages)
+    g, sd = fn(x, each, lot)
+    return np.asarray(g).ravel(), np.asarray(sd).ravel(), names
 
 
 def linearised_yield(scene, design, tolerances, stages: int) -> dict:
@@ -293,9 +309,10 @@ def linearised_yield(scene, design, tolerances, stages: int) -> dict:
     smallest reliability index and the row count, as numbers."""
     from scipy.special import ndtr
 
-    g, sd = row_reliability(scene, design, tolerances, stages)
+    g, sd, names = row_reliability(scene, design, tolerances, stages)
     with np.errstate(invalid="ignore"):  # a spread that leaves the closed forms: not a number
         beta = g / sd
-    bound = float(np.sum(ndtr(-beta)))  # NaN then: no yield meets a target
+    mask = np.asarray(counted(names)).ravel() > 0.0
+    bound = float(np.sum(ndtr(-beta[mask])))  # NaN where the spread leaves the closed forms
     return {"yield": max(0.0, 1.0 - bound), "failure_bound": bound,
-            "min_beta": float(beta.min()), "rows": int(beta.size)}
+            "min_beta": float(beta[mask].min()), "rows": int(mask.sum())}
