@@ -82,3 +82,64 @@ def test_max_yield_needs_values_and_a_row_of_manipulators():
     data["tolerances"] = {"pivot_x": {"value": 0.01}}
     assert parse_spec(data).objective == {"max_yield": 1.0}
     assert spec.tolerances  # the shipped long row has values
+
+
+def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_builds():
+    # the long row with its stop angles free, optimised for yield and for the worst-case box,
+    # each design built 2000 times with the same seed (the same deviations) and judged as
+    # `pdm-design yield` judges it (the map, the simulator on every build that leaves it).
+    # Paired on the builds: of the builds one design passes and the other fails, the
+    # max_yield design must win significantly (exact one-sided sign test, p < 0.05)
+    from pdm_design.solve import optimize
+    from pdm_design.tolerances.yield_ import yield_of
+
+    spec = load_spec(PROBLEMS / "manipulators_long_row_yield.toml")
+    stages, builds = spec.verification.stages, 2000
+    passed = {}
+    for objective in ("max_yield", "max_offset_tolerance"):
+        asked = dataclasses.replace(spec, objective={objective: 1.0})
+        found = optimize(asked, check_samples=0)
+        assert found.status.name == "OPTIMAL"
+        design = asked.design_at(found.design)
+        result = yield_of(asked.scene, design, asked.tolerances, builds=builds, stages=stages,
+                          seed=0, confirm=0, scales=(), sensitivity_samples=0)
+        fails = {f["index"] for f in result.failing}
+        passed[objective] = np.array([i not in fails for i in range(builds)])
+        assert result.estimate == pytest.approx(passed[objective].mean())
+    better = int(np.sum(passed["max_yield"] & ~passed["max_offset_tolerance"]))
+    worse = int(np.sum(~passed["max_yield"] & passed["max_offset_tolerance"]))
+    n = better + worse
+    p_value = sum(math.comb(n, k) for k in range(better, n + 1)) / 2.0 ** n if n else 1.0
+    assert better > worse and p_value < 0.05, (better, worse, p_value)
+
+
+def test_allocation_for_a_yield_target_matches_the_exact_one_quantity_answer(long_row):
+    # the feed place allocated alone (lot, normal, weight 2): the exact yield is the
+    # probability that the deviation stays between the map's two limits, solved for the
+    # scale s (sigma = 2 s / 3) by brentq on the CDF. The allocation's union bound counts
+    # every row near a limit (three tip rows within 0.07 m of each other ahead), so its s is
+    # at most the exact one (the exact yield there meets the target) and, here, within 10 %
+    from scipy.optimize import brentq
+
+    from pdm_design.solve.yield_allocation import allocate_for_yield
+
+    scene, design = long_row
+    stages, target, weight = 1, 0.999, 2.0
+    ahead, behind = _limit(scene, design, +1, stages), _limit(scene, design, -1, stages)
+
+    def exact(scale):
+        sigma = weight * scale / 3.0
+        return ndtr(ahead / sigma) - ndtr(behind / sigma) - target
+
+    s_exact = brentq(exact, 1e-6, 10.0, xtol=1e-12)
+    tols = Tolerances((Tolerance("feed_x", "lot", None, weight),), yield_target=target)
+    found = allocate_for_yield(scene, design, tols, stages=stages)
+    assert 0.9 * s_exact <= found.scale <= s_exact
+    assert exact(found.scale) >= 0.0
+    assert found.linearised["yield"] == pytest.approx(target, abs=1e-9)
+    assert found.tolerances.items[0].value == pytest.approx(weight * found.scale)
+    # a given tolerance that alone misses the target: no scale of the allocated one helps
+    wide = Tolerances((Tolerance("feed_x", "lot", None, weight),
+                       Tolerance("object_width", "lot", 0.6)), yield_target=target)
+    with pytest.raises(ValueError, match="out of reach"):
+        allocate_for_yield(scene, design, wide, stages=stages)
