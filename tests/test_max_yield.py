@@ -101,6 +101,10 @@ def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_build
         found = optimize(asked, check_samples=0)
         assert found.status.name == "OPTIMAL"
         design = asked.design_at(found.design)
+        if objective == "max_yield":  # the NLP's term (inlined SX) is the numeric bound's
+            bound = linearised_yield(asked.scene, design, asked.tolerances, stages)
+            assert found.objectives["max_yield"] == pytest.approx(
+                -math.log10(bound["failure_bound"]), rel=1e-6)
         result = yield_of(asked.scene, design, asked.tolerances, builds=builds, stages=stages,
                           seed=0, confirm=0, scales=(), sensitivity_samples=0)
         fails = {f["index"] for f in result.failing}
@@ -110,6 +114,8 @@ def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_build
     worse = int(np.sum(~passed["max_yield"] & passed["max_offset_tolerance"]))
     n = better + worse
     p_value = sum(math.comb(n, k) for k in range(better, n + 1)) / 2.0 ** n if n else 1.0
+    print(f"builds only max_yield passes: {better}, only the worst case: {worse}, "
+          f"p = {p_value:.2g}")
     assert better > worse and p_value < 0.05, (better, worse, p_value)
 
 
@@ -143,3 +149,41 @@ def test_allocation_for_a_yield_target_matches_the_exact_one_quantity_answer(lon
                        Tolerance("object_width", "lot", 0.6)), yield_target=target)
     with pytest.raises(ValueError, match="out of reach"):
         allocate_for_yield(scene, design, wide, stages=stages)
+
+
+def test_yield_sizes_allocated_tolerances_for_the_target_and_reproduces_its_builds(tmp_path):
+    # `pdm-design yield` of a row with the pivots to allocate and a yield target: the table
+    # shows the allocated values (the allocation's), and a failing build's simulate command
+    # runs the same build (same allocated values) to the same failure
+    from click.testing import CliRunner
+
+    from pdm_design.cli import main
+    from pdm_design.solve.yield_allocation import allocate_for_yield
+
+    text = LONG_ROW.read_text()
+    for q in ("pivot_x", "pivot_y"):
+        text = text.replace(f'{q} = {{ value = 0.09, applies_to = "each" }}',
+                            f"{q} = {{ allocate = true, weight = 1 }}")
+    text = text.replace("confirm = 20 ", "yield_target = 0.99\nconfirm = 20 ")
+    text = text.replace("min_yield = 0.98", "")
+    spec_file = tmp_path / "allocated.toml"
+    spec_file.write_text(text)
+    spec = load_spec(spec_file)
+    found = allocate_for_yield(spec.scene, spec.design_at(), spec.tolerances, stages=100)
+    run = CliRunner().invoke(main, ["yield", str(spec_file), "--builds", "3000",
+                                    "--format", "json"])
+    assert run.exit_code == 0, run.output
+    import json
+
+    out = json.loads(run.output)
+    values = {t["quantity"]: t["value"] for t in out["tolerances"]}
+    assert values["pivot_x"] == pytest.approx(found.scale) == values["pivot_y"]
+    assert values["link_length"] == 0.005
+    failing = out["failing_builds"][0]
+    sim = CliRunner().invoke(main, failing["command"].split()[1:] + ["--format", "json"])
+    assert sim.exit_code == 1
+    assert json.loads(sim.output)["outcome"]["stages_passed"] == failing["stages_passed"]
+    # without a target an allocated tolerance cannot be built: exit 2, naming the key
+    spec_file.write_text(text.replace("yield_target = 0.99\n", ""))
+    bad = CliRunner().invoke(main, ["yield", str(spec_file)])
+    assert bad.exit_code == 2 and "tolerances.pivot_x.value" in bad.output
