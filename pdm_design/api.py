@@ -162,6 +162,8 @@ def _terms(spec: Spec, nlp_terms: dict, margins: dict, tolerance: dict | None) -
     if tolerance is None:
         terms["max_offset_tolerance"] = None
     terms["max_min_margin"] = min_margin_term(spec.kind, margins, spec.requirements)
+    if not spec.objective.get("max_yield"):  # a yield needs its tolerances and the question
+        terms["max_yield"] = None
     return terms
 
 

@@ -26,6 +26,7 @@ from dataclasses import replace
 import casadi as ca
 
 from ..errors import SpecError
+from ..tolerances.model import allocation_shares
 
 # Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
 ALLOCATABLE = {
@@ -53,9 +54,7 @@ def allocating(spec) -> bool:
 
 def coefficients(spec) -> dict[str, float]:
     """{quantity: w_min / w_q} of every allocated quantity (t_q = s * coefficient)."""
-    allocated = [t for t in spec.tolerances if t.allocate]
-    w_min = min(t.weight for t in allocated)
-    return {t.quantity: w_min / t.weight for t in allocated}
+    return allocation_shares(spec.tolerances)
 
 
 def given(spec) -> dict[str, float]:

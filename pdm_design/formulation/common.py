@@ -40,6 +40,7 @@ OBJECTIVE_SENSE = {  # +1: larger is better, -1: smaller is better
     "max_min_margin": 1.0,
     "min_drop": -1.0,
     "fastest_convergence": -1.0,
+    "max_yield": 1.0,
 }
 
 MARGIN, VALIDITY, MODEL = "margin", "validity", "model"
@@ -419,10 +420,11 @@ def spec_key(spec) -> str:
     forced = spec.verification.accuracy.carry == "integrated"  # (the carry integrated: steps)
     steps = (spec.verification.accuracy.agreement
              if pivots is not None and (pivots.damping or forced) else None)
-    allocated = tuple(getattr(spec, "tolerances", ())) if any(
-        t.allocate for t in getattr(spec, "tolerances", ())) else ()  # allocation.py
+    tolerances = getattr(spec, "tolerances", ())
+    allocated = tuple(tolerances) if any(t.allocate for t in tolerances) else ()  # allocation.py
+    stated = repr(tolerances) if spec.objective.get("max_yield") else None  # statistical.py
     return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages,
-                 required, steps) + ((allocated,) if allocated else ()))
+                 required, steps, stated) + ((allocated,) if allocated else ()))
 
 
 # objective terms measured in metres (the others are pure numbers)

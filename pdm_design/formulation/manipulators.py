@@ -124,6 +124,7 @@ def build(spec):
         "max_min_margin": t if epigraph else ca.SX(0.0),
         "min_drop": m.pitch_y,
         "fastest_convergence": m.c,
+        "max_yield": _yield_term(spec, values),
     }
     model = SceneModel(
         kind="manipulators", design_symbols=symbols, aux=tuple(aux),
@@ -136,6 +137,15 @@ def build(spec):
         objective_scale=objective_scale(spec.objective, min(l_max, 1.0)),
     )
     return model, bounds, m
+
+
+def _yield_term(spec, values):
+    """max_yield: nines of the linearised yield (formulation/statistical.py), when asked."""
+    if not float(spec.objective.get("max_yield", 0.0)) > 0.0:
+        return ca.SX(0.0)
+    from .statistical import yield_term
+
+    return yield_term(spec.scene, values, spec.tolerances, spec.verification.stages)
 
 
 def integrated_steps(spec, robust, values, bounds) -> int:

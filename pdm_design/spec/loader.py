@@ -168,11 +168,13 @@ def _parse(data: Any, source: str) -> Spec:
     if "min_yield" in expect_table and not tolerances:
         raise _Invalid("expect.min_yield", "a [tolerances] table to draw the builds from",
                        "no [tolerances]")
+    objective = _named_numbers(data, "objective", OBJECTIVES, _WEIGHT)
+    _check_max_yield(objective, kind.scene.kind, tolerances)
     return Spec(
         source=source,
         scene=scene,
         design=design,
-        objective=_named_numbers(data, "objective", OBJECTIVES, _WEIGHT),
+        objective=objective,
         requirements=_named_numbers(data, "requirements", kind.margins, _REQUIRED_MARGIN),
         verification=verification,
         expect=_build(Expectations, expect_table, "expect"),
@@ -298,13 +300,28 @@ def _check_unique(items, attribute: str, path: str) -> None:
 TOLERANCE_SETTINGS = {"distribution": "the default distribution of every quantity",
                       "builds": "builds drawn by `pdm-design yield`",
                       "seed": "the random seed of the builds drawn",
-                      "confirm": "random builds the event simulator confirms"}
+                      "confirm": "random builds the event simulator confirms",
+                      "yield_target": "the yield the allocated tolerances are sized for"}
 TOLERANCE_KEYS = ("value", "allocate", "weight", "applies_to", "distribution")
 _COUNT = TypeAdapter(Annotated[int, Strict(), Field(ge=1, le=10_000_000)], config=CONFIG)
 _SEED = TypeAdapter(Annotated[int, Strict(), Field(ge=0, le=2**63 - 1)], config=CONFIG)
 _CONFIRM = TypeAdapter(Annotated[int, Strict(), Field(ge=0, le=100_000)], config=CONFIG)
 _PLUS_MINUS = TypeAdapter(Annotated[float, Strict(), Field(gt=0, le=1e6)], config=CONFIG)
 _STRICT_BOOL = TypeAdapter(Annotated[bool, Strict()], config=CONFIG)
+_FRACTION = TypeAdapter(Annotated[float, Strict(), Field(gt=0, lt=1)], config=CONFIG)
+
+
+def _check_max_yield(objective: dict, kind: str, tolerances) -> None:
+    """objective.max_yield needs a manipulators row and tolerances that all have values."""
+    if not objective.get("max_yield"):
+        return
+    if kind != "manipulators":
+        raise _Invalid("objective.max_yield", "a manipulators scene (the yield objective is "
+                       "the manipulators' linearised yield)", f"kind = {kind!r}")
+    if not tolerances or any(t.value is None for t in tolerances):
+        raise _Invalid("objective.max_yield", "a [tolerances] table whose every quantity has "
+                       "a value (the yield is at given tolerances)",
+                       "no [tolerances]" if not tolerances else "a tolerance to allocate")
 
 
 def _tolerances(table: dict, kind: str):
@@ -319,7 +336,8 @@ def _tolerances(table: dict, kind: str):
                  set().union(*map(set, QUANTITIES.values())) - set(quantities)})
     default = _choice(table, "distribution", DISTRIBUTIONS, "tolerances", "normal")
     settings = {key: _setting(table, key, adapter) for key, adapter in
-                (("builds", _COUNT), ("seed", _SEED), ("confirm", _CONFIRM)) if key in table}
+                (("builds", _COUNT), ("seed", _SEED), ("confirm", _CONFIRM),
+                 ("yield_target", _FRACTION)) if key in table}
     items = []
     for name, quantity in quantities.items():
         if name not in table:

@@ -31,7 +31,8 @@ Weight = Annotated[float, Strict(), Field(ge=0, le=LARGEST)]
 # report errors at their key).
 AccuracyField = Annotated[Accuracy, PlainValidator(accuracy)]
 
-OBJECTIVES = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence")
+OBJECTIVES = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence",
+              "max_yield")
 
 MANIPULATOR_MARGINS = (
     "landing", "over_the_top", "lift_off", "slip_carry", "tip_carry", "slip_impact", "tip_impact",

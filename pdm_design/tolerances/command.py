@@ -17,10 +17,12 @@ def spec_tolerances(spec, source: str):
     if not spec.tolerances:
         raise SpecError(source, "tolerances", "a [tolerances] table with at least one quantity "
                         "and its value (docs/tolerances.md)", "none")
+    sized = spec.tolerances.yield_target is not None and spec.kind == "manipulators"
     for tol in spec.tolerances:
-        if tol.value is None:
+        if tol.value is None and not sized:
             raise SpecError(source, f"tolerances.{tol.quantity}.value", "a value (+-, SI) for "
-                            "a yield: allocate = true asks the optimizer for one",
+                            "a yield: allocate = true asks the optimizer for one, or "
+                            "tolerances.yield_target for a manipulators row",
                             "allocate = true")
         if spec.kind == "stairs" and tol.quantity == "friction" and spec.scene.ball.radius == 0:
             raise SpecError(source, "tolerances.friction", "no friction tolerance for a point "
@@ -66,15 +68,31 @@ def design_point(spec, source: str):
     return spec.design_at(found.analysis.design)
 
 
+def sized_tolerances(spec, source, point, stages):
+    """The spec's tolerances, those to allocate sized for tolerances.yield_target by the
+    linearised yield at `point` (solve/yield_allocation.py; exit 1 in words when no size
+    meets it): the same values for the yield run, `check` and `simulate --build`."""
+    tolerances = spec_tolerances(spec, source)
+    if not any(t.allocate for t in tolerances):
+        return tolerances
+    from ..solve.yield_allocation import allocate_for_yield
+
+    try:
+        return allocate_for_yield(spec.scene, point, tolerances, stages=stages).tolerances
+    except ValueError as error:
+        raise PdmError(f"{source}: {error}") from None
+
+
 def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accuracy=None,
               scales=None) -> YieldResult:
     """The yield of the spec's design (the Python API of `pdm-design yield`)."""
     from ..accuracy import accuracy as resolve
 
-    tolerances = spec_tolerances(spec, source)
+    spec_tolerances(spec, source)
     point = design_point(spec, source)
-    builds = builds or tolerances.builds
     stages = stages or spec.verification.stages
+    tolerances = sized_tolerances(spec, source, point, stages)
+    builds = builds or tolerances.builds
     seed = tolerances.seed if seed is None else seed
     acc = resolve(accuracy or spec.verification.accuracy)
     kwargs = {} if scales is None else {"scales": scales}
@@ -89,8 +107,8 @@ def unmet_min_yield(outcome) -> list[str]:
     if not outcome.status.is_success:
         return [f"expected a yield of at least {_pct(wanted)}, got none (no design: status "
                 f"{outcome.status.value})"]
-    tolerances = spec_tolerances(spec, spec.source)
     point = spec.design_at(outcome.analysis.design)
+    tolerances = sized_tolerances(spec, spec.source, point, spec.verification.stages)
     r = yield_of(spec.scene, point, tolerances, builds=tolerances.builds,
                  stages=spec.verification.stages, seed=tolerances.seed,
                  confirm=tolerances.confirm, accuracy=outcome.accuracy or "default",
@@ -111,7 +129,7 @@ def simulate_build_of_spec(spec, source, design, build: str, stages, *, accuracy
 
     seed, index = parse_build(build)
     accuracy = resolve(accuracy or spec.verification.accuracy)
-    tolerances = spec_tolerances(spec, source)
+    tolerances = sized_tolerances(spec, source, design, stages)
     return simulate_one(spec.scene, design, tolerances, seed, index, stages,
                         accuracy=accuracy, record_trajectory=record_trajectory)
 

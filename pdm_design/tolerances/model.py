@@ -1,7 +1,8 @@
 """Typed tolerances: which quantities of a build vary, by how much, and how.
 
 A tolerance is a +- value in SI units (or a request to allocate one, with a relative weight:
-what is cheap to hold tight gets a small weight), applied to every part on its own ("each":
+how cheap it is to hold tight; allocated tolerances share one scale s, t_q = s * w_min / w_q,
+so a quantity twice as cheap to hold tight gets half the tolerance: `allocation_shares`), applied to every part on its own ("each":
 every manipulator's own pivot, link, stop, palm; every step's own rise and tread) or once to
 the whole build ("lot": one friction for a material batch, one mass for an object batch).
 
@@ -137,6 +138,7 @@ class Tolerances:
     builds: int = 10_000
     seed: int = 0
     confirm: int = 20
+    yield_target: float | None = None  # the yield allocated tolerances are sized for
 
     def __iter__(self):
         return iter(self.items)
@@ -149,4 +151,17 @@ class Tolerances:
 
     def scaled(self, factor: float) -> Tolerances:
         return Tolerances(tuple(t.scaled(factor) for t in self.items), self.builds, self.seed,
-                          self.confirm)
+                          self.confirm, self.yield_target)
+
+
+def allocation_shares(tolerances) -> dict[str, float]:
+    """{quantity: w_min / w_q} of every tolerance to allocate: t_q = s * share for the one
+    scale s that the worst-case allocation (formulation/allocation.py) or a yield target
+    (solve/yield_allocation.py) chooses. A weight says how cheap the quantity is to hold tight:
+    twice the weight, half the tolerance; the smallest weight gets s itself."""
+    allocated = [t for t in tolerances if t.allocate]
+    if not allocated:
+        return {}
+    w_min = min(t.weight for t in allocated)
+    return {t.quantity: w_min / t.weight for t in allocated}
+

@@ -1,0 +1,81 @@
+"""Tolerances allocated for a yield target: the largest common scale s of the tolerances to
+allocate (each t_q = s * w_min / w_q, SI: tolerances.model.allocation_shares) at which a design's linearised yield
+(formulation/statistical.py: the union bound 1 - sum_i Phi(-beta_i)) still reaches the target.
+
+The design is fixed (the spec's, or the optimizer's answer). The linearised yield falls as the
+tolerances grow (every row's spread grows with s; the second-order mean shift with s^2), so s
+is found on a grid in log s (the largest grid scale that meets it), then by bisection up to
+the next grid scale. The yield need not fall monotonically with s: with the pivots exact, a
+design sized for their drift can drift the other way and fail sooner.
+Check the answer by Monte Carlo (tolerances.yield_.yield_of on `Allocation.tolerances`): the
+union bound is conservative where several rows can fail, and first order (with a second-order
+mean) in the deviations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from ..tolerances.model import Tolerance, Tolerances, allocation_shares
+
+BISECTIONS = 60
+SCALE_RANGE = (1e-9, 1e3)  # s searched within (SI units)
+GRID = 49  # scales tried first, evenly in log s (the yield need not fall monotonically)
+
+
+@dataclass(frozen=True)
+class Allocation:
+    """The scale found, the tolerances with every allocated value set, and the linearised
+    yield there (statistical.linearised_yield's dict)."""
+
+    scale: float
+    target: float
+    tolerances: Tolerances
+    linearised: dict
+
+
+def with_scale(tolerances: Tolerances, scale: float) -> Tolerances:
+    """The tolerances with every one to allocate given its value at this scale
+    (scale * w_min / w_q: tolerances.model.allocation_shares)."""
+    shares = allocation_shares(tolerances)
+    items = tuple(Tolerance(t.quantity, t.applies_to, scale * shares[t.quantity], t.weight,
+                            t.distribution) if t.allocate else t for t in tolerances)
+    return replace(tolerances, items=items)
+
+
+def allocate_for_yield(scene, design, tolerances: Tolerances, *, stages: int,
+                       target: float | None = None) -> Allocation:
+    """The largest scale s whose allocated tolerances keep the linearised yield >= target
+    (default: tolerances.yield_target). ValueError in words when nothing is to be allocated,
+    no target is given, or no scale meets it."""
+    from ..formulation.statistical import linearised_yield
+
+    target = tolerances.yield_target if target is None else target
+    if target is None or not 0.0 < target < 1.0:
+        raise ValueError(f"a yield target in (0, 1) is needed, got {target!r}")
+    if not any(t.allocate for t in tolerances):
+        raise ValueError("no tolerance to allocate (allocate = true)")
+
+    def meets(scale):
+        lin = linearised_yield(scene, design, with_scale(tolerances, scale), stages)
+        return lin["yield"] >= target, lin
+
+    lo, hi = SCALE_RANGE
+    grid = [lo * (hi / lo) ** (i / (GRID - 1)) for i in range(GRID)]
+    meeting = [i for i, scale in enumerate(grid) if meets(scale)[0]]
+    if not meeting:
+        best = max(meets(scale)[1]["yield"] for scale in grid)
+        raise ValueError(f"the yield target {target} is out of reach: the linearised yield is "
+                         f"at most {best:.6f} for any scale of the allocated tolerances")
+    last = meeting[-1]
+    lo = grid[last]
+    if last + 1 < GRID:  # the target is crossed between this grid point and the next
+        hi = grid[last + 1]
+        for _ in range(BISECTIONS):
+            mid = math.sqrt(lo * hi)
+            lo, hi = (mid, hi) if meets(mid)[0] else (lo, mid)
+            if hi / lo < 1.0 + 1e-9:
+                break
+    allocated = with_scale(tolerances, lo)
+    return Allocation(lo, target, allocated, meets(lo)[1])
