@@ -120,9 +120,9 @@ def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_build
 
 
 def test_allocation_for_a_yield_target_matches_the_exact_one_quantity_answer(long_row):
-    # the feed place allocated alone (lot, normal, weight 2): the exact yield is the
-    # probability that the deviation stays between the map's two limits, solved for the
-    # scale s (sigma = 2 s / 3) by brentq on the CDF. The allocation's union bound counts
+    # the feed place allocated alone (lot, normal, weight 2: alone, its share w_min / w is 1,
+    # so t = s): the exact yield is the probability that the deviation stays between the
+    # map's two limits, solved for the scale s (sigma = s / 3) by brentq on the CDF. The allocation's union bound counts
     # every row near a limit (three tip rows within 0.07 m of each other ahead), so its s is
     # at most the exact one (the exact yield there meets the target) and, here, within 10 %
     from scipy.optimize import brentq
@@ -134,7 +134,7 @@ def test_allocation_for_a_yield_target_matches_the_exact_one_quantity_answer(lon
     ahead, behind = _limit(scene, design, +1, stages), _limit(scene, design, -1, stages)
 
     def exact(scale):
-        sigma = weight * scale / 3.0
+        sigma = scale / 3.0  # t = s * w_min / w = s for the only allocated quantity
         return ndtr(ahead / sigma) - ndtr(behind / sigma) - target
 
     s_exact = brentq(exact, 1e-6, 10.0, xtol=1e-12)
@@ -143,7 +143,7 @@ def test_allocation_for_a_yield_target_matches_the_exact_one_quantity_answer(lon
     assert 0.9 * s_exact <= found.scale <= s_exact
     assert exact(found.scale) >= 0.0
     assert found.linearised["yield"] == pytest.approx(target, abs=1e-9)
-    assert found.tolerances.items[0].value == pytest.approx(weight * found.scale)
+    assert found.tolerances.items[0].value == pytest.approx(found.scale)
     # a given tolerance that alone misses the target: no scale of the allocated one helps
     wide = Tolerances((Tolerance("feed_x", "lot", None, weight),
                        Tolerance("object_width", "lot", 0.6)), yield_target=target)
