@@ -5,7 +5,8 @@
     python results/bench_scale.py            # writes results/bench_scale.md and results/scale.png
     python results/bench_scale.py --quick    # fewer rows and a smaller table (a few minutes)
 
-Options: --base DIR (the old code's checkout, default /work/wt/base), --old-max N (the longest
+Options: --base DIR (the old code's checkout; default: round 1's code, commit ROUND1 below,
+extracted with git archive into a temporary folder), --old-max N (the longest
 row run on the old code: it took 144 s and 9 GB at 10 000 stages), --table-points N,
 --before DIR (a checkout of the code before a table change: its table is run with the same
 points, right after the new one), --repeat K (new and before alternately, K times each),
@@ -196,7 +197,7 @@ def write_markdown(rows, tables, args, quick: bool) -> None:
         "# Long rows at scale",
         "",
         f"Command: `python results/bench_scale.py{''.join(' ' + a for a in sys.argv[1:])}` "
-        f"(old code: `{args.base}`). Each figure is one fresh process "
+        f"(old code: {args.base_label}). Each figure is one fresh process "
         "(`python -m pdm_design optimize SPEC --format json`; the fastest of "
         f"{REPEATS} up to {REPEAT_MAX} stages) on "
         "`problems/manipulators_robust.toml` with only `[verification] stages` changed: wall "
@@ -296,10 +297,23 @@ def plot(rows) -> None:
     fig.savefig(HERE / "scale.png", dpi=100)
 
 
+ROUND1 = "a6ce8ef7f9628524a938f6a2ab86012c374433d2"  # the code before long rows were reworked
+
+
+def round1_checkout(folder: Path) -> Path:
+    """Round 1's pdm_design (commit ROUND1), extracted from the repository's history."""
+    out = folder / "round1"
+    out.mkdir()
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", ROUND1, "pdm_design"],
+                             capture_output=True, check=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(out)], input=archive, check=True)
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--base", type=Path, default=Path("/work/wt/base"))
+    parser.add_argument("--base", type=Path, default=None)
     parser.add_argument("--old-max", type=int, default=1000)
     parser.add_argument("--table-points", type=int, default=None)
     parser.add_argument("--before", type=Path, default=None)
@@ -311,6 +325,9 @@ def main() -> None:
     points = args.table_points or (100 if args.quick else TABLE_TARGET[0])
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
+        args.base_label = f"`{args.base}`" if args.base else f"round 1's, commit {ROUND1[:7]}"
+        if args.base is None:
+            args.base = round1_checkout(folder)
         rows = [] if args.table_only else optimize_rows(stages, args.base, args.old_max, folder)
         runs = [("new", REPO, points)]
         if args.before is not None:  # alternately, under the same load
