@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -22,6 +22,25 @@ from .words import bounds_hint, normalised_margin, summarise
 FEASIBILITY_TOL = 1e-7
 NOT_ASKED = ("not computed: not asked for (`optimize --linearised`, linearise=True in the API); "
              "the robust box is the answer")
+
+
+@dataclass
+class _Search:
+    """Where the solve stands: the formulation solved (the full one after a retry), one Solve
+    per start, every IPOPT run made, the starts that shared a stacked run, the chosen run, and
+    what it cost beyond the IPOPT runs (build seconds; the tie-break's or the diagnosis'
+    iterations and seconds)."""
+
+    form: object
+    runs: list
+    calls: list
+    stacked_starts: int
+    chosen: object
+    build_time: float
+    extra_iters: int = 0
+    extra_time: float = 0.0
+    tie_iters: int = -1
+    kept: bool = False
 
 
 def optimize(
@@ -59,12 +78,40 @@ def optimize(
         same spec gives the same design whatever the starts found first).
     """
     tic = time.perf_counter()
+    form, was_cached, build_time, ws = _formulation(spec, warm_start)
+    _check_options(spec, requirements, starts, max_iter, tol)
+    reqs = dict(spec.requirements if requirements is None else requirements)
+    p = form.parameters(reqs, backoff=BACKOFF_FACTOR * max(tol, bound_relax_factor))
+    options = SolverOptions(max_iter=max_iter, tol=tol, bound_relax_factor=bound_relax_factor)
+    guess, lows, highs, x_starts = _start_points(spec, form, p, starts, seed, start_from)
+
+    search = _search(spec, form, options, x_starts, p, ws, was_cached, build_time)
+    if search.chosen.status is Status.OPTIMAL and tie_break:
+        _tie_break(search, options, p, guess, lows, highs)
+    status, x = search.chosen.status, search.chosen.x
+    violations, at_bounds = (), ()
+    if status in (Status.INFEASIBLE, Status.SOLVER_ERROR) and diagnose:
+        (search.chosen, status, x, violations, at_bounds, search.extra_iters,
+         search.extra_time) = _diagnose(search.form, options, x_starts, p, search.chosen,
+                                        search.runs, search.calls)
+    return _assemble(spec, search, status, x, p, reqs, violations, at_bounds, tic,
+                     linearise=linearise, check_samples=check_samples, seed=seed)
+
+
+def _formulation(spec, warm_start):
+    """(the formulation, whether it was built before, its build seconds, the warm start's
+    solution or None): the full NLP when the warm start solved that one."""
     was_cached = _is_cached(spec)
     form = formulate(spec)
     build_time = 0.0 if was_cached else form.build_time
     ws = warm_start.solution if warm_start is not None else None
     if ws is not None and ws.key == form.key + FULL:
         form = formulate(spec, full=True)  # the warm start solved the NLP with every row
+    return form, was_cached, build_time, ws
+
+
+def _check_options(spec, requirements, starts, max_iter, tol) -> None:
+    """The options' own checks, before any solve (ValueError naming the option)."""
     if requirements is not None:
         _check_requirements(spec, requirements)
     if isinstance(starts, bool) or not isinstance(starts, int) or starts < 1:
@@ -72,10 +119,11 @@ def optimize(
     if not (tol > 0.0 and max_iter >= 1):  # IPOPT refuses them with its whole option text
         raise ValueError(f"tol = {tol!r}, max_iter = {max_iter!r}: expected tol > 0 and "
                          "max_iter >= 1")
-    reqs = dict(spec.requirements if requirements is None else requirements)
-    p = form.parameters(reqs, backoff=BACKOFF_FACTOR * max(tol, bound_relax_factor))
-    options = SolverOptions(max_iter=max_iter, tol=tol, bound_relax_factor=bound_relax_factor)
 
+
+def _start_points(spec, form, p, starts, seed, start_from):
+    """(the spec's guess by name, the lower and upper bounds, the NLP's start points): the
+    `start_from` design first, then the guess and scrambled-Sobol points."""
     names = form.design_names
     guess = {n: spec.design[n].guess for n in names}
     lows = [spec.design[n].min for n in names]
@@ -83,8 +131,11 @@ def optimize(
     designs = start_designs(names, lows, highs, guess, max(starts, 1), seed)
     if start_from:  # first, so that it is tried even with one start
         designs = [{n: float(start_from.get(n, guess[n])) for n in names}] + designs
-    x_starts = form.defined_starts(designs, guess, p)
+    return guess, lows, highs, form.defined_starts(designs, guess, p)
 
+
+def _search(spec, form, options, x_starts, p, ws, was_cached, build_time) -> _Search:
+    """The multistart, and its retry with every row when the answer breaks a deferred one."""
     # stacked only for an NLP solved before in this process: creating the stacked solver costs
     # more than it saves in one solve (docs/optimizer.md section 5)
     stack = was_cached and form.stack_starts
@@ -101,89 +152,123 @@ def optimize(
                                                        was_cached and form.stack_starts)
         calls += more_calls
         chosen = best(runs)
-    extra_iters, extra_time, tie_iters, kept = 0, 0.0, -1, False
-    if chosen.status is Status.OPTIMAL and tie_break:
-        # one design for one spec: the optimal design nearest the spec's guess (tiebreak.py)
-        nearest, kept = nearest_optimum(form, options, chosen, p, guess, lows, highs)
-        if nearest is not None:
-            tie_iters = extra_iters = nearest.iterations
-            extra_time = nearest.seconds
-        if kept:
-            chosen = replace(chosen, x=nearest.x)
-    status, x = chosen.status, chosen.x
-    violations, at_bounds = (), ()
-    if status in (Status.INFEASIBLE, Status.SOLVER_ERROR) and diagnose:
-        chosen, status, x, violations, at_bounds, extra_iters, extra_time = _diagnose(
-            form, options, x_starts, p, chosen, runs, calls)
+    return _Search(form, runs, calls, stacked_starts, chosen, build_time)
 
+
+def _tie_break(search: _Search, options, p, guess, lows, highs) -> None:
+    """One design for one spec: the optimal design nearest the spec's guess (tiebreak.py);
+    its run's cost is counted, its design kept only when it is optimal too."""
+    nearest, search.kept = nearest_optimum(search.form, options, search.chosen, p, guess, lows,
+                                           highs)
+    if nearest is not None:
+        search.tie_iters = search.extra_iters = nearest.iterations
+        search.extra_time = nearest.seconds
+    if search.kept:
+        search.chosen = replace(search.chosen, x=nearest.x)
+
+
+def _assemble(spec, search: _Search, status, x, p, reqs, violations, at_bounds, tic, *,
+              linearise, check_samples, seed) -> OptimizeResult:
+    """The result at x: the design, objectives, box, margins, checks, status and statistics."""
+    form = search.form
     # IPOPT relaxes bounds by bound_relax_factor: restitution 1 came back as 1 + 7e-9, a rise
     # of -1e-8 followed, and the re-check refused it. The design is what lies within them.
     x = np.clip(x, form.lbx, form.ubx)
     design = form.design_values(x)
     slack, scale, terms, _ = (np.asarray(v, dtype=float).ravel() for v in form.evaluate(x, p))
     objectives = dict(zip(form.objective_names, terms.tolist()))
-    robust = form.tolerance_index is not None
     # Only an answer IPOPT converged to claims a box, a score or a linearised set; a stopped or
     # failed run's last point claims nothing (a solver error reported a box of 0 mm).
     answered = status in (Status.OPTIMAL, Status.ACCEPTABLE)
-    tolerance, allocated = None, None
-    if robust and answered:
-        tol_value = float(x[form.tolerance_index])
-        tolerance = {axis: tol_value for axis in form.tolerance_axes}
-        if allocating(spec):  # one half-width per quantity (formulation/allocation.py)
-            allocated = tuple(values_at(spec, tol_value))
-            tolerance = pivot_box(spec.kind, allocated)
+    tolerance, allocated = _tolerance(spec, form, x) if answered else (None, None)
     robust_margins = _robust_margins(form, x, p, slack, scale)
     score = None
     if answered:
         score = float(sum(w * OBJECTIVE_SENSE[n] * objectives[n] for n, w in form.weights.items()))
+    analysis, checks = _checks(spec, form, x, p, design, reqs, tolerance, allocated,
+                               check_samples, seed)
+    linearised = _linearised(spec, form, x, p, design, linearise) if answered else None
+    status = _checked_status(status, checks, form)
+    return OptimizeResult(
+        status=status, design=design, objective=score, objectives=objectives,
+        tolerance=tolerance, linearised=linearised,
+        margins=dict(analysis.margins) if analysis is not None else {},
+        robust_margins=robust_margins,
+        periodic=dict(analysis.periodic) if analysis is not None else {},
+        violations=tuple(violations), checks=checks, stats=_stats(search, tic),
+        message=_message(status, violations, at_bounds),
+        at_bounds=tuple(at_bounds) if violations else (),
+        solution=Solution(form.key, x, search.chosen.lam_x, search.chosen.lam_g),
+        tolerances=allocated,
+    )
 
+
+def _tolerance(spec, form, x):
+    """(the robust box by axis, the allocated half-widths or None) of a converged answer;
+    (None, None) for a spec without a tolerance."""
+    if form.tolerance_index is None:
+        return None, None
+    tol_value = float(x[form.tolerance_index])
+    tolerance = {axis: tol_value for axis in form.tolerance_axes}
+    allocated = None
+    if allocating(spec):  # one half-width per quantity (formulation/allocation.py)
+        allocated = tuple(values_at(spec, tol_value))
+        tolerance = pivot_box(spec.kind, allocated)
+    return tolerance, allocated
+
+
+def _checks(spec, form, x, p, design, reqs, tolerance, allocated, check_samples, seed):
+    """(the closed-form analysis or None, the independent checks by name): the closed-form
+    re-check, and offsets sampled inside the robust box."""
     closed = check.closed_form_check(spec, design, reqs)
-    analysis = closed["analysis"]
-    margins = dict(analysis.margins) if analysis is not None else {}
-    periodic = dict(analysis.periodic) if analysis is not None else {}
     checks: dict[str, object] = {"closed_form": {"passed": closed["passed"],
                                                  "failures": closed["failures"]}}
-    if robust and tolerance and check_samples > 0:
+    if form.tolerance_index is not None and tolerance and check_samples > 0:
         checks["sampled_offsets"] = check.sampled_offsets_check(
             form, x, p, tuple(tolerance.values()) if allocated else
             float(x[form.tolerance_index]), samples=check_samples, seed=seed)
+    return closed["analysis"], checks
 
-    linearised = None
-    if linearise and answered and robust:
-        from .tolerance import linearised_tolerance  # cvxpy: only when asked
 
-        size = _length_scale(spec, design)  # offsets in units of the device's size: the same
-        linearised = linearised_tolerance(form, x, p, cap=10.0 * size, length=size)  # at any scale
-    elif answered and robust:
-        linearised = LinearisedTolerance(0.0, {}, {}, (), status=NOT_ASKED)
+def _linearised(spec, form, x, p, design, linearise):
+    """A converged answer's linearised tolerance set: computed when asked, else marked so;
+    None for a spec without a tolerance."""
+    if form.tolerance_index is None:
+        return None
+    if not linearise:
+        return LinearisedTolerance(0.0, {}, {}, (), status=NOT_ASKED)
+    from .tolerance import linearised_tolerance  # cvxpy: only when asked
 
+    size = _length_scale(spec, design)  # offsets in units of the device's size: the same
+    return linearised_tolerance(form, x, p, cap=10.0 * size, length=size)  # at any scale
+
+
+def _checked_status(status, checks, form):
+    """A converged answer that fails a check is UNVERIFIED; with nothing free, EVALUATED."""
     if status in (Status.OPTIMAL, Status.ACCEPTABLE):
         failed = [k for k, v in checks.items() if isinstance(v, dict) and not v["passed"]]
         if failed:
             status = Status.UNVERIFIED
         elif status is Status.OPTIMAL and not form.design_names:
             status = Status.EVALUATED
-    stats = SolverStats(
+    return status
+
+
+def _stats(search: _Search, tic) -> SolverStats:
+    """The solve's iterations, seconds and starts, every run's and the extra runs' counted."""
+    chosen, runs, calls = search.chosen, search.runs, search.calls
+    return SolverStats(
         iterations=chosen.iterations,
-        total_iterations=sum(r.iterations for r in calls) + extra_iters,
+        total_iterations=sum(r.iterations for r in calls) + search.extra_iters,
         solve_time=chosen.seconds,
-        total_solve_time=sum(r.seconds for r in calls) + extra_time,
+        total_solve_time=sum(r.seconds for r in calls) + search.extra_time,
         starts=len(runs),
-        stacked_starts=stacked_starts,
-        build_time=build_time,
+        stacked_starts=search.stacked_starts,
+        build_time=search.build_time,
         wall_time=time.perf_counter() - tic,
         return_statuses=tuple(r.return_status for r in runs),
-        tie_break_iterations=tie_iters,
-        tie_break_kept=kept,
-    )
-    return OptimizeResult(
-        status=status, design=design, objective=score, objectives=objectives,
-        tolerance=tolerance, linearised=linearised, margins=margins,
-        robust_margins=robust_margins, periodic=periodic, violations=tuple(violations),
-        checks=checks, stats=stats, message=_message(status, violations, at_bounds),
-        at_bounds=tuple(at_bounds) if violations else (),
-        solution=Solution(form.key, x, chosen.lam_x, chosen.lam_g), tolerances=allocated,
+        tie_break_iterations=search.tie_iters,
+        tie_break_kept=search.kept,
     )
 
 
