@@ -30,7 +30,7 @@ import numpy as np
 
 from ..physics import manipulators as phys
 from .common import MARGIN, VALIDITY, ConditionInfo, Scenario
-from .manipulators import impact_rows, scene_sizes
+from .manipulator_rows import impact_rows, scene_sizes
 
 
 class Stages:

@@ -1,6 +1,7 @@
 """The manipulators NLP: periodic handover, first approach and robust offset tolerance.
 
-Every condition is written with the closed forms of `physics.manipulators` on CasADi symbols.
+Every condition is written with the closed forms of `physics.manipulators` on CasADi symbols;
+the rows themselves, one function per group, are in formulation/manipulator_rows.py.
 
 Decision vector x = [free design variables (alpha, beta, link_length, mass_ratio, first_pivot_x,
 first_pivot_y: whichever the spec leaves free), S (periodic handover speed squared), u_lo, u_hi
@@ -43,7 +44,6 @@ row); docs/optimizer.md section 4a derives each.
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import casadi as ca
@@ -51,33 +51,21 @@ import casadi as ca
 from ..errors import SpecError
 from ..physics import manipulators as phys
 from . import allocation
+from . import manipulator_rows as rows
 from ..scenes import ManipulatorsDesign
-from .common import (
-    MARGIN,
-    MODEL,
-    VALIDITY,
-    Condition,
-    SceneModel,
-    design_inputs,
-    fmax_all,
-    fmin_all,
-    objective_scale,
-)
+from .common import SceneModel, design_inputs, fmax_all, fmin_all, objective_scale
+from .manipulator_rows import LIFT_OFF, OVER_THE_TOP
+from .manipulator_rows import nonzero as _nonzero
 
 DEFAULTS = {"first_pivot_x": 0.0, "first_pivot_y": 0.0}
-START_CLEARANCE = 1e-3  # (x link length): the object starts at least this far above palm 1
 FALL_FLOOR = 1e-9  # (x g l): the fall speed squared never below this (far below the clearance's)
 TOLERANCE_CAP = 10.0  # upper bound of the box half-width variable, in link lengths
 # Margins whose periodic and first_ versions are one row (the speed interval covers both): the
 # larger of their two requirements holds both.
-OVER_THE_TOP = ("over_the_top", "first_over_the_top")
-LIFT_OFF = ("lift_off", "first_lift_off")
 SHARED_ROWS = (OVER_THE_TOP, LIFT_OFF)
 # Reported margins the max_min_margin epigraph leaves out (a clearance that is held, not traded).
 OUTSIDE_MIN_MARGIN = ("parked_palms",)
 PARKED_ROWS_CAP = 16  # parked palms checked behind the carrying one, at most (docs/optimizer.md)
-ACOS_EDGE = 1e-15  # acos is taken of at most 1 - this: a finite slope
-MASS_KEPT = 1e-3  # a mass tolerance leaves at least this fraction of the mass
 
 
 def build(spec):
@@ -407,222 +395,8 @@ class _Model:
     def conditions(self, S, u_lo, u_hi, box, robust):
         """Every condition over the box {quantity: half-width} (pivot_x, pivot_y, feed_x,
         friction, object_width; a quantity left out is exact): outer bounds, module docstring
-        and docs/optimizer.md section 4a."""
-        a, b, l, g = self.a, self.b, self.l, self.g
-        body, palm = self.scene.body, self.scene.palm
-        tau = box.get("pivot_y", 0.0)  # the pivot heights: handover angles, fall, clearance
-        t_w = box.get("object_width", 0.0)
-        # every row is increasing in the friction (the stick rows: py > 0) and monotone in the
-        # width (wider: lands less fully on the palm, tips less over its own edges)
-        mu, W, h = palm.friction - box.get("friction", 0.0), palm.width, body.height
-        w, w_lo = body.width + t_w, body.width - t_w
-        out: list[Condition] = []
-
-        def add(keys, where, slack, scale=1.0, kind=MARGIN, **kw):
-            out.append(Condition(tuple(keys) if isinstance(keys, (tuple, list)) else (keys,),
-                                 where, slack, scale, kind, **kw))
-
-        a_lo, a_hi = self.stops(box)
-        stopped = a_lo is not a_hi
-        # palm K + 1's rest raises the handover by cos a_K+1 - cos a (its stop), the pivots by
-        # their heights' difference; palm 1's top by its pivot's and its stop's error
-        d_lo, d_hi = ((0.0, 0.0) if not stopped else
-                      (ca.cos(a_hi) - ca.cos(a), ca.cos(a_lo) - ca.cos(a)))
-        raise_lo, raise_hi = (-tau, tau) if not stopped else (-tau + l * d_lo, tau + l * d_hi)
-        if robust:
-            cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
-            if stopped:
-                cm, cp = cm + d_lo, cp + d_hi
-            # a number wherever IPOPT may step: its push of tau off 0 (1 cm, say) can take
-            # cos b + 2 tau / l past 1 where the handover drop l (1 - cos b) / 2 is smaller
-            # (every start Invalid_Number_Detected); the palm_clearance row keeps the feasible
-            # set inside, so the clip changes no answer
-            edge = 1.0 - ACOS_EDGE
-            th_hi, th_lo = ca.acos(ca.fmax(cm, -edge)), ca.acos(ca.fmin(cp, edge))
-            thetas = [("smallest handover angle", th_lo), ("largest handover angle", th_hi)]
-            Qs = [("palm 1 high", self.fall_speed(raise_hi)),
-                  ("palm 1 low", self.fall_speed(raise_lo))]
-        else:
-            th_hi = th_lo = b
-            thetas = [("at beta", b)]
-            Qs = [("", self.fall_speed(0.0))]
-        Q_hi = Qs[-1][1]
-
-        # Model: the periodic fixed point and the invariant interval of landing speeds.
-        if self.steps:  # integrated: S is v(b)^2 after landing at k sqrt(S) cos(a + b)
-            u_star = self.k * ca.sqrt(ca.fmax(S, 0.0)) * ca.cos(a + b)
-            add((), "periodic handover speed: S = v(beta)^2 (integrated)",
-                self.carry_v2(u_star, b) - S, kind=MODEL, equality=True)
-        else:
-            add((), "periodic handover speed: S (1 - c) = D", S * (1 - self.c) - self.D,
-                kind=MODEL, equality=True)
-        speeds = self.feed_speeds(box)  # u_1 increases with the start speed and the mass ratio
-        qs = self.mass_ratios(box)
-        # u_1 = k (vx cos a_1 - Q sin a_1): decreasing in a_1 in [0, pi/2) for vx >= 0
-        u1_lo = self.first_speed(Q_hi, speeds[0], qs[0], a_hi)
-        u1_hi = self.first_speed(Qs[0][1], speeds[-1], qs[-1], a_lo)
-        # The interval rows keep the backoff in speed units (sqrt(g l)): without it, an
-        # interval met only to IPOPT's tolerance let the first landing stall 1e-4 rad short of
-        # the top in 3 of 900 random specs; in m/s it would be a size-dependent 1e-6 m/s.
-        model = {"kind": MODEL, "backoff_unit": ca.sqrt(g * l)}
-        add((), "interval holds the first landing speed (low)", u1_lo - u_lo, **model)
-        add((), "interval holds the first landing speed (high)", u_hi - u1_hi, **model)
-        if robust:
-            # Curvature bound of ln F(u, th) on the whole interval, for every u (docs/optimizer.md):
-            # d2 ln F / d th2 = -sec^2(a + th) + (y cos th - y^2 sin^2 th) / 2 with y = 2 g l / v^2
-            # <= cot^2(th_lo) / 8 - sec^2(a + th_lo) =: M; M+ = smooth max(M, 0) >= max(M, 0).
-            # (with pivot friction f: cot th_lo becomes cos th_lo / (sin th_lo - f / (g l)),
-            # the same maximum over 1 / v^2 of g l cos th / v^2 - 2 (g l sin th - f)^2 / v^4)
-            lean = ca.sin(th_lo) if phys.is_exact_zero(self.f) else (
-                ca.sin(th_lo) - self.f / (self.gc * l))
-            def curvature(stop):  # the landing palm's stop angle enters the sec^2 term only
-                bound = (ca.cos(th_lo) / lean) ** 2 / 8 - 1 / ca.cos(stop + th_lo) ** 2
-                return (bound + ca.sqrt(bound**2 + 1e-12)) / 2
-
-            # F is decreasing in both palms' stop angles (the carry's start, the landing's
-            # angle): the low rows take a_hi, the high rows a_lo (docs/optimizer.md 4a)
-            curv = curvature(a_hi)
-            # Low end: ln F >= chord - M+ (th - th_lo)(th_hi - th) / 2 >= min over the ends
-            # - M+ (th_hi - th_lo)^2 / 8.
-            sag = ca.exp(-curv * (th_hi - th_lo) ** 2 / 8)
-            for where, th in thetas:
-                add((), f"interval invariant (low, {where})",
-                    self.next_speed(u_lo, th, qs[0], a_hi) * sag - u_lo, **model)
-            # High end: ln F <= ln F(b) + lambda (th - b) + M+ (th - b)^2 / 2 (Taylor), convex in
-            # th so largest at an end; lambda = d ln F / d th at b by CasADi AD.
-            th_s = ca.SX.sym("th")
-            dlog = ca.substitute(ca.jacobian(ca.log(self.next_speed(u_hi, th_s, a=a_lo)), th_s),
-                                 th_s, b)
-            u_b = self.next_speed(u_hi, b, qs[-1], a_lo)  # ln F's th-derivatives are free of q
-            curv = curvature(a_lo) if stopped else curv
-            for where, th in thetas:
-                bound = u_b * ca.exp(dlog * (th - b) + curv * (th - b) ** 2 / 2)
-                add((), f"interval invariant (high, {where})", u_hi - bound, **model)
-        else:
-            add((), "interval invariant (low)", self.next_speed(u_lo, b) - u_lo, **model)
-            add((), "interval invariant (high)", u_hi - self.next_speed(u_hi, b), **model)
-
-        # Validity of the closed forms.
-        add(("forward_landing",), "first landing moves the palm forward", u1_lo,
-            scale=self.k * ca.sqrt(speeds[0]**2 + Q_hi**2), kind=VALIDITY)
-        add(("forward_landing",), "handover moves the next palm forward",
-            phys.landing_speed(ca.cos(th_hi), -ca.sin(th_hi), a_hi, self.q), scale=self.k,
-            kind=VALIDITY)
-        add(("start_height",), "",
-            self.H - raise_hi - START_CLEARANCE * l, scale=l, kind=VALIDITY)
-        t_x = box.get("pivot_x", 0.0)
-        if t_x is not tau and _nonzero(t_x):  # the parked palms' count assumes 2 t_x <= l
-            add(("palm_clearance",), "pivots' places within half a link", l - 2 * t_x, l,
-                kind=VALIDITY)
-        if stopped:  # the bounds take the stops in [0, pi/2) and a start moving forward
-            add(("back_stop_range",), "every back stop at or behind the vertical", a_lo, 1.0,
-                kind=VALIDITY)
-            add(("forward_landing",), "the start moves forward", speeds[0],
-                ca.sqrt(g * l), kind=VALIDITY)
-        m_obj = body.mass
-        for name, mass, t_mass in (("object", m_obj, box.get("object_mass", 0.0)),
-                                   ("every palm", m_obj / self.q, box.get("palm_mass", 0.0))):
-            if _nonzero(t_mass):  # a build with no mass is none: the mass ratio's ends hold
-                add(("positive_mass",), f"{name} keeps a mass within its tolerance",
-                    (1.0 - MASS_KEPT) * mass - t_mass, mass, kind=VALIDITY)
-        if robust and not phys.is_exact_zero(self.f):
-            add(("over_the_top",), "gravity beats the pivot friction at the handover",
-                self.gc * l * ca.sin(th_lo) - self.f, self.gc * l, kind=VALIDITY)
-
-        # Carry conditions on every palm (the first included: u_lo <= u_1 <= u_hi).
-        if self.steps:  # integrated: the slowest point of the slowest carry is still moving
-            add(OVER_THE_TOP, "slowest landing on any palm, slowest point (integrated)",
-                self.carry_v2(u_lo, b, lowest=True)[1], u_lo**2)
-        else:
-            top = self.top_needed if not stopped else phys.top_speed_squared_needed(
-                a_hi, gravity=self.gc, link_length=l, friction=self.f)
-            add(OVER_THE_TOP, "slowest landing on any palm",
-                u_lo**2 - top, u_lo**2)
-        v2 = self.carry_v2(u_hi, th_hi, a=a_lo)
-        if self.plain:
-            held = phys.lift_off_capacity(a_hi, gravity=g, link_length=l)
-            add(LIFT_OFF, "at the back stop, fastest landing",
-                held - u_hi**2, held)
-            held = phys.lift_off_capacity(th_hi, gravity=g, link_length=l)
-            add(LIFT_OFF, "at the handover, fastest carry", held - v2, held)
-            add("slip_carry", "at the back stop", mu - phys.friction_demand(a_hi), mu)
-            add("slip_carry", "at the largest handover angle",
-                mu - phys.friction_demand(th_hi), mu)
-            fp_back = phys.carry_force_point(-a_hi, h)
-            fp_front = -phys.carry_force_point(th_hi, h)
-        else:  # the contact force's tangential part depends on the speed: both ends of each
-            for where, th, speed2 in (("at the back stop, fastest landing", -a, u_hi**2),
-                                      ("at the handover, fastest carry", th_hi, v2)):
-                add(LIFT_OFF, where, self.contact(th, speed2)[0] - speed2, g * l)
-            back = self.carry_ratios([(-a, u_lo**2), (-a, u_hi**2)])
-            front = self.carry_ratios([(th, self.carry_v2(u, th)) for th in (th_lo, th_hi)
-                                       for u in (u_lo, u_hi)])
-            for i, r in enumerate(back + front):
-                add("slip_carry", _v("at the ends of the carry", i, back + front),
-                    mu - phys.friction_demand(None, r), mu)
-            fp_back = fmax_all([phys.carry_force_point(-a, h, r) for r in back])
-            fp_front = fmax_all([-phys.carry_force_point(None, h, r) for r in front])
-        # the object's base stays above palm K + 1 while cos th_K <= cos a_K
-        clearance = self.pitch_y if not stopped else l * (d_lo - d_hi) + self.pitch_y
-        add("palm_clearance", "next palm below the object until the handover",
-            clearance - 2 * tau, l, epigraph=False)
-        if palm.front_stop < math.pi / 2:
-            add("front_stop", "largest handover angle before the front stop",
-                palm.front_stop - th_hi, palm.front_stop, epigraph=False)
-
-        (o1_hi, o1_lo), (o_hi, o_lo) = self.landing_ranges(box, robust)
-        # Palms parked at their front stops behind the carrying one stay clear of the object
-        # (physics.parked_palm_clearance; each palm's landing offset lies between the smallest
-        # of the o_lo versions and the largest of the o_hi ones, each pivot within the box).
-        # Deferred: on problems where they do not bind they cost IPOPT 2 of 14 iterations.
-        parked = {"alpha": a_hi, "theta_end": th_hi, "link_length": l,
-                  "front_stop": palm.front_stop, "pitch_x": self.pitch_x,
-                  "pitch_y": self.pitch_y, "offset_lo": fmin_all(o_lo),
-                  "offset_hi": fmax_all(o_hi), "reach": (w + W) / 2,
-                  "depth": palm.thickness + h, "shift": 2 * _larger(tau, box.get("pivot_x", 0.0))}
-        for n in range(1, self.parked + 1):
-            add("parked_palms", f"palm {n} back, at its front stop",
-                phys.parked_palm_clearance(n, **parked), l, epigraph=False, deferred=True)
-        # Landing within the palm: |o| + w/2 <= W/2.
-        for i, o in enumerate(o_hi):
-            add("landing", _v("object furthest ahead", i, o_hi), W / 2 - o - w / 2, W / 2)
-        for i, o in enumerate(o_lo):
-            add("landing", _v("object furthest behind", i, o_lo), W / 2 + o - w / 2, W / 2)
-        # Tipping during the carry: the force point within the support (ahead of the centre at
-        # the back stop, behind it at the handover).
-        add("tip_carry", "at the back stop, object's front edge", w_lo / 2 - fp_back, w_lo / 2)
-        for i, o in enumerate(o_hi):
-            add("tip_carry", _v("at the back stop, palm's front edge", i, o_hi),
-                W / 2 - o - fp_back, W / 2 - o)
-        add("tip_carry", "at the handover, object's rear edge", w_lo / 2 - fp_front, w_lo / 2)
-        for i, o in enumerate(o_lo):
-            add("tip_carry", _v("at the handover, palm's rear edge", i, o_lo),
-                W / 2 + o - fp_front, W / 2 + o)
-
-        # Impacts: on palms 2.. (velocity along the handover tangent) and the first landing.
-        # The landing palm's stop angle: each row is a sinusoid in 2 a plus a term free of it,
-        # of amplitude k |c| / 2 per unit speed (|c| the row's coefficients of the impulse), so
-        # it lies above the chord between the stops' ends less k |c| (a_hi - a_lo)^2 / 4 / 2
-        # (docs/optimizer.md section 4a): rows at both ends, less that.
-        stop_ends = _ends([a_lo, a_hi] if stopped else [a], "back stop")
-        k_max = phys.momentum_fraction(qs[-1])
-        sag_a = 0.0 if not stopped else k_max * (a_hi - a_lo) ** 2 / 4
-        if self.stages >= 2:
-            # affine in m / (m + M): at both ends
-            for (where, th), (mass, q), (stop, a_k) in itertools.product(
-                    thetas, _ends(qs, "mass ratio"), stop_ends):
-                px, py = phys.landing_impulse(ca.cos(th), -ca.sin(th), a_k, q)
-                impact_rows(add, (mu, W, w, w_lo, h), "slip_impact", "tip_impact",
-                            _join(where, mass, stop), px, py, o_hi, o_lo, sag_a)
-        # multilinear in (start speed, fall speed, m / (m + M)): each row holds on the box iff
-        # at its corners
-        sag_1 = 0.0 if not stopped else sag_a * ca.sqrt(speeds[-1] ** 2 + Q_hi**2)
-        for (where, Q), (feed, vx), (mass, q), (stop, a_k) in itertools.product(
-                Qs, _ends(speeds, "feed"), _ends(qs, "mass ratio"), stop_ends):
-            px, py = phys.landing_impulse(vx, -Q, a_k, q)
-            impact_rows(add, (mu, W, w, w_lo, h), "first_slip_impact", "first_tip_impact",
-                        _join(where, feed, mass, stop), px, py, [o1_hi], [o1_lo], sag_1)
-        return out
+        and docs/optimizer.md section 4a; one function per group of rows in manipulator_rows."""
+        return rows.conditions(self, S, u_lo, u_hi, box, robust)
 
 
 def drift_worst(stages: int, r_ends) -> list:
@@ -633,65 +407,3 @@ def drift_worst(stages: int, r_ends) -> list:
     pairs, odd = divmod(stages - 1, 2)
     both = pairs * (r_ends[0] + r_ends[1])
     return [both + r for r in r_ends] if odd else [both]
-
-
-def scene_sizes(scene):
-    """impact_rows' sizes of a scene as specified (no tolerance box)."""
-    body, palm = scene.body, scene.palm
-    return palm.friction, palm.width, body.width, body.width, body.height
-
-
-def impact_rows(add, sizes, slip, tip, where, px, py, o_hi, o_lo, sag=0.0):
-    """Stick (|px| <= mu py) and no tip (impulse line through the support) at a landing with
-    impulse (px, py) and landing offsets o_hi (furthest ahead) and o_lo (furthest behind):
-    add(key, where, slack, scale) once per row. sizes: (mu, W, w, w_lo, h), the friction, the
-    palm's width, the object's widest and narrowest width and its height (the rows over the
-    object's own edges ask most of the narrowest; the palm's edges' rows do not involve it).
-    sag: each row c . (px, py) >= 0 asks sag |c| more (a bound between the back stops' ends)."""
-    mu, W, _, w, h = sizes
-
-    def less(c1, c2):  # what a row with impulse coefficients (c1, c2) asks more
-        return 0.0 if not _nonzero(sag) else sag * ca.sqrt(c1**2 + c2**2)
-
-    sep = ", " if where else ""
-    add(slip, f"{where}{sep}sliding back", mu * py - px - less(1.0, mu), mu * py)
-    add(slip, f"{where}{sep}sliding forward", mu * py + px - less(1.0, mu), mu * py)
-    # Force point -(h/2) px/py from the centre: ahead (px < 0) within min(w/2, W/2 - o),
-    # behind within min(w/2, W/2 + o). Multiplied by py > 0 (implied by the stick rows).
-    edge = less(h / 2, w / 2)
-    add(tip, f"{where}{sep}over the object's front edge", w / 2 * py + h / 2 * px - edge,
-        w / 2 * py)
-    add(tip, f"{where}{sep}over the object's rear edge", w / 2 * py - h / 2 * px - edge,
-        w / 2 * py)
-    for i, o in enumerate(o_hi):
-        add(tip, _v(f"{where}{sep}over the palm's front edge", i, o_hi),
-            (W / 2 - o) * py + h / 2 * px - less(h / 2, W / 2 - o), (W / 2 - o) * py)
-    for i, o in enumerate(o_lo):
-        add(tip, _v(f"{where}{sep}over the palm's rear edge", i, o_lo),
-            (W / 2 + o) * py - h / 2 * px - less(h / 2, W / 2 + o), (W / 2 + o) * py)
-
-
-def _ends(values, what):
-    """(label, value) of one value or of both ends of an interval."""
-    return [("", values[0])] if len(values) == 1 else [(f"{what} low", values[0]),
-                                                       (f"{what} high", values[-1])]
-
-
-def _join(*words) -> str:
-    return ", ".join(w for w in words if w)
-
-
-def _nonzero(value) -> bool:
-    return not (isinstance(value, (int, float)) and value == 0.0)
-
-
-def _larger(a, b):
-    """The larger of two half-widths (one of them itself when they are the same expression)."""
-    if a is b or not _nonzero(b):
-        return a
-    return b if not _nonzero(a) else ca.fmax(a, b)
-
-
-def _v(text, i, versions):
-    """Label of one version of a bound that has several candidate expressions."""
-    return text if len(versions) == 1 else f"{text}, bound {i + 1}"
