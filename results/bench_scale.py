@@ -48,7 +48,7 @@ TABLE_NOTE = (
     "the new one keeps the last 16. What the target needs and is not done: one NLP per sweep, "
     "the swept scene numbers (palm friction, and the fixed design values) as NLP parameters, so "
     "that a point reuses the built NLP, its solvers (stacked starts) and its stage maps; the "
-    "profile (`--profile N`: measured at 37 ms formulation, 15 ms solvers, 33 ms stage maps, 43 ms IPOPT, 23 ms simulator of 161 ms a point) gives what that would save, and what stays (IPOPT runs, simulator) is by "
+    "profile (`--profile 20`, an earlier run on a loaded machine: 37 ms formulation, 15 ms solvers, 33 ms stage maps, 43 ms IPOPT, 23 ms simulator of 161 ms a point) gives what that would save, and what stays (IPOPT runs, simulator) is by "
     "itself above the 24 ms of CPU a point that 10 000 points in 120 s on 2 workers allow.")
 
 

@@ -47,10 +47,6 @@ class ToleranceEntry:
         value, unit = workshop_value(self.value, self.unit)
         return f"+-{_number(value)} {unit}".rstrip()
 
-    def as_dict(self) -> dict:
-        return {"quantity": self.quantity, "applies_to": self.applies_to, "value": self.value,
-                "unit": self.unit, "limited_by": self.limited_by}
-
 
 @dataclass(frozen=True)
 class Part:

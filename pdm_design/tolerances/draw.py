@@ -47,14 +47,3 @@ def deviations(tol: Tolerance, u: np.ndarray) -> np.ndarray:
     from scipy.special import ndtri
 
     return (tol.value / SIGMAS_PER_TOLERANCE) * ndtri(u)
-
-
-def probability_within(tol: Tolerance, low: float, high: float) -> float:
-    """P(low <= deviation <= high) from the distribution's CDF (for exact checks)."""
-    if tol.distribution == "uniform":
-        t = tol.value
-        return max(0.0, min(high, t) - max(low, -t)) / (2.0 * t)
-    from scipy.special import ndtr
-
-    sigma = tol.value / SIGMAS_PER_TOLERANCE
-    return float(ndtr(high / sigma) - ndtr(low / sigma))
