@@ -212,3 +212,26 @@ def test_the_rolling_row_is_the_simulators_test():
     demand = phys.rolling_impulse_ratio(v0, spin, vy, eps, radius=r, mass=m, inertia=J)
     assert not impact_map(v0, vy, spin, eps, demand * (1 + 1e-9), r, m, J).slipped
     assert impact_map(v0, vy, spin, eps, demand * (1 - 1e-9), r, m, J).slipped
+
+
+def _stairs_times(k):
+    """problems/stairs_design.toml with every length times k and every speed times sqrt(k):
+    the same stairs in units of h0."""
+    r = math.sqrt(k)
+    text = FRICTIONLESS.replace("radius = 0.05 ", f"radius = {0.05 * k!r} ").replace(
+        "drop_height = 1.0 ", f"drop_height = {k!r} ")
+    return text.replace(
+        "launch_speed = { min = 0.5, max = 3.0, initial = 2.0 }",
+        f"launch_speed = {{ min = {0.5 * r!r}, max = {3.0 * r!r}, initial = {2.0 * r!r} }}"
+    ).replace("landing_offset = { min = 0.0, max = 3.0, initial = 0.8 }",
+              f"landing_offset = {{ min = 0.0, max = {3.0 * k!r}, initial = {0.8 * k!r} }}")
+
+
+def test_a_restitution_box_is_the_same_at_any_size(tmp_path):
+    """The same stairs at any size have the same restitution tolerance (a ratio): the NLP's
+    rows and objective are pure numbers (docs/optimizer.md sections 4, 4a)."""
+    assert _stairs_times(1.0) == FRICTIONLESS
+    at = {k: _solved(tmp_path, _stairs_times(k), "restitution = { allocate = true }")[1]
+          .tolerances[0]["value"] for k in (1.0, 1e-4, 1e4)}
+    assert at[1e-4] == pytest.approx(at[1.0], rel=1e-7)
+    assert at[1e4] == pytest.approx(at[1.0], rel=1e-7)

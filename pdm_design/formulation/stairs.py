@@ -38,7 +38,9 @@ er = -tau (the latter corner). The nose condition is increasing in v and concave
 worst case over d in [d_lo, d_hi] is at an end: checking both ends with the smallest v is sound.
 With friction, the first impact's demand falls with v_1: it is checked at er_1 = -tau. Errors
 accumulate (the horizontal landing is neutrally stable), so the tolerance shrinks with the number
-of stages checked.
+of stages checked. The lots of an allocated box (restitution, launch speed, launch place) move
+every landing the same way (longer flights, faster, further), so the two trajectories take their
+ends too (`_Model.end`); friction enters the first impact's row only (docs/optimizer.md, 4a).
 
 The same NLP at any size of the stairs (lengths x k, speeds x sqrt(k): the same design, the box
 x k; docs/optimizer.md, section 4): tau lies in [0, the largest rise of the design box] (a larger
@@ -143,7 +145,8 @@ def build(spec):
         derived={"rise": m.rise, "tread": m.tread, "landing_offset": m.L1,
                  "horizontal_speed": m.vx, "periodic_vertical_speed": m.V},
         tolerance_axes=("rise", "tread"),
-        objective_scale=objective_scale(spec.objective, top or scene.initial.drop_height),
+        objective_scale=objective_scale(spec.objective, _scale_size(spec, top) or
+                                        scene.initial.drop_height),
         # One start at a time: stairs_design's 8 starts need 9-19 iterations alone, 28 stacked, so
         # stacking saved nothing (26.9 ms against 26.7 ms); with the exact nose rows (about 1 ms an
         # iteration to evaluate) they need 10-82, and the stacked run hit its cap of 100 after
@@ -191,15 +194,27 @@ def scale_bound(spec, values, bounds, top):
                         if q in ends])
 
 
+def _scale_size(spec, top):
+    """The tolerance scale's size, for the objective's (common.objective_scale): `top` when it
+    is a length's tolerance (the dearest allocated quantity, share 1, is a length, or nothing
+    is allocated), else that quantity's unit: sqrt(2 g h0) for the launch speed, 1 for a
+    restitution or friction (so IPOPT's tolerances stay relative at any size of the stairs)."""
+    dearest = {q for q, share in allocation.coefficients(spec).items() if share == 1.0}
+    if not dearest or dearest & {"rise", "tread", "launch_x"}:
+        return top
+    if "launch_speed" in dearest:
+        return phys.impact_speed_vertical(spec.scene.gravity, spec.scene.initial.drop_height)
+    return 1.0
+
+
 class _End(NamedTuple):
     """One end of the lots' box (docs/optimizer.md section 4a): the ball's restitution, the
-    launch speed, the horizontal speed of the flights after the first impact, the launcher's
-    shift down the stairs. Every landing increases with each of them."""
+    launch speed, the horizontal speed of the flights after the first impact. Every landing
+    increases with each of them (and with the launcher's place, which the rows add alike)."""
 
     eps: object
     v0: object
     vx: object
-    shift: object
 
 
 def _moved(x, t, sign):
@@ -262,11 +277,10 @@ class _Model:
     def end(self, box, sign):
         """The far (sign +1: every landing furthest) or near (-1: nearest and slowest) end of the
         lots' box: restitution eps + sign t_e, launch speed v0 + sign t_v and its horizontal
-        speed, the launcher sign t_x down the stairs."""
+        speed (the design's own expressions where a quantity has no tolerance)."""
         eps = _moved(self.eps, box.get("restitution", 0.0), sign)
         v0 = _moved(self.v0, box.get("launch_speed", 0.0), sign)
-        shift = _moved(0.0, box.get("launch_x", 0.0), sign)
-        return _End(eps, v0, self.vx if v0 is self.v0 else self.horizontal(v0), shift)
+        return _End(eps, v0, self.vx if v0 is self.v0 else self.horizontal(v0))
 
     def flight(self, v, rise_n, eps=None):
         """(time, next vertical impact speed) of a flight leaving at eps v, falling rise_n."""
@@ -295,7 +309,7 @@ class _Model:
         def at(e, n):
             return e[n] if isinstance(e, (list, tuple)) else e
 
-        eps, v0, vx = (None, None, self.vx) if end is None else end[:3]
+        eps, v0, vx = (None, None, self.vx) if end is None else end
         L1, v1 = self.first_landing(at(er, 0), v0)
         L, v = [L1], [v1]
         for n in range(self.stages - 1):
