@@ -306,11 +306,12 @@ def test_stairs_verification_runs_the_launch_place_corners(tmp_path):
     assert doc["verification"]["samples"] == 1 + 12 * 2 + 16  # nominal, corners x lot, random
 
 
-def test_stairs_lot_allocation_is_refused_in_words(tmp_path):
+def test_stairs_launch_place_with_exact_rows_is_refused_in_words(tmp_path):
     path = tmp_path / "stairs.toml"
-    path.write_text(STAIRS + "\n[tolerances]\nrise = { allocate = true }\n"
-                    "restitution = { value = 0.01 }\n")
+    path.write_text(STAIRS.replace("max_offset_tolerance = 1.0", "max_offset_tolerance = 1.0\n"
+                                   "max_min_margin = 1.0")
+                    + "\n[tolerances]\nrise = { allocate = true }\nlaunch_x = { value = 0.01 }\n")
     run = subprocess.run([sys.executable, "-m", "pdm_design", "optimize", str(path)],
                          capture_output=True, text=True, cwd=ROOT)
-    assert run.returncode == 2 and "tolerances.restitution.value" in run.stderr
-    assert "Traceback" not in run.stderr
+    assert run.returncode == 2 and "tolerances.launch_x" in run.stderr
+    assert "exact launch rows" in run.stderr and "Traceback" not in run.stderr

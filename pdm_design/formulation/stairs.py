@@ -38,7 +38,9 @@ er = -tau (the latter corner). The nose condition is increasing in v and concave
 worst case over d in [d_lo, d_hi] is at an end: checking both ends with the smallest v is sound.
 With friction, the first impact's demand falls with v_1: it is checked at er_1 = -tau. Errors
 accumulate (the horizontal landing is neutrally stable), so the tolerance shrinks with the number
-of stages checked.
+of stages checked. The lots of an allocated box (restitution, launch speed, launch place) move
+every landing the same way (longer flights, faster, further), so the two trajectories take their
+ends too (`_Model.end`); friction enters the first impact's row only (docs/optimizer.md, 4a).
 
 The same NLP at any size of the stairs (lengths x k, speeds x sqrt(k): the same design, the box
 x k; docs/optimizer.md, section 4): tau lies in [0, the largest rise of the design box] (a larger
@@ -50,6 +52,7 @@ the rise, and the objective is divided by its own size (`objective_scale`).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import casadi as ca
 
@@ -106,12 +109,8 @@ def build(spec):
     # the exact nose rows when the reported nose margins must reach something: the epigraph, or
     # a required nose clearance (the smooth rows measure another quantity, section 2)
     exact = epigraph or requires_rows(spec)
-    if exact and any(t.quantity == "launch_x" for t in spec.tolerances) and \
-            allocation.allocating(spec):
-        raise SpecError(spec.source or "<spec>", "tolerances.launch_x",
-                        "no max_min_margin and no nose requirement with an allocated box (the "
-                        "exact launch rows' worst launch place is not derived)",
-                        found="the exact nose rows")
+    if exact and allocation.allocating(spec):
+        _refuse_exact(spec)
     tau = ca.SX.sym("tolerance") if robust else 0.0
     t = ca.SX.sym("min_margin") if epigraph else None
     top = tolerance_bound(scene.initial.drop_height, values, bounds)
@@ -122,7 +121,7 @@ def build(spec):
         aux.append(("periodic_vertical_speed", m.V_symbol, 0.0, math.inf))
         start.append(ca.sqrt(2 * m.g * m.rise / ca.fmax(1 - m.eps**2, 1e-9)))
     if robust:
-        aux.append(("tolerance", tau, 0.0, top))
+        aux.append(("tolerance", tau, 0.0, scale_bound(spec, values, bounds, top)))
         start.append(0.01 * top)
     if epigraph:
         aux.append(("min_margin", t, 0.0, 1.0))
@@ -146,7 +145,8 @@ def build(spec):
         derived={"rise": m.rise, "tread": m.tread, "landing_offset": m.L1,
                  "horizontal_speed": m.vx, "periodic_vertical_speed": m.V},
         tolerance_axes=("rise", "tread"),
-        objective_scale=objective_scale(spec.objective, top or scene.initial.drop_height),
+        objective_scale=objective_scale(spec.objective, _scale_size(spec, top) or
+                                        scene.initial.drop_height),
         # One start at a time: stairs_design's 8 starts need 9-19 iterations alone, 28 stacked, so
         # stacking saved nothing (26.9 ms against 26.7 ms); with the exact nose rows (about 1 ms an
         # iteration to evaluate) they need 10-82, and the stacked run hit its cap of 100 after
@@ -155,6 +155,71 @@ def build(spec):
         stack_starts=False,
     )
     return model, bounds, m
+
+
+# Lots the exact nose rows are not shown monotone in (docs/optimizer.md section 4a): why.
+EXACT_UNBOUNDED = {
+    "launch_x": "the exact launch rows' worst launch place is not derived",
+    "restitution": "the exact gaps' worst restitution is not derived",
+    "launch_speed": "the exact gaps' worst launch and flight speeds are not derived",
+}
+
+
+def _refuse_exact(spec):
+    """Refuse (exit 2) a lot whose bound the exact nose rows lack, in an allocated box."""
+    for tol in spec.tolerances:
+        if tol.quantity in EXACT_UNBOUNDED:
+            raise SpecError(spec.source or "<spec>", f"tolerances.{tol.quantity}",
+                            "no max_min_margin and no nose requirement with an allocated box ("
+                            + EXACT_UNBOUNDED[tol.quantity] + ")", found="the exact nose rows")
+
+
+def scale_bound(spec, values, bounds, top):
+    """The tolerance scale's upper bound: `top` (tolerance_bound), or more where an allocated
+    lot can use more than the rise allows, its physical end divided by its share: a
+    restitution's tolerance up to the restitution, a friction's up to the friction, a launch
+    speed's up to the launch speed (each the largest of the design box). Its rows hold it
+    below that (restitution_range, first_impact_friction, forward_flight): the bound only
+    keeps the variable finite, and the rise's rows hold the rise's share below the rise."""
+    if not allocation.allocating(spec):
+        return top
+
+    def largest(name):
+        return float(bounds[name][1] if name in bounds else values[name])
+
+    ends = {"restitution": lambda: largest("restitution"),
+            "friction": lambda: spec.scene.friction,
+            "launch_speed": lambda: largest("launch_speed")}
+    return max([top] + [ends[q]() / share for q, share in allocation.coefficients(spec).items()
+                        if q in ends])
+
+
+def _scale_size(spec, top):
+    """The tolerance scale's size, for the objective's (common.objective_scale): `top` when it
+    is a length's tolerance (the dearest allocated quantity, share 1, is a length, or nothing
+    is allocated), else that quantity's unit: sqrt(2 g h0) for the launch speed, 1 for a
+    restitution or friction (so IPOPT's tolerances stay relative at any size of the stairs)."""
+    dearest = {q for q, share in allocation.coefficients(spec).items() if share == 1.0}
+    if not dearest or dearest & {"rise", "tread", "launch_x"}:
+        return top
+    if "launch_speed" in dearest:
+        return phys.impact_speed_vertical(spec.scene.gravity, spec.scene.initial.drop_height)
+    return 1.0
+
+
+class _End(NamedTuple):
+    """One end of the lots' box (docs/optimizer.md section 4a): the ball's restitution, the
+    launch speed, the horizontal speed of the flights after the first impact. Every landing
+    increases with each of them (and with the launcher's place, which the rows add alike)."""
+
+    eps: object
+    v0: object
+    vx: object
+
+
+def _moved(x, t, sign):
+    """x + sign t; x itself (the same expression) when the quantity has no tolerance."""
+    return x if isinstance(t, float) and t == 0.0 else x + sign * t
 
 
 def tolerance_bound(h0, values, bounds):
@@ -185,11 +250,7 @@ class _Model:
         # (and their norms, the scales at the guess) are pure numbers at any size of the scene
         self.length, self.speed = h0, self.vy1
         self.rise_unit = rise_unit or h0  # the largest rise in the design box
-        if scene.frictionless:
-            self.vx = self.v0
-        else:
-            self.vx, _ = phys.rolling_impact(self.v0, scene.initial.spin, radius=ball.radius,
-                                             mass=ball.mass, inertia=ball.inertia)
+        self.vx = self.horizontal(self.v0)
         self.rise_derived = values["rise"] is None
         if self.rise_derived:
             self.rise = phys.periodic_rise(h0, self.eps)
@@ -203,45 +264,71 @@ class _Model:
         self.tread = orbit_tread if self.tread_derived else values["tread"]
         self.L1 = self.tread / 2 if values["landing_offset"] is None else values["landing_offset"]
 
-    def flight(self, v, rise_n):
+    def horizontal(self, v0):
+        """The horizontal speed of every flight after the first impact, launched at v0: v0
+        itself, or with friction the rolling speed (affine, increasing in v0)."""
+        if self.scene.frictionless:
+            return v0
+        ball = self.scene.ball
+        vx, _ = phys.rolling_impact(v0, self.scene.initial.spin, radius=ball.radius,
+                                    mass=ball.mass, inertia=ball.inertia)
+        return vx
+
+    def end(self, box, sign):
+        """The far (sign +1: every landing furthest) or near (-1: nearest and slowest) end of the
+        lots' box: restitution eps + sign t_e, launch speed v0 + sign t_v and its horizontal
+        speed (the design's own expressions where a quantity has no tolerance)."""
+        eps = _moved(self.eps, box.get("restitution", 0.0), sign)
+        v0 = _moved(self.v0, box.get("launch_speed", 0.0), sign)
+        return _End(eps, v0, self.vx if v0 is self.v0 else self.horizontal(v0))
+
+    def flight(self, v, rise_n, eps=None):
         """(time, next vertical impact speed) of a flight leaving at eps v, falling rise_n."""
-        up = self.eps * v
+        up = (self.eps if eps is None else eps) * v
         down = ca.sqrt(ca.fmax(up**2 + 2 * self.g * rise_n, SPEED2_FLOOR * self.speed**2))
         return (up + down) / self.g, down
 
-    def first_landing(self, er1):
+    def first_landing(self, er1, v0=None):
         """(L_1, v_1) when the first riser is er1 too high: tread 1 is er1 below its design
         level and the launcher is not, so the ball falls h0 + er1, further and faster.
-        L_1 - landing_offset = v0 (t(er1) - t(0)), written without cancellation."""
+        L_1 - landing_offset = v0 (t(er1) - t(0)), written without cancellation. v0: a launch
+        speed other than the design's (the launcher placed for the design's): the landing
+        moves (v0 - design v0) t(er1) further."""
         h0 = self.h0
         v1 = phys.impact_speed_vertical(self.g, ca.fmax(h0 + er1, SPEED2_FLOOR * h0))
-        return self.L1 + self.v0 * 2 * er1 / (v1 + self.vy1), v1
+        if v0 is None or v0 is self.v0:
+            return self.L1 + self.v0 * 2 * er1 / (v1 + self.vy1), v1
+        return self.L1 + v0 * 2 * er1 / (v1 + self.vy1) + (v0 - self.v0) * self.vy1 / self.g, v1
 
-    def trajectory(self, er, et):
+    def trajectory(self, er, et, end=None):
         """Landing offsets L_1..L_N and vertical impact speeds v_1..v_N with every step's errors
         (er, et) (numbers, symbols or per-step sequences): er[n] is step n+1's riser (er[0] the
-        first, from the top landing), et[n] tread n+1."""
+        first, from the top landing), et[n] tread n+1; end: the lots' values (`end`; None: the
+        design's)."""
 
         def at(e, n):
             return e[n] if isinstance(e, (list, tuple)) else e
 
-        L1, v1 = self.first_landing(at(er, 0))
+        eps, v0, vx = (None, None, self.vx) if end is None else end
+        L1, v1 = self.first_landing(at(er, 0), v0)
         L, v = [L1], [v1]
         for n in range(self.stages - 1):
-            T, v_next = self.flight(v[-1], self.rise + at(er, n + 1))
-            L.append(L[-1] + self.vx * T - (self.tread + at(et, n)))
+            T, v_next = self.flight(v[-1], self.rise + at(er, n + 1), eps)
+            L.append(L[-1] + vx * T - (self.tread + at(et, n)))
             v.append(v_next)
         return L, v
 
-    def nose_slack(self, v, dist):
-        """Clearance rows of one flight over a nose `dist` ahead: [(where, slack), ...]."""
-        r, vx, g = self.scene.ball.radius, self.vx, self.g
+    def nose_slack(self, v, dist, end=None):
+        """Clearance rows of one flight over a nose `dist` ahead: [(where, slack), ...]; end:
+        the restitution and horizontal speed of the lots' near end (None: the design's)."""
+        r, g = self.scene.ball.radius, self.g
+        eps, vx = (self.eps, self.vx) if end is None else (end.eps, end.vx)
         ends = list(zip(NOSE_ENDS, (dist - r, dist + r), strict=True))
         if r == 0.0:
             ends = [("passes over the nose", dist)]
-        return [(where, self.eps * v * vx * z - g * z**2 / 2) for where, z in ends]
+        return [(where, eps * v * vx * z - g * z**2 / 2) for where, z in ends]
 
-    def launch_slack(self, back=0.0):
+    def launch_slack(self, back=0.0, v0=None):
         """The launch clears the top landing (step 0, one design rise above the designed tread 1;
         neither it nor the launcher has construction errors). The ball starts at its apex,
         a = h0 - rise above that landing, horizontal speed v0, and the landing's nose is
@@ -250,11 +337,14 @@ class _Model:
         check when x_n + r <= 0): a v0^2 - g max(x_n + r, 0)^2 / 2 >= 0 (the height times v0^2;
         C1). Conservative when the launch is below the top landing (a < 0) but already past it.
         back: the launcher that far further back (the slack decreases with x_n: a launch_x
-        tolerance's worst end)."""
+        tolerance's worst end). v0: the ball launched at that speed from the design's launcher
+        (the slack increases with it where it holds, a >= 0: a launch_speed tolerance's slow
+        end)."""
         h0, r = self.scene.initial.drop_height, self.scene.ball.radius
         a = h0 - self.rise
         x = self.v0 * self.vy1 / self.g - self.L1 + back + r
-        return a * self.v0**2 - self.g * ca.fmax(x, 0.0) ** 2 / 2
+        speed = self.v0 if v0 is None else v0
+        return a * speed**2 - self.g * ca.fmax(x, 0.0) ** 2 / 2
 
     def conditions(self, box, robust, exact=False):
         """Every row. exact (max_min_margin asked, or a nose clearance required): the smooth
@@ -263,19 +353,26 @@ class _Model:
         slack / scale is the lowest point's height where the ball passes over the nose, divided
         by the tread, which is not the reported margin (0.65 where the exact gap was 0.16 of the
         tread: the take-off gap). That height is never below the gap, so the exact rows imply
-        the smooth ones."""
-        g, r = self.g, self.scene.ball.radius
-        length, speed = self.length, self.speed
-        # the box {quantity: half-width}: every step's rise and tread errors (docs/optimizer.md
-        # sections 4, 4a); tau the rise's, t_t the tread's
-        tau, t_t = box.get("rise", 0.0), box.get("tread", 0.0)
-        t_x = box.get("launch_x", 0.0)  # every landing moves with the launcher, alike
+        the smooth ones. box: {quantity: half-width} (docs/optimizer.md sections 4, 4a): every
+        step's rise and tread errors, and the lots (restitution, friction, launch speed and
+        place), whose far and near ends (`end`) the scenario trajectories take."""
         out: list[Condition] = []
 
         def add(key, where, slack, scale=1.0, kind=MARGIN, unit=1.0, keys=None, **kw):
             keys = keys if keys is not None else ((key,) if key else ())
             out.append(Condition(keys, where, slack / unit, scale / unit, kind, **kw))
 
+        far, near = self.end(box, 1.0), self.end(box, -1.0)
+        self._design_rows(add, box, robust, far, near)
+        self._launch_rows(add, box, exact, near)
+        self._landing_rows(add, box, robust, exact, far, near)
+        return out
+
+    def _design_rows(self, add, box, robust, far, near):
+        """The periodic orbit's rows (the design's own restitution: the stairs are built for
+        it), the first impact's friction, the forward flight and the steps going down."""
+        g, speed = self.g, self.speed
+        tau = box.get("rise", 0.0)
         if self.V_symbol is not None:
             # scaled by the size of either side (2 g rise at the orbit), not by 1 m^2/s^2
             lhs, rhs = self.V**2 * (1 - self.eps**2), 2 * g * self.rise
@@ -285,16 +382,17 @@ class _Model:
             add("periodic_tread", "tread = horizontal speed x periodic flight time",
                 self.tread - self.orbit_tread, self.tread, equality=True)
         if not self.scene.frictionless:
-            ball = self.scene.ball
-            # the normal impulse grows with the fall: the worst first riser is tau too low
-            vy1 = self.first_landing(-tau)[1] if robust else self.vy1
-            demand = phys.rolling_impulse_ratio(self.v0, self.scene.initial.spin, vy1,
-                                                self.eps, radius=ball.radius, mass=ball.mass,
-                                                inertia=ball.inertia)
-            add("first_impact_friction", "first impact ends rolling",
-                self.scene.friction - demand, self.scene.friction)
+            for where, slack in self.friction_slack(box, robust, far, near):
+                add("first_impact_friction", where, slack, self.scene.friction)
+        # the slowest build's flights (near.vx: the launch speed's slow end)
         add("forward_flight", "the ball keeps moving down the stairs",
-            self.vx - MIN_FORWARD_RATIO * speed, speed, kind=VALIDITY, unit=speed)
+            near.vx - MIN_FORWARD_RATIO * speed, speed, kind=VALIDITY, unit=speed)
+        if near.v0 is not self.v0 and not self.scene.frictionless:
+            add("forward_flight", "the slowest launch goes down the stairs",
+                near.v0 - MIN_FORWARD_RATIO * speed, speed, kind=VALIDITY, unit=speed)
+        if near.eps is not self.eps:  # every build's ball rebounds (the nose rows' signs)
+            add("restitution_range", "the lowest restitution rebounds", near.eps, 1.0,
+                kind=VALIDITY)
         # Relative to the rise itself (its value at the guess is the row's norm): IPOPT's
         # tolerances are then fractions of the rise, however small (restitution near 1). In
         # units of the largest rise, so that norm is not below the smallest assemble takes.
@@ -303,23 +401,53 @@ class _Model:
             kind=VALIDITY, unit=self.rise_unit)
         if robust:
             add("step_down", "tread 1 stays below the launch", keep * self.h0 - tau, self.h0,
-                kind=VALIDITY, unit=length)
+                kind=VALIDITY, unit=self.length)
 
-        tread = self.tread
-        add(None, "launch: comes down beyond the top landing's nose", self.launch_slack(t_x),
-            tread * self.v0**2, unit=length * speed**2, keys=LAUNCH_KEYS, epigraph=not exact)
-        if exact:  # the analysis' first_nose_clearance: one design rise above tread 1 (to land
-            # a rise tau higher at worst: the longer flight's gap is the smaller)
+    def friction_slack(self, box, robust, far, near):
+        """[(where, slack)] of first_impact_friction: the friction's low end against the
+        demand, which falls with the normal impulse (the first riser tau too low, the lowest
+        restitution) and grows with the slip |v0 + r omega0| (convex in the launch speed: at
+        either end of its tolerance)."""
+        ball = self.scene.ball
+        vy1 = self.first_landing(-box.get("rise", 0.0))[1] if robust else self.vy1
+        mu = _moved(self.scene.friction, box.get("friction", 0.0), -1.0)
+        launches = [("", self.v0)] if near.v0 is self.v0 else [
+            (", slowest launch", near.v0), (", fastest launch", far.v0)]
+        return [(f"first impact ends rolling{suffix}",
+                 mu - phys.rolling_impulse_ratio(v0, self.scene.initial.spin, vy1, near.eps,
+                                                 radius=ball.radius, mass=ball.mass,
+                                                 inertia=ball.inertia))
+                for suffix, v0 in launches]
+
+    def _launch_rows(self, add, box, exact, near):
+        """The launch clears the top landing's nose: the launcher t_x further back, the
+        slowest launch; the exact rows (one design rise above tread 1, to land a rise tau
+        higher at worst: the longer flight's gap is the smaller)."""
+        g, r, tread = self.g, self.scene.ball.radius, self.tread
+        length, speed = self.length, self.speed
+        add(None, "launch: comes down beyond the top landing's nose",
+            self.launch_slack(box.get("launch_x", 0.0), near.v0), tread * self.v0**2,
+            unit=length * speed**2, keys=LAUNCH_KEYS, epigraph=not exact)
+        if exact:  # the analysis' first_nose_clearance
             gaps = phys.launch_clearances(self.v0, g, r, self.h0 - self.rise,
-                                          self.v0 * self.vy1 / g - self.L1, self.rise + tau)
+                                          self.v0 * self.vy1 / g - self.L1,
+                                          self.rise + box.get("rise", 0.0))
             for phase, gap in zip(EXACT_LAUNCH, gaps, strict=True):
                 add(None, f"launch, exact {phase}", gap, tread, unit=length, keys=LAUNCH_KEYS)
+
+    def _landing_rows(self, add, box, robust, exact, far, near):
+        """Every landing clear of the riser behind it (nearest), every flight over the nose
+        ahead (both ends of its distance, the slowest take-off)."""
+        g, r, tread, length, speed = self.g, self.scene.ball.radius, self.tread, self.length, \
+            self.speed
+        tau, t_t = box.get("rise", 0.0), box.get("tread", 0.0)
         scale = tread * self.vx**2
         if robust:
-            L_long, _ = self.trajectory(tau, -t_t)
-            L_short, v_short = self.trajectory(-tau, t_t)
-            if not (isinstance(t_x, float) and t_x == 0.0):
-                L_long, L_short = [L + t_x for L in L_long], [L - t_x for L in L_short]
+            L_long, _ = self.trajectory(tau, -t_t, far)
+            L_short, v_short = self.trajectory(-tau, t_t, near)
+            t_x = box.get("launch_x", 0.0)  # every landing moves with the launcher, alike
+            L_long, L_short = [_moved(L, t_x, 1.0) for L in L_long], \
+                [_moved(L, t_x, -1.0) for L in L_short]
         else:
             L_long, v_short = self.trajectory(0.0, 0.0)
             L_short = L_long
@@ -336,7 +464,7 @@ class _Model:
             # exact gaps: the flights the analysis judges (a simulation of N bounces flies N - 1)
             judged = exact and (stage < self.stages or self.stages == 1)
             for suffix, dist in ends:
-                for where, slack in self.nose_slack(v_short[n], dist):
+                for where, slack in self.nose_slack(v_short[n], dist, near):
                     add("nose_clearance", f"flight {stage}{suffix}, {where}", slack, scale,
                         unit=length * speed**2, epigraph=not exact)
                 if judged:
@@ -345,4 +473,3 @@ class _Model:
                     for phase, gap in zip(EXACT_FLIGHT, gaps, strict=True):
                         add("nose_clearance", f"flight {stage}{suffix}, exact {phase}", gap,
                             tread, unit=length)
-        return out

@@ -59,9 +59,10 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
                      seed: int = 0, lots=None) -> dict:
     """Simulate the corner patterns and `samples` uniform random builds inside the box (fewer
     on rows longer than RANDOM_ROW: `random_builds`). lots: an allocated tolerance list
-    (formulation/allocation.py); its quantities other than the pivots' (feed_x, feed_speed,
-    friction, object_width, object_mass: one value a build; palm_mass: every palm alike) take
-    every sign corner with every pivot pattern, and a uniform value in each random build."""
+    (formulation/allocation.py); its quantities other than the pivots' or the steps' (feed_x,
+    feed_speed, friction, object_width, object_mass: one value a build; palm_mass: every palm
+    alike; on stairs the lots restitution, friction, launch_speed, launch_x) take every sign
+    corner with every pivot or step pattern, and a uniform value in each random build."""
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
