@@ -147,6 +147,14 @@ def _start_points(spec, form, p, starts, seed, start_from):
     return guess, lows, highs, form.defined_starts(designs, guess, p)
 
 
+def _stacks(form, was_cached: bool) -> bool:
+    """Whether the starts are solved stacked: only for an NLP solved before in this process
+    (creating the stacked solver costs more than it saves in one solve, docs/optimizer.md
+    section 5), and always for a table's generic NLP (formulation/parametric.py), whose solver
+    serves every point, so that a row does not depend on which worker solved it first."""
+    return (was_cached or bool(form.parameter_names)) and form.stack_starts
+
+
 def _continue(form, options, continued, p, build_time) -> _Search:
     """The search continued from a neighbour's local optima: each solved from its solution and
     multipliers (IPOPT's warm start). No runs when there are none of this NLP; no chosen run
@@ -179,10 +187,8 @@ def optima(form, runs) -> tuple[Solution, ...]:
 
 def _search(spec, form, options, x_starts, p, ws, was_cached, build_time) -> _Search:
     """The multistart, and its retry with every row when the answer breaks a deferred one."""
-    # stacked only for an NLP solved before in this process: creating the stacked solver costs
-    # more than it saves in one solve (docs/optimizer.md section 5)
-    stack = was_cached and form.stack_starts
-    runs, calls, stacked_starts = _multistart(form, options, x_starts, p, ws, stack)
+    runs, calls, stacked_starts = _multistart(form, options, x_starts, p, ws,
+                                              _stacks(form, was_cached))
     chosen = best(runs)
     if chosen.status in (Status.OPTIMAL, Status.ACCEPTABLE) and form.deferred_broken(chosen.x, p):
         # The answer breaks a row left out of the NLP: solve every start again with every row
@@ -192,7 +198,7 @@ def _search(spec, form, options, x_starts, p, ws, was_cached, build_time) -> _Se
         form = formulate(spec, full=True)
         build_time += 0.0 if was_cached else form.build_time
         runs, more_calls, stacked_starts = _multistart(form, options, x_starts, p, None,
-                                                       was_cached and form.stack_starts)
+                                                       _stacks(form, was_cached))
         calls += more_calls
         chosen = best(runs)
     return _Search(form, runs, calls, stacked_starts, chosen, build_time)

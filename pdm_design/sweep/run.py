@@ -3,10 +3,13 @@ worker processes or on a Dask distributed cluster, rows appended to the CSV as t
 `resume` continuing an interrupted sweep, the final tables and plots written at the end.
 
 Warm starts: the grid is cut into chains along the last axis (`grid.chains`); a chain's points
-are solved in order, each starting first from the design found at the point before it (an extra
-start: the spec's `initial`, which picks one design of a flat optimum, is left as it is, so a row
-is the design `optimize` gives its point: solve/tiebreak.py). Chains run in parallel. The chains
-do not depend on the number of workers or on the scheduler, so neither do the results.
+are solved in order, the first from every start as `optimize` solves it, each later one from
+the local optima the point before reached (solve.optimize's `continued`; every start again when
+one of those runs fails) and the design found there as an extra start. The spec's `initial`,
+which picks one design of a flat optimum (solve/tiebreak.py), is left as it is. The swept
+numbers are the NLP's parameters where they can be (formulation/parametric.py): one NLP, its
+solvers and stage maps, serve every point. Chains run in parallel. The chains do not depend on
+the number of workers or on the scheduler, so neither do the results (docs/tables.md).
 
 Verification: a row simulates a quarter of the spec's random builds (`table_verification`).
 
