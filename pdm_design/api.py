@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .accuracy import Accuracy, AccuracySetting
 from .accuracy import accuracy as resolve_accuracy
@@ -28,6 +28,9 @@ class DesignOutcome:
     verification: dict | None = None
     solver: dict | None = None
     accuracy: Accuracy | None = None
+    # the optimizer's distinct local optima (solve.optimize.optima): a table's next point
+    # continues from them
+    optima: tuple = field(default=(), repr=False, compare=False)
 
     @property
     def status_message(self) -> str:
@@ -80,12 +83,13 @@ def evaluate(spec: Spec, *, verify: bool = True,
 
 
 def design(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | None = None,
-           linearise: bool = False, start_from: dict | None = None) -> DesignOutcome:
+           linearise: bool = False, start_from: dict | None = None,
+           continued: tuple = ()) -> DesignOutcome:
     """Solve the spec: evaluate a fixed design, or optimise the free variables; verify."""
     if not spec.free_variables:
         return evaluate(spec, verify=verify, accuracy=accuracy)
     return optimize(spec, verify=verify, accuracy=accuracy, linearise=linearise,
-                    start_from=start_from)
+                    start_from=start_from, continued=continued)
 
 
 # What each accuracy preset asks of the optimizer and of the verification depth: IPOPT's
@@ -99,14 +103,16 @@ SOLVE_PRESETS = {
 
 
 def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | None = None,
-             linearise: bool = False, start_from: dict | None = None) -> DesignOutcome:
+             linearise: bool = False, start_from: dict | None = None,
+             continued: tuple = ()) -> DesignOutcome:
     """Choose the free design variables with IPOPT (multistart), then verify the answer and
     its claimed tolerance box in the simulator. accuracy (default: the spec's) sets the
     simulator's tolerances and, through its base preset, IPOPT's tolerance, the starts and how
     many random builds are run. linearise: also the cvxpy sets of a robust answer (docs/
     optimizer.md section 8; not computed unless asked). start_from: a design to start from
     besides the others (a table's neighbour); the answer is the same design without it
-    (solve/tiebreak.py)."""
+    (solve/tiebreak.py). continued: a neighbour's local optima (`DesignOutcome.optima`) to
+    solve from instead of the starts (solve.optimize)."""
     from .solve import optimize as solve
     from .solve.words import bounds_hint, summarise
 
@@ -114,7 +120,7 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
     preset = SOLVE_PRESETS[accuracy.base]
     result = solve(spec, starts=preset["starts"], tol=preset["tol"],
                    bound_relax_factor=preset["bound_relax_factor"], linearise=linearise,
-                   start_from=start_from)
+                   start_from=start_from, continued=continued)
     # IPOPT honours bounds only to its tolerance (e.g. -1e-8 for a bound at 0): clip to them.
     point = spec.design_at({name: min(max(result.design[name], spec.design[name].min),
                                       spec.design[name].max)
@@ -148,7 +154,7 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
     return DesignOutcome(spec=spec, status=result.status, analysis=analysis,
                          violations=violations, objective=objective, tolerance=tolerance,
                          tolerances=tolerances, verification=verification, solver=solver,
-                         accuracy=accuracy)
+                         accuracy=accuracy, optima=result.optima)
 
 
 def _terms(spec: Spec, nlp_terms: dict, margins: dict, tolerance: dict | None) -> dict:

@@ -36,20 +36,17 @@ TABLE_HEADING = "## Table of robust-optimised points (mass_ratio x friction, 2 w
 TABLE_TARGET = (10_000, 120.0)  # points, seconds with 2 workers
 REPEATS, REPEAT_MAX = 3, 100  # rows up to REPEAT_MAX stages: the fastest of REPEATS runs
 TABLE_NOTE = (
-    "`before` is this code without the table's lighter verification (sweep/run.py "
-    "`table_verification`: a row simulates the nominal build, the 12 corner patterns and a "
-    "quarter of the spec's random builds, 4 of 16, where `optimize` simulates 16; the design is "
-    "the same). CPU a point is the user and system time of the table's process and its workers "
-    "(os.wait4), less sensitive to the shared machine's load than the wall time. "
-    "Each point of this table is still a new NLP (its friction and mass ratio are constants in "
-    "the CasADi expressions): it is formulated, its IPOPT solvers created and its stage maps "
-    "built, then solved from 8 starts and the tie-break, its box checked through the stage maps "
-    "and simulated. The old code kept every point's NLP and solvers (0.46 GB at 100 points); "
-    "the new one keeps the last 16. What the target needs and is not done: one NLP per sweep, "
-    "the swept scene numbers (palm friction, and the fixed design values) as NLP parameters, so "
-    "that a point reuses the built NLP, its solvers (stacked starts) and its stage maps; the "
-    "profile (`--profile 20`, an earlier run on a loaded machine: 37 ms formulation, 15 ms solvers, 33 ms stage maps, 43 ms IPOPT, 23 ms simulator of 161 ms a point) gives what that would save, and what stays (IPOPT runs, simulator) is by "
-    "itself above the 24 ms of CPU a point that 10 000 points in 120 s on 2 workers allow.")
+    "A row simulates the nominal build, the 12 corner patterns and 4 of the spec's 16 random "
+    "builds (sweep/run.py `table_verification`) and checks its box through the stage maps (256 "
+    "samples). CPU a point is the user and system time of the table's process and its workers "
+    "(os.wait4), less sensitive to the shared machine's load than the wall time. The table's "
+    "points share one NLP (friction and mass ratio are its parameters, formulation/"
+    "parametric.py), so a worker formulates it, creates its solvers and builds its stage maps "
+    "once; a chain's first point is solved from the 8 starts (stacked), each later point from "
+    "the local optima of the point before (docs/tables.md, \"Speed\"), and the tie-break is "
+    "skipped where it cannot move the design (solve/tiebreak.py `pinned`). `old` is round 1's "
+    "code, where every point was a new NLP solved from every start.")
+AGREEMENT_SAMPLE = 200  # rows of the new table compared with optimize of their points
 
 
 def run(code: Path, args: list[str], timeout: float) -> dict:
@@ -123,29 +120,64 @@ def table_run(code: Path, points: int, folder: Path, label: str) -> dict:
             "--no-plots"]
     result = run(code, args, timeout=3600)
     result["points"] = side * side
+    result["csv"] = out / "table.csv"
     return result
+
+
+def agreement(csv_path: Path, sample: int) -> dict:
+    """`sample` random rows of a table (seed 0) against `optimize` of their points, each
+    solved alone in this process from every start (its own NLP, not the table's): how many
+    agree (alpha and beta within 1e-6 rad, the box within 1e-7 of itself, the same status)
+    and the largest differences."""
+    import csv
+    import random
+
+    sys.path.insert(0, str(REPO))
+    from pdm_design.api import design
+    from pdm_design.spec import parse_spec, read_spec_data
+
+    rows = list(csv.DictReader(csv_path.open()))
+    chosen = random.Random(0).sample(rows, min(sample, len(rows)))
+    data = read_spec_data(SPEC)
+    worst = {"alpha": 0.0, "beta": 0.0, "tolerance": 0.0}
+    agree = 0
+    for row in chosen:
+        data["design"]["mass_ratio"] = float(row["design.mass_ratio"])
+        data["scene"]["palm"]["friction"] = float(row["scene.palm.friction"])
+        alone = design(parse_spec(data, "point"))
+        diffs = {n: abs(float(row[n]) - alone.analysis.design[n]) for n in ("alpha", "beta")}
+        diffs["tolerance"] = abs(float(row["tolerance"]) / alone.tolerance["dx"] - 1.0)
+        for n, d in diffs.items():
+            worst[n] = max(worst[n], d)
+        agree += (row["status"] == alone.status.value and diffs["alpha"] <= 1e-6
+                  and diffs["beta"] <= 1e-6 and diffs["tolerance"] <= 1e-7)
+    return {"rows": len(chosen), "agree": agree, "worst": worst}
 
 
 # where a table point's time goes: (label, the function whose cumulative time it is)
 PHASES = (
     ("formulate the NLP (CasADi expressions)", "formulation/build.py", "formulate"),
     ("create IPOPT solvers (nlpsol: derivatives)", "casadi.py", "nlpsol"),
-    ("IPOPT runs (8 starts and the tie-break)", "solve/ipopt.py", "solve_once"),
+    ("IPOPT: the 8 starts, stacked (a chain's first point)", "solve/stacked.py",
+     "solve_stacked"),
+    ("IPOPT: the optima of the point before, continued", "solve/optimize.py", "_continue"),
+    ("tie-break (its bound, and its run where that does not settle it)", "solve/tiebreak.py",
+     "nearest_optimum"),
     ("stage-map check of the box (256 samples)", "solve/check.py", "sampled_offsets_check"),
     ("simulator: nominal, corners, random builds", "api.py", "_verify_with_box"),
 )
 
 
 def profile_points(count: int) -> dict:
-    """cProfile of `count` table points solved in this process along one chain (the first two
-    solved before, unprofiled): the point's mean time and each phase's (ms)."""
+    """cProfile of `count` table points solved in this process along the table's chains (two
+    points solved before, unprofiled): the point's mean time and each phase's (ms)."""
     import cProfile
     import pstats
 
     sys.path.insert(0, str(REPO))
     from pdm_design.spec import parse_spec, read_spec_data
-    from pdm_design.sweep.grid import grid_points, point_data, sweep_axes
-    from pdm_design.sweep.run import solve_point, PointTask
+    from pdm_design.sweep.grid import chains, grid_points, sweep_axes
+    from pdm_design.sweep.run import DEFAULT_CHAIN, PointTask, solve_point
 
     data = read_spec_data(SPEC)
     axes = sweep_axes(data, ["mass_ratio=8:12:10", "friction=0.7:0.9:10"])
@@ -153,9 +185,12 @@ def profile_points(count: int) -> dict:
     points = grid_points(axes)
     parse_spec(data, str(SPEC))
 
-    def solve(chosen):
-        for point in chosen:
-            solve_point(PointTask(data, str(SPEC), paths, point.values))
+    def solve(chosen):  # along the table's chains: each later point continued
+        for chain in chains(chosen, DEFAULT_CHAIN):
+            optima = ()
+            for i in chain:
+                optima = solve_point(PointTask(data, str(SPEC), paths, chosen[i].values,
+                                               continued=optima)).get("optima", ())
 
     solve(points[-2:])
     profiler = cProfile.Profile()
@@ -234,6 +269,7 @@ def table_lines(tables) -> list[str]:
         return []
     load = os.getloadavg()
     profile, count = tables.pop("profile", None), tables.pop("profile_count", 0)
+    agreed = tables.pop("agreement", None)
     lines = ["", TABLE_HEADING, "",
              f"Command: `python results/bench_scale.py{''.join(' ' + a for a in sys.argv[1:])}`. "
              f"Load average at the end of the tables: {load[0]:.1f} / {load[1]:.1f} / "
@@ -254,6 +290,14 @@ def table_lines(tables) -> list[str]:
                   f"run's rate {rate:.0f} s ({verdict(rate, TABLE_TARGET[1])}); at its CPU a "
                   f"point on 2 cores of its own {idle:.0f} s ({verdict(idle, TABLE_TARGET[1])}).",
                   "", TABLE_NOTE]
+    if agreed:
+        w = agreed["worst"]
+        lines += ["", f"Rows against `optimize` of their points: {agreed['agree']} of "
+                  f"{agreed['rows']} random rows of the new table (seed 0) agree with their point "
+                  "solved alone from every start on its own NLP (the same status, alpha and beta "
+                  "within 1e-6 rad, the box within 1e-7 of itself); largest differences: alpha "
+                  f"{w['alpha']:.1e} rad, beta {w['beta']:.1e} rad, box {w['tolerance']:.1e} of "
+                  "itself."]
     if profile:
         lines += profile_lines(profile, count)
     return lines
@@ -339,8 +383,13 @@ def main() -> None:
             name = label if runs.count(runs[i]) == 1 else f"{label} ({runs[:i].count(runs[i]) + 1})"
             tables[name] = table_run(code, count, folder, label)
             print(f"table {name}: {tables[name]}", flush=True)
+        new = tables.get("new")
+        if new and new.get("exit") == 0:
+            tables["agreement"] = agreement(new["csv"], AGREEMENT_SAMPLE)
+            print(f"agreement: {tables['agreement']}", flush=True)
     for t in tables.values():
         t.pop("out", None)
+        t.pop("csv", None)
     if args.profile:
         tables["profile"] = profile_points(args.profile)
         tables["profile_count"] = args.profile

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import casadi as ca
 import numpy as np
@@ -164,7 +164,7 @@ class Formulation:
     margin_index: int | None
     fixed: dict[str, float]  # design variables fixed by the spec
     derived_names: tuple[str, ...]
-    norms: np.ndarray  # constant row normalisers of g
+    norms: np.ndarray  # row normalisers of g (constants; a bound Formulation's at its numbers)
     scenario_source: object  # SceneModel.scenario: a Scenario, a builder of one, or None
     build_time: float = 0.0
     # rows left out of this NLP (Condition.deferred): Function (x, p) -> (slack, scale, row),
@@ -172,6 +172,11 @@ class Formulation:
     deferred: object = None
     deferred_conditions: tuple[ConditionInfo, ...] = ()
     stack_starts: bool = True  # SceneModel.stack_starts
+    # scene numbers taken as parameters (formulation/parametric.py), after the backoff in p;
+    # a generic Formulation (aux_init of (design, numbers), norms_of) until `bind`
+    parameter_names: tuple[str, ...] = ()
+    norms_of: object = None  # casadi Function numbers -> row normalisers, generic only
+    scene_values: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @functools.cached_property
     def scenario(self) -> Scenario | None:
@@ -198,7 +203,22 @@ class Formulation:
             required = self.p_default[: len(self.p_names)]
         else:
             required = [float(requirements.get(n, 0.0)) for n in self.p_names]
-        return np.append(np.asarray(required, dtype=float), backoff)
+        return np.concatenate([np.asarray(required, dtype=float), [backoff], self.scene_values])
+
+    def bind(self, spec) -> Formulation:
+        """This generic NLP at one spec's scene numbers (formulation/parametric.py): the same
+        solvers, its p, start values, normalisers, fixed values and stage maps at them."""
+        from .parametric import values
+
+        numbers = values(spec, self.parameter_names)
+        xd = ca.SX.sym("design", self.n_design)
+        required = [float(spec.requirements.get(n, 0.0)) for n in self.p_names]
+        return replace(
+            self, p_default=np.concatenate([required, [DEFAULT_BACKOFF], numbers]),
+            aux_init=ca.Function("aux_init", [xd], [self.aux_init(xd, numbers)]),
+            fixed=_fixed_values(spec), norms=np.asarray(self.norms_of(numbers)).ravel(),
+            scenario_source=self.scenario_source.bind(numbers, spec), scene_values=numbers,
+            norms_of=None)
 
     def requirement(self, info: ConditionInfo, p) -> float:
         """The required margin of one condition under parameters p (0 for non-margin kinds)."""
@@ -279,14 +299,19 @@ def design_inputs(spec, names: tuple[str, ...], defaults: dict[str, float]):
             values[name] = symbols[name] = sym
             bounds[name] = (entry.min, entry.max, entry.guess)
         else:
-            values[name] = None if entry is None else float(entry)
+            # a number, or a parameter's symbol (formulation/parametric.py)
+            values[name] = (None if entry is None else entry if isinstance(entry, ca.SX)
+                            else float(entry))
     return values, symbols, bounds
 
 
 def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
-             defer: bool = True) -> Formulation:
+             defer: bool = True, parameters=None) -> Formulation:
     """The NLP of a scene model, with requirements as parameters; defer: leave the deferred
-    conditions out of it (Formulation.deferred evaluates them)."""
+    conditions out of it (Formulation.deferred evaluates them). parameters: (names, SX
+    symbols) of the scene numbers the model was built on as symbols (formulation/parametric.py):
+    they follow the requirements and the backoff in p, and the Formulation is generic until
+    bound to a spec's numbers (Formulation.bind)."""
     design_names = tuple(model.design_symbols)
     aux_names = tuple(a[0] for a in model.aux)
     x = ca.vertcat(*model.design_symbols.values(), *(a[1] for a in model.aux))
@@ -294,19 +319,16 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
     ubx = [bounds[n][1] for n in design_names] + [a[3] for a in model.aux]
 
     p_names = tuple(sorted({k for c in model.conditions if c.kind == MARGIN for k in c.keys}))
+    scene_names, scene = parameters if parameters is not None else ((), ca.SX(0, 1))
     p = ca.SX.sym("required", len(p_names) + 1)  # the last: the rows' backoff
+    if parameters is not None:
+        p = ca.vertcat(p, scene)
     p_of = {n: p[i] for i, n in enumerate(p_names)}
     backoff = p[len(p_names)]
     t = model.margin_symbol if model.margin_symbol is not None else 0.0
-
-    # Row normalisers: |scale| of each condition at the spec's guess (constants).
-    guess = {n: bounds[n][2] for n in design_names}
-    scale_fn = ca.Function("s", [x], [ca.vertcat(*[c.scale for c in model.conditions])])
-    x_guess = np.concatenate([[guess[n] for n in design_names],
-                              np.asarray(model.aux_init([guess[n] for n in design_names])).ravel()
-                              if model.aux else []])
-    norms = np.abs(np.asarray(scale_fn(x_guess)).ravel())
-    norms = np.where(np.isfinite(norms) & (norms > 1e-9), norms, 1.0)
+    norms_of = _row_norms(model, x, bounds, design_names, scene, parameters is not None)
+    norms = norms_of(np.zeros(0)) if parameters is None else norms_of(scene)
+    norms = [norms[i] for i in range(len(model.conditions))]
 
     rows, lbg, ubg, infos = [], [], [], []
     later = []  # (condition, normaliser, row) of the deferred conditions
@@ -332,7 +354,10 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
         infos.append(ConditionInfo(len(infos), c.name, c.keys, c.where, c.kind, c.equality,
                                    c.quantities))
     conditions = [c for c in model.conditions if not (c.deferred and defer)]
-    norms = np.array([n for c, n in zip(model.conditions, norms) if not (c.deferred and defer)])
+    kept = [n for c, n in zip(model.conditions, norms) if not (c.deferred and defer)]
+    if parameters is not None:  # a generic NLP's normalisers: Formulation.bind
+        norms_of = ca.Function("norms", [scene], [ca.vertcat(*kept)])
+    norms = np.array(kept) if parameters is None else np.zeros(0)
     deferred = None
     if later:
         deferred = ca.Function("deferred", [x, p], [ca.vertcat(*[c.slack for c, _, _ in later]),
@@ -360,8 +385,8 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
     tol_index = aux_names.index("tolerance") + n_d if "tolerance" in aux_names else None
     m_index = aux_names.index("min_margin") + n_d if "min_margin" in aux_names else None
     p_default = np.array([float(spec.requirements.get(n, 0.0)) for n in p_names]
-                         + [DEFAULT_BACKOFF])
-    fixed = {n: v for n, v in _fixed_values(spec).items()}
+                         + [DEFAULT_BACKOFF] + [0.0] * len(scene_names))
+    fixed = _fixed_values(spec)
     return Formulation(
         kind=model.kind, key=key,
         # Rows repeat subexpressions built separately (cos beta, the fall speeds...): merging
@@ -377,7 +402,26 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
         tolerance_index=tol_index, margin_index=m_index, fixed=fixed,
         derived_names=derived_names, norms=norms, scenario_source=model.scenario,
         deferred=deferred, deferred_conditions=deferred_infos, stack_starts=model.stack_starts,
+        parameter_names=scene_names, norms_of=norms_of if parameters is not None else None,
     )
+
+
+def _row_norms(model, x, bounds, design_names, scene, symbolic: bool):
+    """Row normalisers: |scale| of each condition at the spec's guess, 1 where that is not a
+    number above 1e-9. A Function of the scene parameters when the model has them (symbolic),
+    else a function that returns the constants."""
+    guess = [bounds[n][2] for n in design_names]
+    inputs = [x, scene] if symbolic else [x]
+    scale_fn = ca.Function("s", inputs, [ca.vertcat(*[c.scale for c in model.conditions])])
+    if not symbolic:
+        aux = np.asarray(model.aux_init(guess)).ravel() if model.aux else []
+        norms = np.abs(np.asarray(scale_fn(np.concatenate([guess, aux]))).ravel())
+        norms = np.where(np.isfinite(norms) & (norms > 1e-9), norms, 1.0)
+        return lambda _: norms
+    aux = model.aux_init(ca.DM(guess), scene) if model.aux else ca.SX(0, 1)
+    norms = ca.fabs(scale_fn(ca.vertcat(ca.DM(guess), aux), scene))
+    norms = ca.if_else((norms > 1e-9) * (norms < math.inf), norms, 1.0)
+    return ca.Function("norms", [scene], [norms])
 
 
 def fmax_all(values):
@@ -399,7 +443,9 @@ def fmin_all(values):
 
 
 def _fixed_values(spec) -> dict[str, float]:
-    return {k: float(v) for k, v in spec.design.items() if not isinstance(v, Bounds)}
+    """The spec's fixed design numbers (a parameter's symbol is not one: Formulation.bind)."""
+    return {k: float(v) for k, v in spec.design.items()
+            if not isinstance(v, (Bounds, ca.SX))}
 
 
 # Requirements that add rows when above 0 (the stairs' exact nose rows, formulation/stairs.py).

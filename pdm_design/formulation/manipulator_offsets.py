@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import functools
 import threading
+from dataclasses import replace
 
 import casadi as ca
 import numpy as np
@@ -34,12 +35,14 @@ from .manipulator_rows import impact_rows, scene_sizes
 
 
 class Stages:
-    """The stage maps of one formulation's row (design symbols x as the formulation's)."""
+    """The stage maps of one formulation's row (design symbols x as the formulation's; with
+    scene parameters, formulation/parametric.py, x is followed by them: `bind`)."""
 
-    def __init__(self, spec, model, m):
+    def __init__(self, spec, model, m, parameters=None):
         self.spec, self.m = spec, m
         self.N, self.P = spec.verification.stages, m.parked
-        self.x = ca.vertcat(*model.design_symbols.values(), *(s for _, s, _, _ in model.aux))
+        self.x = ca.vertcat(*model.design_symbols.values(), *(s for _, s, _, _ in model.aux),
+                            *([] if parameters is None else [parameters]))
         self._parked = _parked_clearance(spec, m)
         self._cache: dict[tuple, tuple] = {}
         self._maps: dict[tuple[int, int], object] = {}
@@ -48,6 +51,10 @@ class Stages:
     def __call__(self) -> Scenario:
         """The whole row's scenario (Formulation.scenario builds it on first use)."""
         return self.scenario()
+
+    def bind(self, numbers, spec) -> Bound:
+        """These maps at one spec's scene numbers (the parameters after x)."""
+        return Bound(self, np.asarray(numbers, dtype=float), spec)
 
     @functools.cached_property
     def start(self):
@@ -225,6 +232,26 @@ class Stages:
             buffer.set_arg(i, memoryview(a))
         call()
         return [out.copy() if out.shape[1] > 1 else out[:, 0].copy() for out in outs]
+
+
+class Bound:
+    """A generic row's stage maps (Stages with scene parameters) at one spec's numbers: what
+    solve/check.py and the linearised sets ask of Stages, x without the numbers."""
+
+    def __init__(self, stages: Stages, numbers: np.ndarray, spec):
+        self.stages, self.numbers, self.spec = stages, numbers, spec
+        self.N, self.P = stages.N, stages.P
+
+    def __call__(self) -> Scenario:
+        sc = self.stages.scenario()
+        x = ca.SX.sym("x", self.stages.x.numel() - self.numbers.size)
+        d = ca.SX.sym("d", sc.function.size1_in(1))
+        slack, scale = sc.function(ca.vertcat(x, self.numbers), d)
+        return replace(sc, function=ca.Function("offsets", [x, d], [slack, scale]))
+
+    def stream(self, x, *args, **kwargs) -> dict:
+        x = np.concatenate([np.asarray(x, dtype=float).ravel(), self.numbers])
+        return self.stages.stream(x, *args, **kwargs)
 
 
 def _worse(worst: dict, slack, scale, rows, required, K: int) -> None:

@@ -68,8 +68,9 @@ OUTSIDE_MIN_MARGIN = ("parked_palms",)
 PARKED_ROWS_CAP = 16  # parked palms checked behind the carrying one, at most (docs/optimizer.md)
 
 
-def build(spec):
-    """SceneModel and bounds of a manipulators spec."""
+def build(spec, parameters=None):
+    """SceneModel and bounds of a manipulators spec. parameters: the SX symbols of the scene
+    numbers the spec holds as symbols (formulation/parametric.py): aux_init takes them too."""
     scene = spec.scene
     values, symbols, bounds = design_inputs(spec, ManipulatorsDesign.VARIABLES, DEFAULTS)
     robust = float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0
@@ -105,7 +106,8 @@ def build(spec):
         start.append(0.0)
     if epigraph:
         start.append(0.0)
-    aux_init = ca.Function("aux_init", [xd], [ca.vertcat(*start)])
+    inputs = [xd] if parameters is None else [xd, parameters]
+    aux_init = ca.Function("aux_init", inputs, [ca.vertcat(*start)])
 
     objective_terms = {
         "max_offset_tolerance": tau if robust else ca.SX(0.0),

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..formulation import formulate
 from ..formulation.allocation import allocating, pivot_box, values_at
+from ..formulation import build
 from ..formulation.build import FULL
 from ..formulation.common import BACKOFF_FACTOR, MODEL, OBJECTIVE_SENSE
 from ..status import Status
@@ -43,6 +44,9 @@ class _Search:
     kept: bool = False
 
 
+DISTINCT = 1e-4  # two optima whose designs differ by less (of the bounds) are one
+
+
 def optimize(
     spec,
     *,
@@ -58,6 +62,7 @@ def optimize(
     check_samples: int = 256,
     start_from: dict[str, float] | None = None,
     tie_break: bool = True,
+    continued: tuple[Solution, ...] = (),
 ) -> OptimizeResult:
     """Best design of `spec` (see docs/optimizer.md).
 
@@ -76,6 +81,10 @@ def optimize(
         table's neighbouring point): it may speed the solve, never move the spec's guess.
     tie_break: of an optimal set, the design nearest the spec's guess (solve/tiebreak.py: the
         same spec gives the same design whatever the starts found first).
+    continued: the local optima of a neighbouring spec with the same NLP (`result.optima`: a
+        table's point before this one, formulation/parametric.py): each is solved again from
+        its solution and multipliers instead of the starts; the starts run only if one of
+        those runs does not succeed (docs/tables.md, "Warm starts").
     """
     tic = time.perf_counter()
     form, was_cached, build_time, ws = _formulation(spec, warm_start)
@@ -85,7 +94,11 @@ def optimize(
     options = SolverOptions(max_iter=max_iter, tol=tol, bound_relax_factor=bound_relax_factor)
     guess, lows, highs, x_starts = _start_points(spec, form, p, starts, seed, start_from)
 
-    search = _search(spec, form, options, x_starts, p, ws, was_cached, build_time)
+    search = _continue(form, options, continued, p, build_time)
+    if not search.runs or search.chosen is None:  # none to continue from, or one failed
+        tried = search.runs
+        search = _search(spec, form, options, x_starts, p, ws, was_cached, build_time)
+        search.runs, search.calls = tried + search.runs, tried + search.calls
     if search.chosen.status is Status.OPTIMAL and tie_break:
         _tie_break(search, options, p, guess, lows, highs)
     status, x = search.chosen.status, search.chosen.x
@@ -101,7 +114,7 @@ def optimize(
 def _formulation(spec, warm_start):
     """(the formulation, whether it was built before, its build seconds, the warm start's
     solution or None): the full NLP when the warm start solved that one."""
-    was_cached = _is_cached(spec)
+    was_cached = build.is_cached(spec)
     form = formulate(spec)
     build_time = 0.0 if was_cached else form.build_time
     ws = warm_start.solution if warm_start is not None else None
@@ -134,22 +147,58 @@ def _start_points(spec, form, p, starts, seed, start_from):
     return guess, lows, highs, form.defined_starts(designs, guess, p)
 
 
+def _stacks(form, was_cached: bool) -> bool:
+    """Whether the starts are solved stacked: only for an NLP solved before in this process
+    (creating the stacked solver costs more than it saves in one solve, docs/optimizer.md
+    section 5), and always for a table's generic NLP (formulation/parametric.py), whose solver
+    serves every point, so that a row does not depend on which worker solved it first."""
+    return (was_cached or bool(form.parameter_names)) and form.stack_starts
+
+
+def _continue(form, options, continued, p, build_time) -> _Search:
+    """The search continued from a neighbour's local optima: each solved from its solution and
+    multipliers (IPOPT's warm start). No runs when there are none of this NLP; no chosen run
+    (search from the starts, these runs counted too) unless every run succeeds without
+    breaking a deferred row."""
+    if not continued or any(s.key != form.key for s in continued):
+        return _Search(form, [], [], 0, None, build_time)
+    solver = solver_for(form.key, form.nlp, replace(options, warm=True))
+    runs = [solve_once(solver, s.x, p, form.lbx, form.ubx, form.lbg, form.ubg, lam_x0=s.lam_x,
+                       lam_g0=s.lam_g, start=-1 - i) for i, s in enumerate(continued)]
+    chosen = best(runs)
+    if any(r.status is not Status.OPTIMAL for r in runs) or form.deferred_broken(chosen.x, p):
+        chosen = None
+    return _Search(form, runs, list(runs), 0, chosen, build_time)
+
+
+def optima(form, runs) -> tuple[Solution, ...]:
+    """The distinct local optima among the runs that succeeded, best first: a design apart
+    from every better one by more than DISTINCT of its bounds (the auxiliaries aside)."""
+    n = form.n_design
+    span = form.ubx[:n] - form.lbx[:n]
+    span = np.where(np.isfinite(span) & (span > 0.0), span, 1.0)
+    kept = []
+    for run in sorted((r for r in runs if r.status is Status.OPTIMAL), key=lambda r: r.f):
+        if all(np.max(np.abs(run.x[:n] - k.x[:n]) / span, initial=0.0) > DISTINCT
+               for k in kept):
+            kept.append(run)
+    return tuple(Solution(form.key, r.x, r.lam_x, r.lam_g) for r in kept)
+
+
 def _search(spec, form, options, x_starts, p, ws, was_cached, build_time) -> _Search:
     """The multistart, and its retry with every row when the answer breaks a deferred one."""
-    # stacked only for an NLP solved before in this process: creating the stacked solver costs
-    # more than it saves in one solve (docs/optimizer.md section 5)
-    stack = was_cached and form.stack_starts
-    runs, calls, stacked_starts = _multistart(form, options, x_starts, p, ws, stack)
+    runs, calls, stacked_starts = _multistart(form, options, x_starts, p, ws,
+                                              _stacks(form, was_cached))
     chosen = best(runs)
     if chosen.status in (Status.OPTIMAL, Status.ACCEPTABLE) and form.deferred_broken(chosen.x, p):
         # The answer breaks a row left out of the NLP: solve every start again with every row
         # (and diagnose with them if that fails). A spec that fails without them is diagnosed
         # without them: the analysis' margins at the diagnosed point include theirs.
-        was_cached = _is_cached(spec, full=True)
+        was_cached = build.is_cached(spec, full=True)
         form = formulate(spec, full=True)
         build_time += 0.0 if was_cached else form.build_time
         runs, more_calls, stacked_starts = _multistart(form, options, x_starts, p, None,
-                                                       was_cached and form.stack_starts)
+                                                       _stacks(form, was_cached))
         calls += more_calls
         chosen = best(runs)
     return _Search(form, runs, calls, stacked_starts, chosen, build_time)
@@ -199,7 +248,7 @@ def _assemble(spec, search: _Search, status, x, p, reqs, violations, at_bounds, 
         message=_message(status, violations, at_bounds),
         at_bounds=tuple(at_bounds) if violations else (),
         solution=Solution(form.key, x, search.chosen.lam_x, search.chosen.lam_g),
-        tolerances=allocated,
+        tolerances=allocated, optima=optima(form, search.runs),
     )
 
 
@@ -369,13 +418,6 @@ def _check_requirements(spec, requirements: dict) -> None:
                              f"(one of {', '.join(known)})")
         if isinstance(value, bool) or not -1.0 <= float(value) <= 1.0:  # NaN fails too
             raise ValueError(f"requirements: {name} = {value!r}, expected a number in [-1, 1]")
-
-
-def _is_cached(spec, full=False) -> bool:
-    from ..formulation import build
-    from ..formulation.common import spec_key
-
-    return spec_key(spec) + (build.FULL if full else "") in build._CACHE
 
 
 def _length_scale(spec, design) -> float:

@@ -113,6 +113,9 @@ class OptimizeResult:
     message: str
     solution: Solution | None = field(default=None, repr=False)
     at_bounds: tuple[str, ...] = ()  # design variables at a bound of the least-violation design
+    # the distinct local optima the runs reached (solve.optimize.optima): what a table continues
+    # from at its next point (optimize's `continued`)
+    optima: tuple[Solution, ...] = field(default=(), repr=False)
     # the allocated and given tolerances of a spec whose [tolerances] allocates (formulation/
     # allocation.py): {quantity, applies_to, value (SI), unit, allocated}; None otherwise
     tolerances: tuple[dict, ...] | None = None

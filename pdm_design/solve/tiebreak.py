@@ -18,6 +18,20 @@ moved a unique optimum, beta on its slip limit, by 1e-6 rad toward the guess), a
 f <= cap holds to IPOPT's tolerance (10 tol is accepted). An answer that moves no variable by more than FLAT of its
 bounds is a curved optimum's slide along the slack, not a flat set: the multistart's answer
 stands then, as it does when the second solve fails (`stats.tie_break_kept`).
+
+The second solve is not run where its answer is known to be the multistart's (`pinned`): where
+no design within the tie-break's slack s (the cap's RELATIVE tol max(|f*|, ABSOLUTE) and the
+10 tol IPOPT may overstep it by) is FLAT away. With A the gradients of the active rows and
+bounds (equality rows, and those with a multiplier), a move d splits into a part off them,
+pinv(A) (A d), and one along them, N z (N: A's null space). Off them: each active row i with
+multiplier lam_i raises the objective by |lam_i| |A_i d| at first order, so |A_i d| <=
+s / |lam_i| (0 for an equality). Along them the objective rises at second order, z' H z / 2
+with H the Lagrangian's Hessian on N, so a design variable k moves by at most
+sqrt(2 s c' H^+ c), c = N' e_k, if every flat direction of H leaves the design alone (the
+landing-speed interval's ends are free on a robust optimum: they move no design variable); a
+flat direction that moves the design is a flat optimum, and the tie-break runs. When the sum
+of both parts is below a third of FLAT for every free design variable, the tie-break could not
+move the design by FLAT: it is skipped (`stats.tie_break_iterations` -1).
 """
 
 from __future__ import annotations
@@ -66,7 +80,7 @@ def nearest_optimum(form, options, chosen, p, guess: dict[str, float], lows, hig
     objective, solved from the multistart's best run `chosen`; kept unless that solve does not
     succeed or moves no variable by more than FLAT of its bounds (a curved optimum: `chosen` is
     the one). (None, False) without free variables."""
-    if form.n_design == 0:
+    if form.n_design == 0 or pinned(form, chosen, p, options.tol, lows, highs):
         return None, False
     names = form.design_names
     lo, hi = np.asarray(lows, float), np.asarray(highs, float)
@@ -89,6 +103,67 @@ def nearest_optimum(form, options, chosen, p, guess: dict[str, float], lows, hig
         return run, False
     moved = np.max(np.abs(run.x[:form.n_design] - chosen.x[:form.n_design]) / span)
     return run, bool(moved > FLAT)
+
+
+ACTIVE = 1e-6  # a multiplier above this of the largest marks an active row or bound
+FLAT_CURVATURE = 1e-8  # a curvature below this of the Hessian's largest entry is none
+_JACOBIANS: Bounded = Bounded()
+
+
+def pinned(form, run, p, tol: float, lows, highs) -> bool:
+    """Whether the tie-break could not move `run`'s design by FLAT of its bounds: the module
+    docstring's bound, each free design variable's move under the tie-break's whole slack
+    (the cap and IPOPT's tolerance on it) below a third of FLAT."""
+    x, lam_g, lam_x = (np.asarray(v, float).ravel() for v in (run.x, run.lam_g, run.lam_x))
+    largest = max(np.max(np.abs(lam_g), initial=0.0), np.max(np.abs(lam_x), initial=0.0))
+    if not largest > 0.0:
+        return False
+    jac, hess = _derivatives(form)
+    equality = form.lbg == form.ubg
+    rows = equality | (np.abs(lam_g) > ACTIVE * largest)
+    bounds = np.abs(lam_x) > ACTIVE * largest
+    A = np.vstack([np.asarray(jac(x, p), float)[rows], np.eye(x.size)[bounds]])
+    slack = (RELATIVE + 10.0) * tol * max(abs(run.f), ABSOLUTE)
+    lam = np.concatenate([np.abs(lam_g[rows]), np.abs(lam_x[bounds])])
+    reach = np.where(np.concatenate([equality[rows], np.zeros(bounds.sum(), bool)]), 0.0,
+                     slack / np.where(lam > 0.0, lam, np.inf))
+    n = form.n_design
+    # first order: off the active rows, d = pinv(A) (A d), each |A_i d| <= slack / |lam_i|
+    first = np.abs(np.linalg.pinv(A)[:n]) @ reach
+    # second order: along them, d = N z with z' H z / 2 <= slack (H: the Lagrangian's Hessian
+    # on the null space N of A), so |d_k| <= sqrt(2 slack c' H^+ c), c = N' e_k
+    u, sv, vt = np.linalg.svd(A)
+    null = vt[int(np.sum(sv > 1e-9 * sv[0])):].T
+    second = np.zeros(n)
+    if null.shape[1]:
+        full = np.asarray(hess(x, p, lam_g), float)
+        w, v = np.linalg.eigh(0.5 * (null.T @ (full + full.T) @ null))
+        zero = FLAT_CURVATURE * max(np.max(np.abs(full)), 1.0)  # rounding, in H's units
+        flat = np.abs(w) <= zero
+        if np.any(w < -zero):
+            return False  # not a minimum along the rows: no bound
+        along = null[:n] @ v  # each design variable's share of each curvature direction
+        if np.any(np.abs(along[:, flat]) > 1e-9):
+            return False  # a flat direction moves the design
+        second = np.sqrt(2.0 * slack * np.sum(along[:, ~flat] ** 2 / w[~flat], axis=1))
+    span = np.asarray(highs, float) - np.asarray(lows, float)
+    span = np.where(span > 0.0, span, 1.0)
+    move = (first + second) / span
+    return bool(np.all(np.isfinite(move)) and np.all(move < FLAT / 3.0))
+
+
+def _derivatives(form):
+    """(Jacobian of the rows (x, p), Hessian of the Lagrangian (x, p, lam_g)), cached."""
+    with _LOCK:
+        found = _JACOBIANS.get(form.key)
+    if found is None:
+        x, p, f, g = (form.nlp[k] for k in ("x", "p", "f", "g"))
+        lam = ca.SX.sym("lam_g", g.numel())
+        found = (ca.Function("jac_g", [x, p], [ca.jacobian(g, x)]),
+                 ca.Function("hess_l", [x, p, lam], [ca.hessian(f + ca.dot(lam, g), x)[0]]))
+        with _LOCK:
+            _JACOBIANS[form.key] = found
+    return found
 
 
 _OBJECTIVES: Bounded = Bounded()

@@ -143,6 +143,9 @@ class Spec:
     # sha256 of the spec's content (spec.loader.content_digest): a saved design names the spec
     # it was made from with it, so a sheet can refuse one whose spec has changed since
     digest: str = field(default="", compare=False)
+    # spec paths ("design.mass_ratio", "scene.palm.friction") a table varies: the NLP takes
+    # those it can as parameters, one NLP for every point (formulation/parametric.py)
+    nlp_parameters: tuple[str, ...] = field(default=(), compare=False)
 
     @property
     def kind(self) -> str:

@@ -3,10 +3,13 @@ worker processes or on a Dask distributed cluster, rows appended to the CSV as t
 `resume` continuing an interrupted sweep, the final tables and plots written at the end.
 
 Warm starts: the grid is cut into chains along the last axis (`grid.chains`); a chain's points
-are solved in order, each starting first from the design found at the point before it (an extra
-start: the spec's `initial`, which picks one design of a flat optimum, is left as it is, so a row
-is the design `optimize` gives its point: solve/tiebreak.py). Chains run in parallel. The chains
-do not depend on the number of workers or on the scheduler, so neither do the results.
+are solved in order, the first from every start as `optimize` solves it, each later one from
+the local optima the point before reached (solve.optimize's `continued`; every start again when
+one of those runs fails) and the design found there as an extra start. The spec's `initial`,
+which picks one design of a flat optimum (solve/tiebreak.py), is left as it is. The swept
+numbers are the NLP's parameters where they can be (formulation/parametric.py): one NLP, its
+solvers and stage maps, serve every point. Chains run in parallel. The chains do not depend on
+the number of workers or on the scheduler, so neither do the results (docs/tables.md).
 
 Verification: a row simulates a quarter of the spec's random builds (`table_verification`).
 
@@ -42,7 +45,7 @@ from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future
 from concurrent.futures import wait as wait_futures
 from contextlib import contextmanager, suppress
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..errors import SpecError
@@ -75,17 +78,28 @@ class PointTask:
     paths: tuple[tuple[str, ...], ...]
     values: tuple[float, ...]
     warm: dict[str, float] | None = None
+    # the local optima of the point before (OPTIMA of its result): solved again from them,
+    # the starts only when that fails (solve.optimize's `continued`)
+    continued: tuple = ()
 
 
-def solve_point(task: PointTask) -> dict[str, str]:
-    """Solve one grid point; its table cells (no sweep columns). Never raises for a bad point:
-    an exception becomes a row with status `error` and the exception as its reason."""
+OPTIMA = "optima"  # the key of a point's local optima in solve_point's answer (not a cell)
+
+
+def solve_point(task: PointTask) -> dict:
+    """Solve one grid point; its table cells (no sweep columns) and, under OPTIMA, the local
+    optima its next point continues from. Never raises for a bad point: an exception becomes
+    a row with status `error` and the exception as its reason."""
     from ..api import design
 
     try:
         spec = table_verification(parse_spec(point_data(task.data, task.paths, task.values),
                                              task.source))
-        return tables.outcome_cells(design(spec, start_from=task.warm), spec.kind)
+        # the swept numbers as the NLP's parameters: one NLP, its solvers and stage maps, for
+        # every point (formulation/parametric.py)
+        spec = replace(spec, nlp_parameters=tuple(".".join(path) for path in task.paths))
+        outcome = design(spec, start_from=task.warm, continued=task.continued)
+        return tables.outcome_cells(outcome, spec.kind) | {OPTIMA: outcome.optima}
     except Exception as error:  # one point's failure must not end the sweep
         return tables.error_cells(error)
 
@@ -163,6 +177,7 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
     todo = [p for p in points if p.key not in done]
     all_chains = chains(points, chain)
     csv_path = folder / CSV_NAME
+    optima: dict = {}  # grid key -> the local optima its next point continues from
     # Ctrl-C from here until the workers are shut down: noted while the pool starts, runs and
     # stops, raised as KeyboardInterrupt only where the sweep is safe to stop (`interrupts`)
     with interrupt_guard() as guard:
@@ -177,7 +192,9 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
                     progress_bar(len(points), f"sweep {Path(source).name}",
                                  enabled=show_progress, completed=reused) as advance:
 
-                def record(i: int, cells: dict[str, str]) -> None:
+                def record(i: int, cells: dict) -> None:
+                    cells = dict(cells)
+                    optima[points[i].key] = cells.pop(OPTIMA, ())
                     row = {**dict(zip(sweep_columns, points[i].key)), **cells}
                     stream.write(tables.csv_line([row.get(c, "") for c in header]))
                     stream.flush()
@@ -186,8 +203,9 @@ def run_sweep(spec_path: str | os.PathLike, sweeps: list[str] | tuple[str, ...],
                     if on_row is not None:
                         on_row(points[i], row)
 
-                def task(i: int, warm: dict | None) -> PointTask:
-                    return PointTask(data, labels[i], paths, points[i].values, warm)
+                def task(i: int, warm: dict | None, before) -> PointTask:
+                    return PointTask(data, labels[i], paths, points[i].values, warm,
+                                     optima.pop(before, ()) if before is not None else ())
 
                 if todo:
                     _execute(executor, all_chains, points, done, free, task, record,
@@ -318,8 +336,8 @@ def _execute(executor, all_chains, points, done, free, task, record, stop) -> No
             k += 1
         position[c] = k
         if k < len(members):
-            before = done.get(points[members[k - 1]].key) if k else None
-            future = executor.submit(task(members[k], _warm(before, free)))
+            before = points[members[k - 1]].key if k else None
+            future = executor.submit(task(members[k], _warm(done.get(before), free), before))
             pending[future] = (c, members[k])
 
     try:
