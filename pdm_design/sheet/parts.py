@@ -24,6 +24,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..units import workshop
+
 MM = 1e3
 HOLE_SPACING_FRACTION = 0.5   # link holes on the palm: half the palm's width apart
 BOX_WORDS = ("worst-case box the optimizer computed (every build with all its errors inside it "
@@ -68,17 +70,9 @@ PART_WORDS = {
 
 
 def workshop_value(value: float, unit: str) -> tuple[float, str]:
-    """(value, unit) in workshop units: m -> mm, rad -> degrees, m/s -> mm/s, kg -> g; others
-    as given."""
-    if unit == "m":
-        return value * MM, "mm"
-    if unit == "rad":
-        return math.degrees(value), "deg"
-    if unit == "m/s":
-        return value * MM, "mm/s"
-    if unit == "kg":
-        return value * 1e3, "g"
-    return value, unit
+    """(value, unit) in workshop units (units.workshop: m -> mm, rad -> degrees, m/s -> mm/s,
+    kg -> g, N m -> N mm; others as given)."""
+    return workshop(value, unit)
 
 
 def workshop_column(column: str, value=None) -> tuple[str, object]:

@@ -20,6 +20,9 @@ the end of STREAM_ORDER so that earlier quantities keep their random streams.
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+from ..units import WORKSHOP
+
 DISTRIBUTIONS = ("normal", "uniform")
 APPLIES_TO = ("each", "lot")
 SIGMAS_PER_TOLERANCE = 3.0  # normal: sigma = t / 3
@@ -42,38 +45,39 @@ class Quantity:
         return self.applies[0]
 
 
-def _q(name, unit, build_unit, factor, applies, what):
+def _q(name, unit, applies, what):
+    build_unit, factor = WORKSHOP.get(unit, (unit, 1.0))  # units.py: one table for every layer
     return Quantity(name, unit, build_unit, factor, applies, what)
 
 
 _EACH_OR_LOT, _LOT = ("each", "lot"), ("lot",)
 QUANTITIES: dict[str, dict[str, Quantity]] = {
     "manipulators": {q.name: q for q in (
-        _q("pivot_x", "m", "mm", 1e3, _EACH_OR_LOT, "a pivot's place along the row"),
-        _q("pivot_y", "m", "mm", 1e3, _EACH_OR_LOT, "a pivot's height (up)"),
-        _q("link_length", "m", "mm", 1e3, _EACH_OR_LOT, "a manipulator's link length"),
-        _q("back_stop", "rad", "deg", 57.29577951308232, _EACH_OR_LOT,
+        _q("pivot_x", "m", _EACH_OR_LOT, "a pivot's place along the row"),
+        _q("pivot_y", "m", _EACH_OR_LOT, "a pivot's height (up)"),
+        _q("link_length", "m", _EACH_OR_LOT, "a manipulator's link length"),
+        _q("back_stop", "rad", _EACH_OR_LOT,
            "a back stop's angle alpha (the palm rests at -alpha)"),
-        _q("palm_mass", "kg", "g", 1e3, _EACH_OR_LOT, "a palm's mass"),
-        _q("friction", "1", "1", 1.0, _LOT, "the object-palm friction coefficient"),
-        _q("object_mass", "kg", "g", 1e3, _LOT, "the object's mass"),
-        _q("object_width", "m", "mm", 1e3, _LOT, "the object's width along the row"),
-        _q("feed_x", "m", "mm", 1e3, _LOT, "where the object starts along the row"),
-        _q("feed_speed", "m/s", "mm/s", 1e3, _LOT,
+        _q("palm_mass", "kg", _EACH_OR_LOT, "a palm's mass"),
+        _q("friction", "1", _LOT, "the object-palm friction coefficient"),
+        _q("object_mass", "kg", _LOT, "the object's mass"),
+        _q("object_width", "m", _LOT, "the object's width along the row"),
+        _q("feed_x", "m", _LOT, "where the object starts along the row"),
+        _q("feed_speed", "m/s", _LOT,
            "the object's initial speed (along its initial velocity; +x if that is 0)"),
-        _q("link_mass", "kg", "g", 1e3, _EACH_OR_LOT,
+        _q("link_mass", "kg", _EACH_OR_LOT,
            "the mass of each of a manipulator's links (nominal: [scene.links] mass)"),
-        _q("pivot_friction", "N m", "N mm", 1e3, _EACH_OR_LOT,
+        _q("pivot_friction", "N m", _EACH_OR_LOT,
            "a manipulator's Coulomb pivot friction torque, its joints together (nominal: "
            "[scene.pivots] friction_torque)"),
     )},
     "stairs": {q.name: q for q in (
-        _q("rise", "m", "mm", 1e3, _EACH_OR_LOT, "a step's rise"),
-        _q("tread", "m", "mm", 1e3, _EACH_OR_LOT, "a step's tread"),
-        _q("restitution", "1", "1", 1.0, _LOT, "the ball's coefficient of restitution"),
-        _q("friction", "1", "1", 1.0, _LOT, "the ball-step friction coefficient"),
-        _q("launch_speed", "m/s", "mm/s", 1e3, _LOT, "the launch speed"),
-        _q("launch_x", "m", "mm", 1e3, _LOT, "where the ball is launched along the stairs"),
+        _q("rise", "m", _EACH_OR_LOT, "a step's rise"),
+        _q("tread", "m", _EACH_OR_LOT, "a step's tread"),
+        _q("restitution", "1", _LOT, "the ball's coefficient of restitution"),
+        _q("friction", "1", _LOT, "the ball-step friction coefficient"),
+        _q("launch_speed", "m/s", _LOT, "the launch speed"),
+        _q("launch_x", "m", _LOT, "where the ball is launched along the stairs"),
     )},
 }
 
