@@ -127,8 +127,8 @@ def table_run(code: Path, points: int, folder: Path, label: str) -> dict:
 def agreement(csv_path: Path, sample: int) -> dict:
     """`sample` random rows of a table (seed 0) against `optimize` of their points, each
     solved alone in this process from every start (its own NLP, not the table's): how many
-    agree (alpha and beta within 1e-6 rad, the box within 1e-7 of itself, the same status)
-    and the largest differences."""
+    agree (alpha and beta within 1e-5 rad, the box within 1e-6 of itself, the same status: what
+    tests/test_sweep.py asks of a row and its point solved alone) and the largest differences."""
     import csv
     import random
 
@@ -149,8 +149,8 @@ def agreement(csv_path: Path, sample: int) -> dict:
         diffs["tolerance"] = abs(float(row["tolerance"]) / alone.tolerance["dx"] - 1.0)
         for n, d in diffs.items():
             worst[n] = max(worst[n], d)
-        agree += (row["status"] == alone.status.value and diffs["alpha"] <= 1e-6
-                  and diffs["beta"] <= 1e-6 and diffs["tolerance"] <= 1e-7)
+        agree += (row["status"] == alone.status.value and diffs["alpha"] <= 1e-5
+                  and diffs["beta"] <= 1e-5 and diffs["tolerance"] <= 1e-6)
     return {"rows": len(chosen), "agree": agree, "worst": worst}
 
 
@@ -295,7 +295,7 @@ def table_lines(tables) -> list[str]:
         lines += ["", f"Rows against `optimize` of their points: {agreed['agree']} of "
                   f"{agreed['rows']} random rows of the new table (seed 0) agree with their point "
                   "solved alone from every start on its own NLP (the same status, alpha and beta "
-                  "within 1e-6 rad, the box within 1e-7 of itself); largest differences: alpha "
+                  "within 1e-5 rad, the box within 1e-6 of itself); largest differences: alpha "
                   f"{w['alpha']:.1e} rad, beta {w['beta']:.1e} rad, box {w['tolerance']:.1e} of "
                   "itself."]
     if profile:

@@ -66,9 +66,9 @@ def test_a_point_solved_on_the_generic_nlp_is_its_own_optimum(q, mu):
     own = optimize(point(q, mu, parametric=False), check_samples=64)
     generic = optimize(point(q, mu), check_samples=64)
     assert own.status is generic.status is own.status.OPTIMAL
-    assert generic.tolerance["dx"] == pytest.approx(own.tolerance["dx"], rel=1e-7)
+    assert generic.tolerance["dx"] == pytest.approx(own.tolerance["dx"], rel=1e-6)
     for name in ("alpha", "beta"):
-        assert generic.design[name] == pytest.approx(own.design[name], abs=1e-6)
+        assert generic.design[name] == pytest.approx(own.design[name], abs=1e-5)
     assert generic.checks["sampled_offsets"]["passed"]
 
 
@@ -79,9 +79,9 @@ def test_a_chain_continued_from_its_optima_reaches_the_cold_multistarts_designs(
         cold = optimize(point(10.5, float(mu)), check_samples=0)
         if continued:
             assert warm.stats.starts == len(continued)  # no cold start was needed
-        assert warm.tolerance["dx"] == pytest.approx(cold.tolerance["dx"], rel=1e-7)
+        assert warm.tolerance["dx"] == pytest.approx(cold.tolerance["dx"], rel=1e-6)
         for name in ("alpha", "beta"):
-            assert warm.design[name] == pytest.approx(cold.design[name], abs=1e-6)
+            assert warm.design[name] == pytest.approx(cold.design[name], abs=1e-5)
         continued = warm.optima
         assert continued and continued[0].key == formulate(point(10.5, float(mu))).key
 
@@ -126,7 +126,7 @@ def test_a_table_of_the_generic_nlp_rows_equals_points_solved_alone(tmp_path):
     for row in rows[::3]:
         alone = design(point(float(row["design.mass_ratio"]),
                              float(row["scene.palm.friction"]), parametric=False))
-        assert float(row["tolerance"]) == pytest.approx(alone.tolerance["dx"], rel=1e-7)
+        assert float(row["tolerance"]) == pytest.approx(alone.tolerance["dx"], rel=1e-6)
         for name in ("alpha", "beta"):
-            assert float(row[name]) == pytest.approx(alone.analysis.design[name], abs=1e-6)
+            assert float(row[name]) == pytest.approx(alone.analysis.design[name], abs=1e-5)
         assert row["verified"] == "true"
