@@ -325,34 +325,11 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
         p = ca.vertcat(p, scene)
     p_of = {n: p[i] for i, n in enumerate(p_names)}
     backoff = p[len(p_names)]
-    t = model.margin_symbol if model.margin_symbol is not None else 0.0
     norms_of = _row_norms(model, x, bounds, design_names, scene, parameters is not None)
     norms = norms_of(np.zeros(0)) if parameters is None else norms_of(scene)
     norms = [norms[i] for i in range(len(model.conditions))]
 
-    rows, lbg, ubg, infos = [], [], [], []
-    later = []  # (condition, normaliser, row) of the deferred conditions
-    for i, c in enumerate(model.conditions):
-        if c.kind == MARGIN and not c.equality:
-            need = fmax_all([p_of[k] for k in c.keys])
-            expr = c.slack - (need + (t if c.epigraph else 0.0)) * c.scale
-        else:
-            expr = c.slack
-        # in the normalised row's units, those IPOPT's tolerances are measured in
-        if c.equality:
-            rows.append(expr / norms[i])
-        elif c.kind != MODEL:
-            rows.append(expr / norms[i] - backoff)
-        else:
-            unit = 0.0 if c.backoff_unit is None else ca.fabs(c.backoff_unit)
-            rows.append((expr - backoff * unit) / norms[i])
-        if c.deferred and defer:
-            later.append((c, norms[i], rows.pop()))
-            continue
-        lbg.append(0.0)
-        ubg.append(0.0 if c.equality else math.inf)
-        infos.append(ConditionInfo(len(infos), c.name, c.keys, c.where, c.kind, c.equality,
-                                   c.quantities))
+    rows, lbg, ubg, infos, later = _rows(model, norms, p_of, backoff, defer)
     conditions = [c for c in model.conditions if not (c.deferred and defer)]
     kept = [n for c, n in zip(model.conditions, norms) if not (c.deferred and defer)]
     if parameters is not None:  # a generic NLP's normalisers: Formulation.bind
@@ -366,12 +343,7 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
     deferred_infos = tuple(ConditionInfo(i, c.name, c.keys, c.where, c.kind, c.equality)
                            for i, (c, _, _) in enumerate(later))
 
-    weights = {k: float(v) for k, v in spec.objective.items() if float(v) != 0.0}
-    f = 0.0
-    for name, w in weights.items():
-        f = f - w * OBJECTIVE_SENSE[name] * model.objective_terms[name]
-    if model.objective_scale != 1.0:
-        f = f / model.objective_scale
+    weights, f = _objective(spec, model)
     terms = ca.vertcat(*[model.objective_terms[n] for n in OBJECTIVE_SENSE])
     derived_names = tuple(model.derived)
     evaluate = ca.Function(
@@ -404,6 +376,49 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
         deferred=deferred, deferred_conditions=deferred_infos, stack_starts=model.stack_starts,
         parameter_names=scene_names, norms_of=norms_of if parameters is not None else None,
     )
+
+
+def _rows(model, norms, p_of, backoff, defer: bool):
+    """(rows, lbg, ubg, infos, later) of the NLP: each condition less its requirement (and the
+    margin epigraph), normalised, less the backoff; `later` the deferred ones (condition,
+    normaliser, row) when defer."""
+    t = model.margin_symbol if model.margin_symbol is not None else 0.0
+    rows, lbg, ubg, infos = [], [], [], []
+    later = []  # (condition, normaliser, row) of the deferred conditions
+    for i, c in enumerate(model.conditions):
+        if c.kind == MARGIN and not c.equality:
+            need = fmax_all([p_of[k] for k in c.keys])
+            expr = c.slack - (need + (t if c.epigraph else 0.0)) * c.scale
+        else:
+            expr = c.slack
+        # in the normalised row's units, those IPOPT's tolerances are measured in
+        if c.equality:
+            rows.append(expr / norms[i])
+        elif c.kind != MODEL:
+            rows.append(expr / norms[i] - backoff)
+        else:
+            unit = 0.0 if c.backoff_unit is None else ca.fabs(c.backoff_unit)
+            rows.append((expr - backoff * unit) / norms[i])
+        if c.deferred and defer:
+            later.append((c, norms[i], rows.pop()))
+            continue
+        lbg.append(0.0)
+        ubg.append(0.0 if c.equality else math.inf)
+        infos.append(ConditionInfo(len(infos), c.name, c.keys, c.where, c.kind, c.equality,
+                                   c.quantities))
+    return rows, lbg, ubg, infos, later
+
+
+def _objective(spec, model):
+    """(the objective's weights, the NLP's objective: minus the weighted terms, over the
+    objective's scale)."""
+    weights = {k: float(v) for k, v in spec.objective.items() if float(v) != 0.0}
+    f = 0.0
+    for name, w in weights.items():
+        f = f - w * OBJECTIVE_SENSE[name] * model.objective_terms[name]
+    if model.objective_scale != 1.0:
+        f = f / model.objective_scale
+    return weights, f
 
 
 def _row_norms(model, x, bounds, design_names, scene, symbolic: bool):
