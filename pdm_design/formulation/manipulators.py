@@ -51,6 +51,7 @@ import casadi as ca
 from ..errors import SpecError
 from ..physics import manipulators as phys
 from . import allocation
+from . import manipulator_links as links
 from . import manipulator_rows as rows
 from ..scenes import ManipulatorsDesign
 from .common import SceneModel, design_inputs, fmax_all, fmin_all, objective_scale
@@ -84,9 +85,9 @@ def build(spec):
     t = ca.SX.sym("min_margin") if epigraph else None
     l_max = bounds["link_length"][1] if "link_length" in bounds else values["link_length"]
 
-    stops = any(t.quantity == "back_stop" for t in spec.tolerances) and \
-        allocation.allocating(spec)
-    m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages, stops))
+    stops, linked = (any(t.quantity == q for t in spec.tolerances) and
+                    allocation.allocating(spec) for q in ("back_stop", "link_length"))
+    m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages, stops, linked))
     m.steps = integrated_steps(spec, robust, values, bounds)
     conditions = allocation.box_conditions(
         spec, lambda box: m.conditions(S, u_lo, u_hi, box, robust),
@@ -159,12 +160,13 @@ def integrated_steps(spec, robust, values, bounds) -> int:
     return phys.carry_steps(spec.verification.accuracy.agreement / 10.0, span=span)
 
 
-def parked_rows(scene, values, bounds, stages, stops=False) -> int:
+def parked_rows(scene, values, bounds, stages, stops=False, links=False) -> int:
     """How many palms behind the carrying one can meet the carried object somewhere in the
     design box (at most PARKED_ROWS_CAP and stages - 1). The palm n places back is behind the
     object from the start of the carry once n pitch_x >= l (sin f + sin a) + (w + W) / 2 - o +
     2 tol, with -o <= (W - w) / 2 (the landing rows) and 2 tol <= pitch_y <= l (the
-    palm_clearance row); each term is bounded over the box."""
+    palm_clearance row); each term is bounded over the box. links: the link lengths
+    toleranced, whose errors add 2 t_l <= l (link_length_range) to the pivots' relative move."""
     def low(name):
         return bounds[name][0] if name in bounds else values[name]
 
@@ -178,7 +180,7 @@ def parked_rows(scene, values, bounds, stages, stops=False) -> int:
     # stops: the back stops toleranced, at most 2 alpha (back_stop_range keeps t_a <= alpha)
     a_max = min((2.0 if stops else 1.0) * high("alpha"), 1.5)
     far = (l_max * (max(math.sin(palm.front_stop), 0.0) + math.sin(a_max))
-           + palm.width + l_max)
+           + palm.width + (2.0 if links else 1.0) * l_max)
     reach = math.ceil(far / pitch_min) if pitch_min > 0.0 else PARKED_ROWS_CAP
     return max(0, min(stages - 1, reach, PARKED_ROWS_CAP))
 
@@ -269,20 +271,20 @@ class _Model:
         t_v = box.get("feed_speed", 0.0)
         return [self.vx0] if not _nonzero(t_v) else [self.vx0 - t_v, self.vx0 + t_v]
 
-    def next_speed(self, u, th, q=None, a=None):
+    def next_speed(self, u, th, q=None, a=None, l=None):
         """Landing speed on the next palm after carrying at u from -alpha to the handover th
         (q: that palm's mass ratio, the spec's by default; a: both palms' stop angle, the
-        spec's alpha by default)."""
+        spec's alpha by default; l: the carrying palm's link, the design's by default)."""
         a = self.a if a is None else a
-        v = ca.sqrt(self.carry_v2(u, th, a=a))
+        v = ca.sqrt(self.carry_v2(u, th, a=a, l=l))
         return phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), a,
                                   self.q if q is None else q)
 
-    def carry_v2(self, u, th, lowest=False, a=None):
+    def carry_v2(self, u, th, lowest=False, a=None, l=None):
         """v^2 at th on a carry that left -alpha at u: the closed form, or with pivot damping
         (or integrated_steps set) fourth-order steps in the angle (lowest: also the smallest
-        v^2 on the way)."""
-        kw = dict(gravity=self.gc, link_length=self.l, friction=self.f)
+        v^2 on the way; l: the link, the design's by default)."""
+        kw = dict(gravity=self.gc, link_length=self.l if l is None else l, friction=self.f)
         if not self.steps:
             v2 = phys.carry_speed_squared(u, self.a if a is None else a, th, **kw)
             return (v2, None) if lowest else v2
@@ -325,11 +327,12 @@ class _Model:
         if not robust:
             o = C0 + vx0 * self.flight_time(0.0)
             return (o, o), ([o], [o])
-        tau, t_x, t_f = (box.get(q, 0.0) for q in ("pivot_y", "pivot_x", "feed_x"))
+        tau, t_x, t_f, t_l = (box.get(q, 0.0)
+                              for q in ("pivot_y", "pivot_x", "feed_x", "link_length"))
         stops = self.stops(box)
-        o1, (o_hi, o_lo) = self._landing_ranges(tau, t_x, N, self.vx0, stops)
+        o1, (o_hi, o_lo) = self._landing_ranges(tau, t_x, N, self.vx0, stops, t_l)
         if len(speeds := self.feed_speeds(box)) > 1:  # a bound for each end; the worst holds
-            ranges = [self._landing_ranges(tau, t_x, N, vx, stops) for vx in speeds]
+            ranges = [self._landing_ranges(tau, t_x, N, vx, stops, t_l) for vx in speeds]
             o1 = (fmax_all([r[0][0] for r in ranges]), fmin_all([r[0][1] for r in ranges]))
             o_hi = [o for r in ranges for o in r[1][0]]
             o_lo = [o for r in ranges for o in r[1][1]]
@@ -337,17 +340,20 @@ class _Model:
         return ((shift(o1[0], 1), shift(o1[1], -1)),
                 ([shift(o, 1) for o in o_hi], [shift(o, -1) for o in o_lo]))
 
-    def _landing_ranges(self, tau, t_x, N, vx0, stops):
+    def _landing_ranges(self, tau, t_x, N, vx0, stops, t_l=0.0):
         """landing_ranges without the feed place's error: tau the pivots' heights, t_x their
         places, vx0 the start speed (a number, or an expression of unknown sign: then both
         cases' bounds, the larger and the smaller of them), stops the back stops' angles
-        (docs/optimizer.md section 4a: palm 1's top and every palm's centre move with them)."""
+        (docs/optimizer.md section 4a: palm 1's top and every palm's centre move with them),
+        t_l the links' lengths (formulation/manipulator_links.py; not with the stops')."""
         a, b, l = self.a, self.b, self.l
-        stopped = stops[0] is not stops[1]
+        stopped, linked = stops[0] is not stops[1], _nonzero(t_l)
         C0 = self.C0
-        # palm 1's top raised by [lo, hi]: its pivot's error and its stop's
+        # palm 1's top raised by [lo, hi]: its pivot's error and its stop's (or its link's)
         lo, hi = (-tau, tau) if not stopped else (-tau + l * (ca.cos(stops[1]) - ca.cos(a)),
                                                   tau + l * (ca.cos(stops[0]) - ca.cos(a)))
+        if linked:
+            lo, hi = lo - t_l * ca.cos(a), hi + t_l * ca.cos(a)
         # each palm's centre moves l (sin a_K - sin a) - cot b l (cos a_K - cos a) = h(a_K)
         # along its landing place, once per palm up to K (increasing in a_K)
         cot_b = ca.cos(b) / ca.sin(b)
@@ -356,6 +362,8 @@ class _Model:
         signed = isinstance(vx0, (int, float))
         t_up, t_down = self.flight_time(lo), self.flight_time(hi)  # palm lower: longer flight
         shift1 = [0.0, 0.0] if not stopped else [l * (ca.sin(s) - ca.sin(a)) for s in stops]
+        if linked:  # palm 1's top e_1 sin a further back
+            shift1 = [-t_l * ca.sin(a), t_l * ca.sin(a)]
         if not signed:  # vx0 t over t in [t_down, t_up]: at an end
             o1 = (fmax_all([vx0 * t_up, vx0 * t_down]) + C0 + t_x + shift1[1],
                   fmin_all([vx0 * t_up, vx0 * t_down]) + C0 - t_x + shift1[0])
@@ -377,7 +385,9 @@ class _Model:
         else:  # phi convex: ends above, tangent below
             phi_max, phi_min = [phi_plus, phi_minus], tangent
         spread = tau * (1 + cot_b) if t_x is tau else t_x + tau * cot_b
-        if not stopped:
+        if linked:  # every link's R(e, z) at its worst, stage by stage
+            drifts = [links.second_order(self, N, tau, t_l)]
+        elif not stopped:
             cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
             r_ends = [l * (ca.sqrt(1 - cp**2) - ca.sin(b)) + 2 * tau * cot_b,
                       l * (ca.sqrt(1 - cm**2) - ca.sin(b)) - 2 * tau * cot_b]
@@ -389,6 +399,9 @@ class _Model:
                                  + cot_b * e) for e in ends]
         o_hi = [C0 + p + spread + N * h_end[1] for p in phi_max]
         o_lo = [C0 + p - spread + N * h_end[0] + d for p in phi_min for d in drifts]
+        if linked:  # the links' first-order moves add up along the row
+            extra = links.first_order(self, N, t_l)
+            o_hi, o_lo = [o + extra for o in o_hi], [o - extra for o in o_lo]
         return o1, (o_hi, o_lo)
 
     # -- the conditions -----------------------------------------------------------------------
