@@ -9,6 +9,8 @@ Corner patterns (each of the four sign corners (+-dx, +-dy)):
 - every pivot (step) at the same corner: the whole row shifted or skewed;
 - alternating corners on odd and even pivots: the largest relative offsets, 2 x the box;
 - only the second pivot at the corner: the paper's experiment.
+With an allocated box (`lots`), each pattern with every sign corner of the other quantities;
+the link lengths also alternately long and short.
 
 Random builds: `samples` of them on rows up to RANDOM_ROW stages; on longer rows fewer, so that
 the simulated random stages stay samples x RANDOM_ROW (at least one build): the event simulator
