@@ -203,8 +203,8 @@ LINKS = "[scene.links]\nmass = 0.5\ncount = 2\n"
 
 
 @pytest.mark.parametrize("extra, key, why", [
-    ("link_length = { allocate = true }\nback_stop = { allocate = true }",
-     "tolerances.link_length", "expected link_length or back_stop, not both"),
+    ("link_length = { allocate = true }\n" + LINKS, "tolerances.link_length",
+     "expected the paper's device"),
     ("pivot_x = { allocate = true }\nlink_length = { value = 0.01 }\n" + LINKS,
      "tolerances.link_length", "expected the paper's device"),
 ])

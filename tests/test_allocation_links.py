@@ -5,6 +5,7 @@ alternating, and at random builds inside it; it fails some build at 1.5 times th
 own limit along those patterns lies between 1 and 1.5 times the box. The landing place's map
 the bound is built on is checked against the simulator's landings."""
 
+import itertools
 import math
 
 import numpy as np
@@ -100,6 +101,33 @@ def test_the_link_box_is_the_right_size(case, request):
         mid = 0.5 * (low + high)
         low, high = (low, mid) if _failures(setup, mid) else (mid, high)
     assert 1.0 < high <= 1.5
+
+
+def test_links_and_stops_hold_at_the_corners(tmp_path_factory):
+    """Links and back stops together (manipulator_links.Rest): the pivots' patterns with the
+    links and the stops each all high, all low and alternating either way pass; 1.5 times
+    the box fails some."""
+    spec, design, value = _allocated(tmp_path_factory,
+                                     WITH_PIVOTS + "back_stop = { allocate = true, weight = 10 }\n")
+    assert value["back_stop"] == pytest.approx(value["link_length"] / 10, rel=1e-12)
+    stages = spec.verification.stages
+    patterns = _links(stages).values()
+
+    def failures(scale):
+        count = 0
+        for _, signs in corner_patterns(stages):
+            for links, stops in itertools.product(patterns, patterns):
+                deviations = {
+                    "pivot_x": np.array([[sx * scale * value["pivot_x"] for sx, _ in signs]]),
+                    "pivot_y": np.array([[sy * scale * value["pivot_y"] for _, sy in signs]]),
+                    "link_length": (scale * value["link_length"] * links)[None, :],
+                    "back_stop": (scale * value["back_stop"] * stops)[None, :]}
+                run = simulate_build(spec.scene, design, deviations, stages)
+                count += not run.outcome.completed
+        return count
+
+    assert failures(1.0) == 0
+    assert failures(1.5) > 0
 
 
 def test_lot_of_links_is_bounded_as_each(tmp_path_factory, alone):

@@ -61,19 +61,19 @@ class Frame:
         d_lo, d_hi = ((0.0, 0.0) if not stopped else
                       (ca.cos(a_hi) - ca.cos(a), ca.cos(a_lo) - ca.cos(a)))
         raise_lo, raise_hi = (-tau, tau) if not stopped else (-tau + l * d_lo, tau + l * d_hi)
-        # the links' lengths (manipulator_links; not with the stops'): palm 1's top, the
-        # handover and the carry move with them
+        # the links' lengths (manipulator_links): palm 1's top, the handover and the carry
+        # move with them (and the stops, with both: a links.Rest)
         self.l_lo, self.l_hi = links.ends(m, box)
         self.linked, self.t_l = self.l_lo is not self.l_hi, box.get("link_length", 0.0)
         if self.linked:
-            raise_lo, raise_hi = (raise_lo - self.t_l * ca.cos(a),
-                                  raise_hi + self.t_l * ca.cos(a))
+            self.rest = links.Rest(m, self.t_l, (a_lo, a_hi))
+            raise_lo, raise_hi = -tau + self.rest.q_lo, tau + self.rest.q_hi
         if robust:
             cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
             if stopped:
                 cm, cp = cm + d_lo, cp + d_hi
             if self.linked:
-                cm, cp = links.handover_cosines(m, tau, self.t_l)
+                cm, cp = self.rest.handover_cosines(tau)
             # a number wherever IPOPT may step: its push of tau off 0 (1 cm, say) can take
             # cos b + 2 tau / l past 1 where the handover drop l (1 - cos b) / 2 is smaller
             # (every start Invalid_Number_Detected); the palm_clearance row keeps the feasible
@@ -214,8 +214,8 @@ def carry_rows(m, f):
     f.fp_back, f.fp_front = (_plain_contact_rows if m.plain else _contact_rows)(m, f)
     # the object's base stays above palm K + 1 while cos th_K <= cos a_K
     clearance = m.pitch_y if not f.stopped else l * (f.d_lo - f.d_hi) + m.pitch_y
-    if f.linked:  # palm K + 1's top t_l cos a higher, the object's start t_l cos a lower
-        clearance = clearance - 2 * f.t_l * ca.cos(m.a)
+    if f.linked:  # palm K + 1's top q_hi higher, the object's start on palm K q_lo
+        clearance = m.pitch_y + f.rest.q_lo - f.rest.q_hi
     add("palm_clearance", "next palm below the object until the handover",
         clearance - 2 * f.tau, l, epigraph=False)
     if palm.front_stop < math.pi / 2:
@@ -229,10 +229,11 @@ def _plain_contact_rows(m, f):
     held = phys.lift_off_capacity(a_hi, gravity=g, link_length=f.l_lo)
     add(LIFT_OFF, "at the back stop, fastest landing",
         held - f.u_hi**2, held)
-    if f.linked:  # held - v2 = 3 g (l cos b + z) - 2 g l_K cos a - u^2 with l_K cos th_K =
-        # l cos b + z_K (manipulator_links): exact in the link and z, least at l_hi, z = -Z
-        lowest = m.l * ca.cos(m.b) - links.reach(m, f.tau, f.t_l)
-        held, v2 = g * lowest, f.u_hi**2 + 2 * g * (f.l_hi * ca.cos(m.a) - lowest)
+    if f.linked:  # held - v2 = 3 g (l cos b + z) - 2 g l_K cos a_K - u^2 with l_K cos th_K =
+        # l cos b + z_K (manipulator_links): least at z_lo and l_K cos a_K = l cos a + q_hi
+        lowest = m.l * ca.cos(m.b) + f.rest.z_range(f.tau)[0]
+        held = g * lowest
+        v2 = f.u_hi**2 + 2 * g * (m.l * ca.cos(m.a) + f.rest.q_hi - lowest)
     else:
         v2 = m.carry_v2(f.u_hi, th_hi, a=f.a_lo)
         held = phys.lift_off_capacity(th_hi, gravity=g, link_length=m.l)

@@ -346,25 +346,27 @@ class _Model:
         places, vx0 the start speed (a number, or an expression of unknown sign: then both
         cases' bounds, the larger and the smaller of them), stops the back stops' angles
         (docs/optimizer.md section 4a: palm 1's top and every palm's centre move with them),
-        t_l the links' lengths (formulation/manipulator_links.py; not with the stops')."""
+        t_l the links' lengths (formulation/manipulator_links.py: with them every palm's rest,
+        link and stop together, is a links.Rest)."""
         a, b, l = self.a, self.b, self.l
         stopped, linked = stops[0] is not stops[1], _nonzero(t_l)
         C0 = self.C0
-        # palm 1's top raised by [lo, hi]: its pivot's error and its stop's (or its link's)
+        # palm 1's top raised by [lo, hi]: its pivot's error and its stop's (and its link's)
         lo, hi = (-tau, tau) if not stopped else (-tau + l * (ca.cos(stops[1]) - ca.cos(a)),
                                                   tau + l * (ca.cos(stops[0]) - ca.cos(a)))
+        rest = links.Rest(self, t_l, stops) if linked else None
         if linked:
-            lo, hi = lo - t_l * ca.cos(a), hi + t_l * ca.cos(a)
+            lo, hi = -tau + rest.q_lo, tau + rest.q_hi
         # each palm's centre moves l (sin a_K - sin a) - cot b l (cos a_K - cos a) = h(a_K)
         # along its landing place, once per palm up to K (increasing in a_K)
         cot_b = ca.cos(b) / ca.sin(b)
-        h_end = [0.0, 0.0] if not stopped else [
+        h_end = [0.0, 0.0] if not stopped or linked else [
             l * ((ca.sin(s) - ca.sin(a)) - cot_b * (ca.cos(s) - ca.cos(a))) for s in stops]
         signed = isinstance(vx0, (int, float))
         t_up, t_down = self.flight_time(lo), self.flight_time(hi)  # palm lower: longer flight
         shift1 = [0.0, 0.0] if not stopped else [l * (ca.sin(s) - ca.sin(a)) for s in stops]
-        if linked:  # palm 1's top e_1 sin a further back
-            shift1 = [-t_l * ca.sin(a), t_l * ca.sin(a)]
+        if linked:  # palm 1's top p_1 further back
+            shift1 = [rest.p_lo, rest.p_hi]
         if not signed:  # vx0 t over t in [t_down, t_up]: at an end
             o1 = (fmax_all([vx0 * t_up, vx0 * t_down]) + C0 + t_x + shift1[1],
                   fmin_all([vx0 * t_up, vx0 * t_down]) + C0 - t_x + shift1[0])
@@ -387,7 +389,7 @@ class _Model:
             phi_max, phi_min = [phi_plus, phi_minus], tangent
         spread = tau * (1 + cot_b) if t_x is tau else t_x + tau * cot_b
         if linked:  # every link's R(e, z) at its worst, stage by stage
-            drifts = [links.second_order(self, N, tau, t_l)]
+            drifts = [rest.second_order(N, tau)]
         elif not stopped:
             cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
             r_ends = [l * (ca.sqrt(1 - cp**2) - ca.sin(b)) + 2 * tau * cot_b,
@@ -400,9 +402,9 @@ class _Model:
                                  + cot_b * e) for e in ends]
         o_hi = [C0 + p + spread + N * h_end[1] for p in phi_max]
         o_lo = [C0 + p - spread + N * h_end[0] + d for p in phi_min for d in drifts]
-        if linked:  # the links' first-order moves add up along the row
-            extra = links.first_order(self, N, t_l)
-            o_hi, o_lo = [o + extra for o in o_hi], [o - extra for o in o_lo]
+        if linked:  # the links' and stops' first-order moves add up along the row; palm 1
+            least, largest = rest.first_order(N)
+            o_hi, o_lo = [o + largest for o in o_hi] + [o1[0]], [o + least for o in o_lo] + [o1[1]]
         return o1, (o_hi, o_lo)
 
     # -- the conditions -----------------------------------------------------------------------
