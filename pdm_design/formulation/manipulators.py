@@ -161,12 +161,12 @@ def integrated_steps(spec, robust, values, bounds) -> int:
     return phys.carry_steps(spec.verification.accuracy.agreement / 10.0, span=span)
 
 
-def parked_rows(scene, values, bounds, stages, stops=False, links=False) -> int:
+def parked_rows(scene, values, bounds, stages, stops=False, linked=False) -> int:
     """How many palms behind the carrying one can meet the carried object somewhere in the
     design box (at most PARKED_ROWS_CAP and stages - 1). The palm n places back is behind the
     object from the start of the carry once n pitch_x >= l (sin f + sin a) + (w + W) / 2 - o +
     2 tol, with -o <= (W - w) / 2 (the landing rows) and 2 tol <= pitch_y <= l (the
-    palm_clearance row); each term is bounded over the box. links: the link lengths
+    palm_clearance row); each term is bounded over the box. linked: the link lengths
     toleranced, whose errors add 2 t_l <= l (link_length_range) to the pivots' relative move."""
     def low(name):
         return bounds[name][0] if name in bounds else values[name]
@@ -181,7 +181,7 @@ def parked_rows(scene, values, bounds, stages, stops=False, links=False) -> int:
     # stops: the back stops toleranced, at most 2 alpha (back_stop_range keeps t_a <= alpha)
     a_max = min((2.0 if stops else 1.0) * high("alpha"), 1.5)
     far = (l_max * (max(math.sin(palm.front_stop), 0.0) + math.sin(a_max))
-           + palm.width + (2.0 if links else 1.0) * l_max)
+           + palm.width + (2.0 if linked else 1.0) * l_max)
     reach = math.ceil(far / pitch_min) if pitch_min > 0.0 else PARKED_ROWS_CAP
     return max(0, min(stages - 1, reach, PARKED_ROWS_CAP))
 
