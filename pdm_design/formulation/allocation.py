@@ -31,14 +31,11 @@ from ..tolerances.model import allocation_shares
 # Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
 ALLOCATABLE = {
     "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
-                     "palm_mass", "object_mass", "back_stop"),
+                     "palm_mass", "object_mass", "back_stop", "link_length"),
     "stairs": ("rise", "tread", "launch_x", "restitution", "friction", "launch_speed"),
 }
 # Why the others are refused: what a sound bound of them would need (the words of the error).
 NOT_YET = {
-    "link_length": "every stage's handover angle, speed map and landing place move with each "
-                   "link's own length; no outer bound of the speed interval over a box of link "
-                   "lengths is derived yet",
     "link_mass": "no outer bound over a box of link masses is derived yet",
     "pivot_friction": "no outer bound over a box of pivot frictions is derived yet",
 }
@@ -82,6 +79,8 @@ def check(spec) -> None:
                         "links, frictionless pivots) to bound a mass's or a stop's tolerance "
                         "(with links or pivot friction they enter the carry; not derived yet)",
                         found="scene.links or scene.pivots")
+    if spec.kind == "manipulators":
+        _check_links(spec, source)
     for tol in spec.tolerances:
         if tol.quantity in allowed:
             continue
@@ -92,6 +91,16 @@ def check(spec) -> None:
                         "a quantity the worst-case allocation can bound: "
                         + ", ".join(allowed) + f" ({why})",
                         found=tol.quantity)
+
+
+def _check_links(spec, source) -> None:
+    """A link length's tolerance is bounded on the paper's device."""
+    if any(t.quantity == "link_length" for t in spec.tolerances) and \
+            not spec.scene.plain_mechanism:
+        raise SpecError(source, "tolerances.link_length", "the paper's device (massless links, "
+                        "frictionless pivots) to bound the link lengths' tolerance (with links "
+                        "or pivot friction a link's length enters the carry's effective mass and "
+                        "gravity; not derived yet)", found="scene.links or scene.pivots")
 
 
 def half_widths(spec, s) -> dict[str, object]:

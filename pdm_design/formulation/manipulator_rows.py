@@ -16,6 +16,7 @@ import math
 import casadi as ca
 
 from ..physics import manipulators as phys
+from . import manipulator_links as links
 from .common import MARGIN, MODEL, VALIDITY, Condition, fmax_all, fmin_all
 
 START_CLEARANCE = 1e-3  # (x link length): the object starts at least this far above palm 1
@@ -60,10 +61,19 @@ class Frame:
         d_lo, d_hi = ((0.0, 0.0) if not stopped else
                       (ca.cos(a_hi) - ca.cos(a), ca.cos(a_lo) - ca.cos(a)))
         raise_lo, raise_hi = (-tau, tau) if not stopped else (-tau + l * d_lo, tau + l * d_hi)
+        # the links' lengths (manipulator_links): palm 1's top, the handover and the carry
+        # move with them (and the stops, with both: a links.Rest)
+        self.l_lo, self.l_hi = links.ends(m, box)
+        self.linked, self.t_l = self.l_lo is not self.l_hi, box.get("link_length", 0.0)
+        if self.linked:
+            self.rest = links.Rest(m, self.t_l, (a_lo, a_hi))
+            raise_lo, raise_hi = -tau + self.rest.q_lo, tau + self.rest.q_hi
         if robust:
             cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
             if stopped:
                 cm, cp = cm + d_lo, cp + d_hi
+            if self.linked:
+                cm, cp = self.rest.handover_cosines(tau)
             # a number wherever IPOPT may step: its push of tau off 0 (1 cm, say) can take
             # cos b + 2 tau / l past 1 where the handover drop l (1 - cos b) / 2 is smaller
             # (every start Invalid_Number_Detected); the palm_clearance row keeps the feasible
@@ -133,20 +143,21 @@ def _robust_interval_rows(m, f, model):
         return (bound + ca.sqrt(bound**2 + 1e-12)) / 2
 
     # F is decreasing in both palms' stop angles (the carry's start, the landing's
-    # angle): the low rows take a_hi, the high rows a_lo (docs/optimizer.md 4a)
+    # angle) and increasing in the carrying palm's link (th >= a): the low rows take a_hi
+    # and l_lo, the high rows a_lo and l_hi (docs/optimizer.md 4a)
     curv = curvature(a_hi)
     # Low end: ln F >= chord - M+ (th - th_lo)(th_hi - th) / 2 >= min over the ends
     # - M+ (th_hi - th_lo)^2 / 8.
     sag = ca.exp(-curv * (th_hi - th_lo) ** 2 / 8)
     for where, th in thetas:
         add((), f"interval invariant (low, {where})",
-            m.next_speed(u_lo, th, qs[0], a_hi) * sag - u_lo, **model)
+            m.next_speed(u_lo, th, qs[0], a_hi, f.l_lo) * sag - u_lo, **model)
     # High end: ln F <= ln F(b) + lambda (th - b) + M+ (th - b)^2 / 2 (Taylor), convex in
     # th so largest at an end; lambda = d ln F / d th at b by CasADi AD.
     th_s = ca.SX.sym("th")
-    dlog = ca.substitute(ca.jacobian(ca.log(m.next_speed(u_hi, th_s, a=a_lo)), th_s),
-                         th_s, b)
-    u_b = m.next_speed(u_hi, b, qs[-1], a_lo)  # ln F's th-derivatives are free of q
+    dlog = ca.substitute(ca.jacobian(ca.log(m.next_speed(u_hi, th_s, a=a_lo, l=f.l_hi)),
+                                     th_s), th_s, b)
+    u_b = m.next_speed(u_hi, b, qs[-1], a_lo, f.l_hi)  # ln F's th-derivatives are free of q
     curv = curvature(a_lo) if f.stopped else curv
     for where, th in thetas:
         bound = u_b * ca.exp(dlog * (th - b) + curv * (th - b) ** 2 / 2)
@@ -169,6 +180,9 @@ def validity_rows(m, f):
     if t_x is not tau and nonzero(t_x):  # the parked palms' count assumes 2 t_x <= l
         add(("palm_clearance",), "pivots' places within half a link", l - 2 * t_x, l,
             kind=VALIDITY)
+    if f.linked:  # the parked palms' count takes 2 t_l <= l
+        add(("link_length_range",), "every link at least half its length",
+            l - 2 * f.t_l, l, kind=VALIDITY)
     if f.stopped:  # the bounds take the stops in [0, pi/2) and a start moving forward
         add(("back_stop_range",), "every back stop at or behind the vertical", a_lo, 1.0,
             kind=VALIDITY)
@@ -193,13 +207,15 @@ def carry_rows(m, f):
         add(OVER_THE_TOP, "slowest landing on any palm, slowest point (integrated)",
             m.carry_v2(u_lo, b, lowest=True)[1], u_lo**2)
     else:
-        top = m.top_needed if not f.stopped else phys.top_speed_squared_needed(
-            f.a_hi, gravity=m.gc, link_length=l, friction=m.f)
+        top = m.top_needed if not (f.stopped or f.linked) else phys.top_speed_squared_needed(
+            f.a_hi, gravity=m.gc, link_length=f.l_hi, friction=m.f)
         add(OVER_THE_TOP, "slowest landing on any palm",
             u_lo**2 - top, u_lo**2)
     f.fp_back, f.fp_front = (_plain_contact_rows if m.plain else _contact_rows)(m, f)
     # the object's base stays above palm K + 1 while cos th_K <= cos a_K
     clearance = m.pitch_y if not f.stopped else l * (f.d_lo - f.d_hi) + m.pitch_y
+    if f.linked:  # palm K + 1's top q_hi higher, the object's start on palm K q_lo
+        clearance = m.pitch_y + f.rest.q_lo - f.rest.q_hi
     add("palm_clearance", "next palm below the object until the handover",
         clearance - 2 * f.tau, l, epigraph=False)
     if palm.front_stop < math.pi / 2:
@@ -209,12 +225,18 @@ def carry_rows(m, f):
 
 def _plain_contact_rows(m, f):
     """Lift-off and slip during the carry on the paper's device; (fp_back, fp_front)."""
-    l, g, add, mu, h, a_hi, th_hi = m.l, m.g, f.add, f.mu, f.h, f.a_hi, f.th_hi
-    v2 = m.carry_v2(f.u_hi, th_hi, a=f.a_lo)
-    held = phys.lift_off_capacity(a_hi, gravity=g, link_length=l)
+    g, add, mu, h, a_hi, th_hi = m.g, f.add, f.mu, f.h, f.a_hi, f.th_hi
+    held = phys.lift_off_capacity(a_hi, gravity=g, link_length=f.l_lo)
     add(LIFT_OFF, "at the back stop, fastest landing",
         held - f.u_hi**2, held)
-    held = phys.lift_off_capacity(th_hi, gravity=g, link_length=l)
+    if f.linked:  # held - v2 = 3 g (l cos b + z) - 2 g l_K cos a_K - u^2 with l_K cos th_K =
+        # l cos b + z_K (manipulator_links): least at z_lo and l_K cos a_K = l cos a + q_hi
+        lowest = m.l * ca.cos(m.b) + f.rest.z_range(f.tau)[0]
+        held = g * lowest
+        v2 = f.u_hi**2 + 2 * g * (m.l * ca.cos(m.a) + f.rest.q_hi - lowest)
+    else:
+        v2 = m.carry_v2(f.u_hi, th_hi, a=f.a_lo)
+        held = phys.lift_off_capacity(th_hi, gravity=g, link_length=m.l)
     add(LIFT_OFF, "at the handover, fastest carry", held - v2, held)
     add("slip_carry", "at the back stop", mu - phys.friction_demand(a_hi), mu)
     add("slip_carry", "at the largest handover angle",
@@ -257,6 +279,8 @@ def placement_rows(m, f):
               "pitch_y": m.pitch_y, "offset_lo": fmin_all(o_lo),
               "offset_hi": fmax_all(o_hi), "reach": (w + W) / 2,
               "depth": palm.thickness + h, "shift": 2 * larger(tau, box.get("pivot_x", 0.0))}
+    if f.linked:  # the parked palm's top and the object's arc each move by at most t_l
+        parked["shift"] = parked["shift"] + 2 * f.t_l
     for n in range(1, m.parked + 1):
         add("parked_palms", f"palm {n} back, at its front stop",
             phys.parked_palm_clearance(n, **parked), l, epigraph=False, deferred=True)

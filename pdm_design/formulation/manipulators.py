@@ -38,8 +38,9 @@ Bounds that are not exact are outer bounds, so the box found is sound (never too
 Allocated tolerances ([tolerances] with allocate = true, formulation/allocation.py): the same
 rows over a box with one half-width per quantity, `box` {quantity: half-width}: the pivots'
 places and heights apart, the feed's place and speed, the friction, the object's width, the
-masses (the mass ratio's ends) and the back stops (their ends, and the drift they add along the
-row); docs/optimizer.md section 4a derives each.
+masses (the mass ratio's ends), the back stops (their ends, and the drift they add along the
+row) and the links' lengths (formulation/manipulator_links.py); docs/optimizer.md section 4a
+derives each.
 """
 
 from __future__ import annotations
@@ -51,6 +52,7 @@ import casadi as ca
 from ..errors import SpecError
 from ..physics import manipulators as phys
 from . import allocation
+from . import manipulator_links as links
 from . import manipulator_rows as rows
 from ..scenes import ManipulatorsDesign
 from .common import SceneModel, design_inputs, fmax_all, fmin_all, objective_scale
@@ -85,9 +87,9 @@ def build(spec, parameters=None):
     t = ca.SX.sym("min_margin") if epigraph else None
     l_max = bounds["link_length"][1] if "link_length" in bounds else values["link_length"]
 
-    stops = any(t.quantity == "back_stop" for t in spec.tolerances) and \
-        allocation.allocating(spec)
-    m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages, stops))
+    stops, linked = (any(t.quantity == q for t in spec.tolerances) and
+                    allocation.allocating(spec) for q in ("back_stop", "link_length"))
+    m = _Model(scene, values, stages, parked_rows(scene, values, bounds, stages, stops, linked))
     m.steps = integrated_steps(spec, robust, values, bounds)
     conditions = allocation.box_conditions(
         spec, lambda box: m.conditions(S, u_lo, u_hi, box, robust),
@@ -161,12 +163,13 @@ def integrated_steps(spec, robust, values, bounds) -> int:
     return phys.carry_steps(spec.verification.accuracy.agreement / 10.0, span=span)
 
 
-def parked_rows(scene, values, bounds, stages, stops=False) -> int:
+def parked_rows(scene, values, bounds, stages, stops=False, linked=False) -> int:
     """How many palms behind the carrying one can meet the carried object somewhere in the
     design box (at most PARKED_ROWS_CAP and stages - 1). The palm n places back is behind the
     object from the start of the carry once n pitch_x >= l (sin f + sin a) + (w + W) / 2 - o +
     2 tol, with -o <= (W - w) / 2 (the landing rows) and 2 tol <= pitch_y <= l (the
-    palm_clearance row); each term is bounded over the box."""
+    palm_clearance row); each term is bounded over the box. linked: the link lengths
+    toleranced, whose errors add 2 t_l <= l (link_length_range) to the pivots' relative move."""
     def low(name):
         return bounds[name][0] if name in bounds else values[name]
 
@@ -180,7 +183,7 @@ def parked_rows(scene, values, bounds, stages, stops=False) -> int:
     # stops: the back stops toleranced, at most 2 alpha (back_stop_range keeps t_a <= alpha)
     a_max = min((2.0 if stops else 1.0) * high("alpha"), 1.5)
     far = (l_max * (max(math.sin(palm.front_stop), 0.0) + math.sin(a_max))
-           + palm.width + l_max)
+           + palm.width + (2.0 if linked else 1.0) * l_max)
     reach = math.ceil(far / pitch_min) if pitch_min > 0.0 else PARKED_ROWS_CAP
     return max(0, min(stages - 1, reach, PARKED_ROWS_CAP))
 
@@ -271,20 +274,20 @@ class _Model:
         t_v = box.get("feed_speed", 0.0)
         return [self.vx0] if not _nonzero(t_v) else [self.vx0 - t_v, self.vx0 + t_v]
 
-    def next_speed(self, u, th, q=None, a=None):
+    def next_speed(self, u, th, q=None, a=None, l=None):
         """Landing speed on the next palm after carrying at u from -alpha to the handover th
         (q: that palm's mass ratio, the spec's by default; a: both palms' stop angle, the
-        spec's alpha by default)."""
+        spec's alpha by default; l: the carrying palm's link, the design's by default)."""
         a = self.a if a is None else a
-        v = ca.sqrt(self.carry_v2(u, th, a=a))
+        v = ca.sqrt(self.carry_v2(u, th, a=a, l=l))
         return phys.landing_speed(v * ca.cos(th), -v * ca.sin(th), a,
                                   self.q if q is None else q)
 
-    def carry_v2(self, u, th, lowest=False, a=None):
+    def carry_v2(self, u, th, lowest=False, a=None, l=None):
         """v^2 at th on a carry that left -alpha at u: the closed form, or with pivot damping
         (or integrated_steps set) fourth-order steps in the angle (lowest: also the smallest
-        v^2 on the way)."""
-        kw = dict(gravity=self.gc, link_length=self.l, friction=self.f)
+        v^2 on the way; l: the link, the design's by default)."""
+        kw = dict(gravity=self.gc, link_length=self.l if l is None else l, friction=self.f)
         if not self.steps:
             v2 = phys.carry_speed_squared(u, self.a if a is None else a, th, **kw)
             return (v2, None) if lowest else v2
@@ -327,11 +330,12 @@ class _Model:
         if not robust:
             o = C0 + vx0 * self.flight_time(0.0)
             return (o, o), ([o], [o])
-        tau, t_x, t_f = (box.get(q, 0.0) for q in ("pivot_y", "pivot_x", "feed_x"))
+        tau, t_x, t_f, t_l = (box.get(q, 0.0)
+                              for q in ("pivot_y", "pivot_x", "feed_x", "link_length"))
         stops = self.stops(box)
-        o1, (o_hi, o_lo) = self._landing_ranges(tau, t_x, N, self.vx0, stops)
+        o1, (o_hi, o_lo) = self._landing_ranges(tau, t_x, N, self.vx0, stops, t_l)
         if len(speeds := self.feed_speeds(box)) > 1:  # a bound for each end; the worst holds
-            ranges = [self._landing_ranges(tau, t_x, N, vx, stops) for vx in speeds]
+            ranges = [self._landing_ranges(tau, t_x, N, vx, stops, t_l) for vx in speeds]
             o1 = (fmax_all([r[0][0] for r in ranges]), fmin_all([r[0][1] for r in ranges]))
             o_hi = [o for r in ranges for o in r[1][0]]
             o_lo = [o for r in ranges for o in r[1][1]]
@@ -339,25 +343,32 @@ class _Model:
         return ((shift(o1[0], 1), shift(o1[1], -1)),
                 ([shift(o, 1) for o in o_hi], [shift(o, -1) for o in o_lo]))
 
-    def _landing_ranges(self, tau, t_x, N, vx0, stops):
+    def _landing_ranges(self, tau, t_x, N, vx0, stops, t_l=0.0):
         """landing_ranges without the feed place's error: tau the pivots' heights, t_x their
         places, vx0 the start speed (a number, or an expression of unknown sign: then both
         cases' bounds, the larger and the smaller of them), stops the back stops' angles
-        (docs/optimizer.md section 4a: palm 1's top and every palm's centre move with them)."""
+        (docs/optimizer.md section 4a: palm 1's top and every palm's centre move with them),
+        t_l the links' lengths (formulation/manipulator_links.py: with them every palm's rest,
+        link and stop together, is a links.Rest)."""
         a, b, l = self.a, self.b, self.l
-        stopped = stops[0] is not stops[1]
+        stopped, linked = stops[0] is not stops[1], _nonzero(t_l)
         C0 = self.C0
-        # palm 1's top raised by [lo, hi]: its pivot's error and its stop's
+        # palm 1's top raised by [lo, hi]: its pivot's error and its stop's (and its link's)
         lo, hi = (-tau, tau) if not stopped else (-tau + l * (ca.cos(stops[1]) - ca.cos(a)),
                                                   tau + l * (ca.cos(stops[0]) - ca.cos(a)))
+        rest = links.Rest(self, t_l, stops) if linked else None
+        if linked:
+            lo, hi = -tau + rest.q_lo, tau + rest.q_hi
         # each palm's centre moves l (sin a_K - sin a) - cot b l (cos a_K - cos a) = h(a_K)
         # along its landing place, once per palm up to K (increasing in a_K)
         cot_b = ca.cos(b) / ca.sin(b)
-        h_end = [0.0, 0.0] if not stopped else [
+        h_end = [0.0, 0.0] if not stopped or linked else [
             l * ((ca.sin(s) - ca.sin(a)) - cot_b * (ca.cos(s) - ca.cos(a))) for s in stops]
         signed = isinstance(vx0, (int, float))
         t_up, t_down = self.flight_time(lo), self.flight_time(hi)  # palm lower: longer flight
         shift1 = [0.0, 0.0] if not stopped else [l * (ca.sin(s) - ca.sin(a)) for s in stops]
+        if linked:  # palm 1's top p_1 further back
+            shift1 = [rest.p_lo, rest.p_hi]
         if not signed:  # vx0 t over t in [t_down, t_up]: at an end
             o1 = (fmax_all([vx0 * t_up, vx0 * t_down]) + C0 + t_x + shift1[1],
                   fmin_all([vx0 * t_up, vx0 * t_down]) + C0 - t_x + shift1[0])
@@ -379,7 +390,9 @@ class _Model:
         else:  # phi convex: ends above, tangent below
             phi_max, phi_min = [phi_plus, phi_minus], tangent
         spread = tau * (1 + cot_b) if t_x is tau else t_x + tau * cot_b
-        if not stopped:
+        if linked:  # every link's R(e, z) at its worst, stage by stage
+            drifts = [rest.second_order(N, tau)]
+        elif not stopped:
             cm, cp = ca.cos(b) - 2 * tau / l, ca.cos(b) + 2 * tau / l
             r_ends = [l * (ca.sqrt(1 - cp**2) - ca.sin(b)) + 2 * tau * cot_b,
                       l * (ca.sqrt(1 - cm**2) - ca.sin(b)) - 2 * tau * cot_b]
@@ -391,6 +404,9 @@ class _Model:
                                  + cot_b * e) for e in ends]
         o_hi = [C0 + p + spread + N * h_end[1] for p in phi_max]
         o_lo = [C0 + p - spread + N * h_end[0] + d for p in phi_min for d in drifts]
+        if linked:  # the links' and stops' first-order moves add up along the row; palm 1
+            least, largest = rest.first_order(N)
+            o_hi, o_lo = [o + largest for o in o_hi] + [o1[0]], [o + least for o in o_lo] + [o1[1]]
         return o1, (o_hi, o_lo)
 
     # -- the conditions -----------------------------------------------------------------------

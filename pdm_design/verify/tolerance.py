@@ -9,6 +9,8 @@ Corner patterns (each of the four sign corners (+-dx, +-dy)):
 - every pivot (step) at the same corner: the whole row shifted or skewed;
 - alternating corners on odd and even pivots: the largest relative offsets, 2 x the box;
 - only the second pivot at the corner: the paper's experiment.
+With an allocated box (`lots`), each pattern with every sign corner of the other quantities;
+the link lengths also alternately long and short.
 
 Random builds: `samples` of them on rows up to RANDOM_ROW stages; on longer rows fewer, so that
 the simulated random stages stay samples x RANDOM_ROW (at least one build): the event simulator
@@ -62,19 +64,22 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
     (formulation/allocation.py); its quantities other than the pivots' or the steps' (feed_x,
     feed_speed, friction, object_width, object_mass: one value a build; palm_mass: every palm
     alike; on stairs the lots restitution, friction, launch_speed, launch_x) take every sign
-    corner with every pivot or step pattern, and a uniform value in each random build."""
+    corner with every pivot or step pattern, and a uniform value in each random build;
+    link_length (ALTERNATING) also alternately long and short, and its own value on every
+    manipulator in a random build."""
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
     per_stage = {q for _, q in AXES[spec.kind]}  # the corner patterns' own quantities
     lot = {e["quantity"]: e["value"] for e in (lots or ()) if e["quantity"] not in per_stage}
     builds = [(name + _lot_name(signs_l), [(sx * half[0], sy * half[1]) for sx, sy in signs],
-               {q: sl * lot[q] for q, sl in zip(lot, signs_l)})
+               {q: _scaled(sl, lot[q]) for q, (_, sl) in zip(lot, signs_l)})
               for name, signs in corner_patterns(stages)
-              for signs_l in itertools.product((1.0, -1.0), repeat=len(lot))]
+              for signs_l in itertools.product(*(_lot_signs(q, stages) for q in lot))]
     for i in range(random_builds(samples, stages)):
         draws = rng.uniform(-1.0, 1.0, size=(stages, 2)) * np.asarray(half)
-        built = {q: float(rng.uniform(-t, t)) for q, t in lot.items()}
+        built = {q: (rng.uniform(-t, t, size=stages).tolist() if q in ALTERNATING
+                     else float(rng.uniform(-t, t))) for q, t in lot.items()}
         builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws], built))
 
     failures = []
@@ -100,8 +105,22 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
             "box": dict(zip(_axes(spec), half, strict=True))}
 
 
+def _lot_signs(quantity: str, stages: int) -> list[tuple[str, object]]:
+    """(name, sign) of a quantity's corners: +-1 (a lot, or every part alike), and for an
+    ALTERNATING quantity every other part at the other end (+-(1, -1, 1, ...))."""
+    signs = [("+1", 1.0), ("-1", -1.0)]
+    if quantity in ALTERNATING:
+        alternate = [(-1.0) ** k for k in range(stages)]
+        signs += [("alternating +1", alternate), ("alternating -1", [-s for s in alternate])]
+    return signs
+
+
+def _scaled(sign, value):
+    return sign * value if isinstance(sign, float) else [s * value for s in sign]
+
+
 def _lot_name(signs) -> str:
-    return "" if not signs else " with " + ", ".join(f"{s:+.0f}" for s in signs)
+    return "" if not signs else " with " + ", ".join(name for name, _ in signs)
 
 
 def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
@@ -123,12 +142,14 @@ def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
 
     built = {"pivot_x": np.array([[e[0] for e in errors]]),
              "pivot_y": np.array([[e[1] for e in errors]])}
-    for q, dev in deviations.items():
-        built[q] = np.full((1, stages), dev) if q in PER_PART else np.array([dev])
+    for q, dev in deviations.items():  # a list: every part its own value
+        built[q] = (np.array([dev]) if isinstance(dev, list) else
+                    np.full((1, stages), dev) if q in PER_PART else np.array([dev]))
     return simulate_build(spec.scene, design, built, stages, accuracy=accuracy)
 
 
 PER_PART = ("palm_mass", "link_length", "back_stop")  # quantities of every manipulator
+ALTERNATING = ("link_length",)  # per-part quantities whose corners also alternate part by part
 
 
 def _axes(spec: Spec) -> tuple[str, str]:
