@@ -48,8 +48,11 @@ STAIRS_NOT_YET = ("restitution and launch speed move the periodic orbit itself, 
 
 
 def allocating(spec) -> bool:
-    """Whether the spec's [tolerances] asks the optimizer to allocate a tolerance."""
-    return any(t.allocate for t in getattr(spec, "tolerances", ()))
+    """Whether the spec's [tolerances] asks the optimizer to allocate a worst-case tolerance
+    (not one sized for a yield target: formulation/yield_target.py)."""
+    from .yield_target import active
+
+    return any(t.allocate for t in getattr(spec, "tolerances", ())) and not active(spec)
 
 
 def coefficients(spec) -> dict[str, float]:
