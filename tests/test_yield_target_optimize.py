@@ -15,30 +15,23 @@ from pdm_design.formulation.statistical import linearised_yield
 from pdm_design.solve.yield_allocation import allocate_for_yield, with_scale
 from pdm_design.spec import load_spec
 
-LONG_ROW = Path(__file__).resolve().parents[1] / "problems" / "manipulators_long_row.toml"
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+# the long row's parts over 20 stages, stop angles free (its own as the guess), the pivots'
+# places and heights to allocate (weight 1: one tolerance s for both), target 99.73 %
+TARGET_SPEC = PROBLEMS / "manipulators_yield_target.toml"
 TARGET, STAGES = 0.9973, 20
 
 
-def target_spec_text(target=TARGET, stages=STAGES) -> str:
-    """manipulators_long_row with its stop angles free (its own as the guess), the pivots'
-    places and heights to allocate (weight 1: one tolerance s for both), a yield target."""
-    text = LONG_ROW.read_text()
-    for q in ("pivot_x", "pivot_y"):
-        text = text.replace(f'{q} = {{ value = 0.09, applies_to = "each" }}',
-                            f"{q} = {{ allocate = true, weight = 1 }}")
-    text = text.replace("alpha = 0.0613 ", "alpha = { min = 0.0, max = 0.6, initial = 0.0613 } #")
-    text = text.replace("beta = 0.4928 ", "beta = { min = 0.2, max = 1.2, initial = 0.4928 } #")
-    text = text.replace("confirm = 20 ", f"yield_target = {target}\nconfirm = 20 ")
-    text = text.replace("min_yield = 0.98", "")
-    return text.replace("stages = 100", f"stages = {stages}")
+def target_spec_text() -> str:
+    return TARGET_SPEC.read_text()
 
 
 @pytest.fixture(scope="module")
-def answer(tmp_path_factory):
+def answer():
     """(the spec, the optimized design, s*, optimize's JSON)."""
-    path = tmp_path_factory.mktemp("target") / "long_row_target.toml"
-    path.write_text(target_spec_text())
+    path = TARGET_SPEC
     spec = load_spec(path)
+    assert spec.tolerances.yield_target == TARGET and spec.verification.stages == STAGES
     assert set(spec.free_variables) == {"alpha", "beta"}
     run = CliRunner().invoke(main, ["optimize", str(path), "--format", "json", "--no-verify"])
     assert run.exit_code == 0, run.output
@@ -123,8 +116,21 @@ def test_bad_yield_target_specs_exit_2_naming_the_key(tmp_path, edit, key):
 
 
 def test_a_stairs_yield_target_is_refused_naming_the_key(tmp_path):
-    stairs = (LONG_ROW.parent / "stairs_yield.toml").read_text()
+    stairs = (PROBLEMS / "stairs_yield.toml").read_text()
     path = tmp_path / "stairs.toml"
     path.write_text(stairs.replace("[tolerances]", "[tolerances]\nyield_target = 0.99", 1))
     run = CliRunner().invoke(main, ["optimize", str(path), "--no-verify"])
     assert run.exit_code == 2 and "tolerances.yield_target" in run.output, run.output
+
+
+def test_the_build_sheet_lists_the_statistical_pivot_tolerances_and_no_box(answer):
+    # no worst-case box (none was asked for: the sheet says why), the allocated pivots on
+    # their brackets with the target they are sized for and what limits them
+    from pdm_design.sheet.build import sheet_for
+
+    _, _, scale, _ = answer
+    sheet = sheet_for(TARGET_SPEC)
+    assert sheet.tolerance is None and "99.73 %" in sheet.tolerance_note
+    pivots = [e for e in sheet.tolerances if e.quantity in ("pivot x", "pivot y")]
+    assert len(pivots) == 2 and all(e.value == pytest.approx(scale, rel=1e-6) for e in pivots)
+    assert all("linearised yield of 99.73 %; limited by" in e.limited_by for e in pivots)
