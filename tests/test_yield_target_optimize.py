@@ -123,14 +123,18 @@ def test_a_stairs_yield_target_is_refused_naming_the_key(tmp_path):
     assert run.exit_code == 2 and "tolerances.yield_target" in run.output, run.output
 
 
-def test_the_build_sheet_lists_the_statistical_pivot_tolerances_and_no_box(answer):
-    # no worst-case box (none was asked for: the sheet says why), the allocated pivots on
-    # their brackets with the target they are sized for and what limits them
-    from pdm_design.sheet.build import sheet_for
+def test_the_build_sheet_lists_the_statistical_pivot_tolerances_with_their_target(answer):
+    # the sheet's entries of optimize's tolerance list (sheet_for: no worst-case box is
+    # searched for such a spec, its note says so): the allocated pivots on their brackets
+    # with the target they are sized for and what limits them, the given ones as given
+    from pdm_design.sheet.build import _yield_target, allocated_entries
 
-    _, _, scale, _ = answer
-    sheet = sheet_for(TARGET_SPEC)
-    assert sheet.tolerance is None and "99.73 %" in sheet.tolerance_note
-    pivots = [e for e in sheet.tolerances if e.quantity in ("pivot x", "pivot y")]
-    assert len(pivots) == 2 and all(e.value == pytest.approx(scale, rel=1e-6) for e in pivots)
+    spec, _, scale, out = answer
+    assert _yield_target(spec) == TARGET
+    entries = allocated_entries(out["tolerances"], target=_yield_target(spec))
+    pivots = [e for e in entries if e.quantity in ("pivot x", "pivot y")]
+    assert len(pivots) == 2 and all(e.value == scale for e in pivots)
     assert all("linearised yield of 99.73 %; limited by" in e.limited_by for e in pivots)
+    assert {e.limited_by for e in entries if e not in pivots} == {"given in the spec"}
+    # a worst-case answer's sheet lists its pivots in its own box instead
+    assert not any(e.quantity.startswith("pivot") for e in allocated_entries(out["tolerances"]))
