@@ -43,8 +43,11 @@ STAIRS_NOT_YET = "no outer bound over its box is derived yet"
 
 
 def allocating(spec) -> bool:
-    """Whether the spec's [tolerances] asks the optimizer to allocate a tolerance."""
-    return any(t.allocate for t in getattr(spec, "tolerances", ()))
+    """Whether the spec's [tolerances] asks the optimizer to allocate a worst-case tolerance
+    (not one sized for a yield target: formulation/yield_target.py)."""
+    from .yield_target import active
+
+    return any(t.allocate for t in getattr(spec, "tolerances", ())) and not active(spec)
 
 
 def coefficients(spec) -> dict[str, float]:

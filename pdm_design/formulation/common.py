@@ -137,6 +137,9 @@ class SceneModel:
     # Stacking shares IPOPT's per-iteration overhead, so it pays only where that overhead, not the
     # rows' evaluation, is an iteration's cost, and where the starts need alike iteration counts.
     stack_starts: bool = True
+    # a term maximised besides the [objective] table's (None: none): the allocated scale's
+    # log s of a yield target (formulation/yield_target.py)
+    extra_objective: object = None
 
 
 @dataclass(frozen=True)
@@ -416,6 +419,8 @@ def _objective(spec, model):
     f = 0.0
     for name, w in weights.items():
         f = f - w * OBJECTIVE_SENSE[name] * model.objective_terms[name]
+    if model.extra_objective is not None:
+        f = f - model.extra_objective
     if model.objective_scale != 1.0:
         f = f / model.objective_scale
     return weights, f
@@ -483,7 +488,10 @@ def spec_key(spec) -> str:
              if pivots is not None and (pivots.damping or forced) else None)
     tolerances = getattr(spec, "tolerances", ())
     allocated = tuple(tolerances) if any(t.allocate for t in tolerances) else ()  # allocation.py
-    stated = repr(tolerances) if spec.objective.get("max_yield") else None  # statistical.py
+    from .yield_target import active  # tolerances sized for a yield target
+
+    stated = repr(tolerances) if spec.objective.get("max_yield") or active(spec) \
+        else None  # statistical.py
     return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages,
                  required, steps, stated) + ((allocated,) if allocated else ()))
 

@@ -51,7 +51,7 @@ import casadi as ca
 
 from ..errors import SpecError
 from ..physics import manipulators as phys
-from . import allocation
+from . import allocation, yield_target
 from . import manipulator_links as links
 from . import manipulator_rows as rows
 from ..scenes import ManipulatorsDesign
@@ -101,6 +101,11 @@ def build(spec, parameters=None):
         aux.append(("tolerance", tau, 0.0, tolerance_bound(values, bounds, l_max)))
     if epigraph:
         aux.append(("min_margin", t, 0.0, 1.0))
+    target = yield_target.target_rows(spec, values, symbols, bounds) \
+        if yield_target.active(spec) else None  # tolerances sized for a yield target
+    if target is not None:
+        conditions = [*conditions, target.condition]
+        aux.append((yield_target.AUX, target.scale, *target.bounds))
 
     xd = ca.vertcat(*symbols.values()) if symbols else ca.SX(0, 1)
     start = m.aux_start()
@@ -108,6 +113,8 @@ def build(spec, parameters=None):
         start.append(0.0)
     if epigraph:
         start.append(0.0)
+    if target is not None:
+        start.append(target.start)
     inputs = [xd] if parameters is None else [xd, parameters]
     aux_init = ca.Function("aux_init", inputs, [ca.vertcat(*start)])
 
@@ -127,6 +134,7 @@ def build(spec, parameters=None):
         # stopped it 2e-5 short at 40-micron links; at a metre and above they are fine as they
         # are, and the shipped problems' NLP stays as measured (results/bench_optimize.md)
         objective_scale=objective_scale(spec.objective, min(l_max, 1.0)),
+        extra_objective=target.objective if target is not None else None,
     )
     return model, bounds, m
 

@@ -89,7 +89,7 @@ def optimize_text(outcome: DesignOutcome) -> str:
         if outcome.tolerance.get("limited_by"):
             lines.append(_limited_by(outcome.tolerance["limited_by"]))
     if outcome.tolerances:
-        lines += ["", "allocated tolerances (worst case: every build inside them works):",
+        lines += ["", _allocation_heading(outcome.spec),
                   *allocation_rows(outcome.spec.kind, outcome.tolerances)]
     if outcome.verification is not None:
         v = outcome.verification
@@ -107,6 +107,17 @@ def optimize_text(outcome: DesignOutcome) -> str:
     if outcome.violations:
         lines += ["", "why it does not work:", *(f"  - {v}" for v in outcome.violations)]
     return "\n".join(lines) + "\n"
+
+
+def _allocation_heading(spec) -> str:
+    """What the allocated tolerances promise: every build inside them works (worst case), or
+    the row's linearised yield reaches the target (docs/optimizer.md section 10)."""
+    from ..formulation.yield_target import active
+
+    if active(spec):
+        return (f"allocated tolerances (sized for a linearised yield of "
+                f"{100 * spec.tolerances.yield_target:.4g} %; check it with `pdm-design yield`):")
+    return "allocated tolerances (worst case: every build inside them works):"
 
 
 def allocation_rows(kind: str, entries) -> list[str]:

@@ -19,13 +19,15 @@ def is_yield_document(data) -> bool:
 
 def spec_yield(spec, source: str):
     """The yield document of the design `spec` fixes, under its [tolerances] with the spec's
-    builds, seed and stages (`pdm-design yield`'s run); (None, why) where the spec gives none
-    or leaves a tolerance to the optimizer to allocate."""
+    builds, seed and stages (`pdm-design yield`'s run, which sizes the tolerances to allocate
+    for a yield_target); (None, why) where the spec gives none or leaves a tolerance to the
+    optimizer's worst-case allocation."""
     items = list(spec.tolerances or ())
     if not items:
         return None, "the spec has no [tolerances]"
     to_allocate = [t.quantity for t in items if t.value is None]
-    if to_allocate:
+    sized = spec.tolerances.yield_target is not None  # sized for it by the yield run
+    if to_allocate and not sized:
         return None, (f"{', '.join(to_allocate)} {'is' if len(to_allocate) == 1 else 'are'} "
                       "to be allocated (no value in the spec's [tolerances])")
     from ..tolerances.command import run_yield

@@ -102,7 +102,7 @@ def sheet_for(path: str | Path, *, count: int | None = None,
     path = Path(path)
     if path.suffix.lower() == ".json":
         spec, values, status, tol, violations, verification = _from_json(path)
-        extra = spec_entries(spec)
+        extra, target = spec_entries(spec), None
     else:
         from ..api import design
 
@@ -111,12 +111,17 @@ def sheet_for(path: str | Path, *, count: int | None = None,
         values = dict(outcome.analysis.design)
         status, tol = outcome.status.value, outcome.tolerance
         violations, verification = tuple(outcome.violations), outcome.verification
-        extra = (allocated_entries(outcome.tolerances) if outcome.tolerances
-                 else spec_entries(spec))
+        target = _yield_target(spec)
+        extra = (allocated_entries(outcome.tolerances, target=target)
+                 if outcome.tolerances else spec_entries(spec))
     fixed = fixed_spec(spec, values, source=str(path))
     if verification is None and _is_success(status):  # saved with --no-verify: simulate it now
         verification = _verify_now(fixed)
-    if _is_success(status) or tol:
+    if target is not None:  # statistical tolerances, listed below: no box
+        tol, note = None, (f"no worst-case box: the tolerances are sized for a linearised yield "
+                           f"of {100 * target:.4g} % (listed below; check it with "
+                           "`pdm-design yield`)")
+    elif _is_success(status) or tol:
         tol, note = _tolerance(fixed, tol, tolerance)
     else:  # a box around a design that does not work is no build tolerance
         tol, note = None, f"tolerance not computed: the design's status is {status}"
@@ -142,23 +147,33 @@ ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot brac
 SPEC_WORDS = "the spec's statistical tolerance"
 
 
-def allocated_entries(entries) -> tuple:
+def allocated_entries(entries, target: float | None = None) -> tuple:
     """ToleranceEntry of every allocated or given tolerance of an optimize answer other than
-    the pivots' (the sheet's own box lists those), on its part, with what limits it."""
+    the pivots' (the sheet's own box lists those), on its part, with what limits it; with a
+    yield `target` (tolerances sized for it, formulation/yield_target.py: no box) the pivots'
+    too, statistical."""
     from ..solve.binding import SHARED, in_words
     from .parts import ToleranceEntry
 
     out = []
+    sized = "" if target is None else f" for a linearised yield of {100 * target:.4g} %"
     for e in entries or ():
-        if e["quantity"] in ("pivot_x", "pivot_y"):
+        if e["quantity"] in ("pivot_x", "pivot_y") and target is None:
             continue
         lot = " (one lot)" if e["applies_to"] == "lot" else ""
-        why = ("allocated; limited by " + (in_words(e["limited_by"]) or SHARED)
+        why = (f"allocated{sized}; limited by " + (in_words(e["limited_by"]) or SHARED)
                if e["allocated"] else "given in the spec")
         out.append(ToleranceEntry(e["quantity"].replace("_", " "),
                                   ALLOCATED_PART.get(e["quantity"], e["quantity"]) + lot,
                                   e["value"], "" if e["unit"] == "1" else e["unit"], why))
     return tuple(out)
+
+
+def _yield_target(spec) -> float | None:
+    """The yield target the answer's tolerances are sized for (None: a worst-case box)."""
+    from ..formulation.yield_target import active
+
+    return spec.tolerances.yield_target if active(spec) else None
 
 
 def spec_entries(spec) -> tuple:

@@ -12,6 +12,7 @@ from ..formulation.allocation import allocating, pivot_box, values_at
 from ..formulation import build
 from ..formulation.build import FULL
 from ..formulation.common import BACKOFF_FACTOR, MODEL, OBJECTIVE_SENSE
+from ..formulation.yield_target import AUX as TARGET_SCALE
 from ..status import Status
 from . import check, elastic
 from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
@@ -256,6 +257,8 @@ def _tolerance(spec, form, x):
     """(the robust box by axis, the allocated half-widths or None) of a converged answer;
     (None, None) for a spec without a tolerance."""
     if form.tolerance_index is None:
+        if TARGET_SCALE in form.x_names:  # sized for a yield target (formulation/yield_target)
+            return None, tuple(values_at(spec, float(x[form.x_names.index(TARGET_SCALE)])))
         return None, None
     tol_value = float(x[form.tolerance_index])
     tolerance = {axis: tol_value for axis in form.tolerance_axes}

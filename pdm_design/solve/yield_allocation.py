@@ -79,3 +79,69 @@ def allocate_for_yield(scene, design, tolerances: Tolerances, *, stages: int,
                 break
     allocated = with_scale(tolerances, lo)
     return Allocation(lo, target, allocated, meets(lo)[1])
+
+
+def dominant_rows(scene, design, tolerances: Tolerances, stages: int, *,
+                  floor: float = 0.01) -> list[dict]:
+    """What limits tolerances sized for a yield: the failures that make up the union bound
+    sum_i Phi(-beta_i) at this design and these (valued) tolerances, by name, each with its
+    share of the bound and where along the row its rows are ("palm k": the carry on palm k and
+    the handover to k + 1, the landing on k + 1; "the first landing"), the largest first;
+    those holding less than `floor` of it left out."""
+    import numpy as np
+    from scipy.special import ndtr
+
+    from ..formulation.statistical import Chain, counted, row_reliability
+
+    g, sd, names = row_reliability(scene, design, tolerances, stages)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        tail = ndtr(-g / sd) * np.asarray(counted(names)).ravel()
+    total = float(np.sum(tail))
+    if not total > 0.0:
+        return []
+    chain = Chain(scene)
+    sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1) + [len(chain.last[1])]
+    place = np.repeat(np.arange(len(sizes)), sizes)  # 0: the first landing, k: palm k
+    out = []
+    for name in dict.fromkeys(names):
+        mine = np.array([n == name for n in names]) & (tail > 0.0)
+        share = float(tail[mine].sum()) / total
+        if share < floor:
+            continue
+        out.append({"condition": name, "where": _places(place[mine], tail[mine], total),
+                    "share": share})
+    return sorted(out, key=lambda e: -e["share"])
+
+
+def _places(places, tails, total) -> str:
+    """Where one failure's share of the union bound lies, in words: the palms whose rows
+    hold at least a thousandth of it, and the largest."""
+    import numpy as np
+
+    def word(k):
+        return "the first landing" if k == 0 else f"palm {k}"
+
+    kept = places[tails >= 1e-3 * total] if np.any(tails >= 1e-3 * total) else places
+    top = int(places[int(np.argmax(tails))])
+    lo, hi = int(kept.min()), int(kept.max())
+    if lo == hi:
+        return word(top)
+    return f"{word(lo) if lo == 0 else f'palms {lo}'}-{hi}, the most at {word(top)}"
+
+
+def limits_at_target(spec, solution, entries) -> list[dict]:
+    """optimize's tolerance list of a spec sized for a yield target (formulation/
+    yield_target.py), each allocated entry limited by the dominant rows of the union bound at
+    the answer (dominant_rows); [] for a given tolerance."""
+    import numpy as np
+
+    from ..formulation import formulate
+
+    form = formulate(spec)
+    values = form.design_values(np.asarray(solution.x, dtype=float))
+    design = spec.design_at({n: values[n] for n in spec.free_variables})
+    valued = {e["quantity"]: e["value"] for e in entries}
+    sized = replace(spec.tolerances, items=tuple(
+        replace(t, value=valued[t.quantity]) if t.allocate else t for t in spec.tolerances))
+    limits = dominant_rows(spec.scene, design, sized, spec.verification.stages)
+    return [dict(e) | {"limited_by": limits if e["allocated"] else []} for e in entries]

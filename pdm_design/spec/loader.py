@@ -170,6 +170,7 @@ def _parse(data: Any, source: str) -> Spec:
                        "no [tolerances]")
     objective = _named_numbers(data, "objective", OBJECTIVES, _WEIGHT)
     _check_max_yield(objective, kind.scene.kind, tolerances)
+    _check_yield_target(kind.scene.kind, tolerances)
     return Spec(
         source=source,
         scene=scene,
@@ -322,6 +323,19 @@ def _check_max_yield(objective: dict, kind: str, tolerances) -> None:
         raise _Invalid("objective.max_yield", "a [tolerances] table whose every quantity has "
                        "a value (the yield is at given tolerances)",
                        "no [tolerances]" if not tolerances else "a tolerance to allocate")
+
+
+def _check_yield_target(kind: str, tolerances) -> None:
+    """tolerances.yield_target sizes allocated tolerances by the manipulators' linearised yield:
+    it needs a manipulators row and a quantity with allocate = true."""
+    if tolerances.yield_target is None:
+        return
+    if kind != "manipulators":
+        raise _Invalid("tolerances.yield_target", "a manipulators scene (the tolerances are "
+                       "sized by the manipulators' linearised yield)", f"kind = {kind!r}")
+    if not any(t.allocate for t in tolerances):
+        raise _Invalid("tolerances.yield_target", "a quantity with allocate = true (the "
+                       "tolerances sized for the target)", "no tolerance to allocate")
 
 
 def _tolerances(table: dict, kind: str):
