@@ -312,12 +312,9 @@ _FRACTION = TypeAdapter(Annotated[float, Strict(), Field(gt=0, lt=1)], config=CO
 
 
 def _check_max_yield(objective: dict, kind: str, tolerances) -> None:
-    """objective.max_yield needs a manipulators row and tolerances that all have values."""
+    """objective.max_yield needs tolerances that all have values."""
     if not objective.get("max_yield"):
         return
-    if kind != "manipulators":
-        raise _Invalid("objective.max_yield", "a manipulators scene (the yield objective is "
-                       "the manipulators' linearised yield)", f"kind = {kind!r}")
     if not tolerances or any(t.value is None for t in tolerances):
         raise _Invalid("objective.max_yield", "a [tolerances] table whose every quantity has "
                        "a value (the yield is at given tolerances)",
