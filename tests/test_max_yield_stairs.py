@@ -21,12 +21,6 @@ from pdm_design.tolerances.yield_ import wilson
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 
 
-@pytest.fixture(scope="module")
-def stairs():
-    spec = load_spec(PROBLEMS / "stairs_yield.toml")
-    return spec.scene, spec.design_at()
-
-
 def _limit(scene, design, sign, stages, far=3.0):
     """The launch place deviation (sign +1 or -1) where the map's build first fails, by
     bisection: the map's own account of the rows the linearisation writes."""
@@ -42,14 +36,27 @@ def _limit(scene, design, sign, stages, far=3.0):
     return 0.5 * (lo + hi)
 
 
+def _scene_and_design(problem, radius=None):
+    spec = load_spec(PROBLEMS / problem)
+    scene = spec.scene
+    if radius is not None:
+        scene = dataclasses.replace(scene, ball=dataclasses.replace(scene.ball, radius=radius))
+    return scene, spec.design_at()
+
+
+@pytest.mark.parametrize("problem, radius", [
+    ("stairs_yield.toml", None),            # a 5 cm ball, its disc clear of the riser
+    ("paper_stairs_friction.toml", None),   # a 0.5 m ball (above the rise), rolling, spinning
+    ("paper_stairs_frictionless.toml", 0.0),  # a point ball: over the nose, no disc
+])
 @pytest.mark.parametrize("stages", [1, 4])
-def test_the_rows_meet_zero_where_the_map_fails_a_build(stairs, stages):
+def test_the_rows_meet_zero_where_the_map_fails_a_build(problem, radius, stages):
     # the launch place moves every landing alike (linear): each side's nearest row, its
     # reliability index times sigma, is the deviation at which the map fails the build, on
     # the nose side (overshooting the tread) and the riser side (the disc's back on the
     # nose above the riser: the grazing place, found by Newton's method in the rows, against
-    # the map's root of the exact falling gap)
-    scene, design = stairs
+    # the map's root of the exact falling gap; a point ball's height over the nose)
+    scene, design = _scene_and_design(problem, radius)
     sigma = 0.01
     tols = Tolerances((Tolerance("launch_x", "lot", 3.0 * sigma),))
     g, sd, names = row_reliability(scene, design, tols, stages)
@@ -60,37 +67,49 @@ def test_the_rows_meet_zero_where_the_map_fails_a_build(stairs, stages):
     assert reach["nose_hit"] == pytest.approx(_limit(scene, design, -1, stages), rel=1e-9)
 
 
-def test_the_linearised_yield_is_the_monte_carlo_yield_where_one_row_dominates():
-    # a tread 0.1 m short of the orbit's: the landing moves 0.1 m towards the nose every
+@pytest.mark.parametrize("problem, short, landing, friction", [
+    ("stairs_yield.toml", 0.1, 1.3, None),             # a 5 cm ball, frictionless
+    ("paper_stairs_friction.toml", 0.05, 1.0, 0.05),   # a 0.5 m ball rolling, spinning
+])
+def test_the_linearised_yield_is_the_monte_carlo_yield_where_one_row_dominates(
+        problem, short, landing, friction):
+    # a tread `short` of the orbit's: the landing moves that far towards the nose every
     # bounce, so the last landing's overshoot row dominates the failures (the one before is
-    # about two of its standard deviations further off, a share of the bound below 1e-3).
+    # about two of its standard deviations further off, a share of the bound below 1 %).
     # Every quantity varies, small: the launch speed (which moves every landing, linearly),
-    # the boards' restitution, every step's rise and tread; the map's yield over 200 000
-    # builds must hold the linearised yield within its 95 % interval
-    scene = load_spec(PROBLEMS / "stairs_yield.toml").scene
-    design = StairsDesign(restitution=0.8, launch_speed=3.0, tread=2.338227661322947,
-                          landing_offset=1.3)
-    tols = Tolerances((Tolerance("launch_speed", "lot", 0.02),
-                       Tolerance("restitution", "lot", 0.0003),
-                       Tolerance("rise", "each", 0.001), Tolerance("tread", "each", 0.001)))
+    # the boards' restitution (and friction), every step's rise and tread; the map's yield
+    # over 200 000 builds must hold the linearised yield within its 95 % interval
+    from pdm_design.sim.stairs import stairs_geometry
+
+    spec = load_spec(PROBLEMS / problem)
+    scene = spec.scene
+    orbit = stairs_geometry(scene, spec.design_at()).tread
+    design = StairsDesign(restitution=0.8, launch_speed=3.0, tread=orbit - short,
+                          landing_offset=landing)
+    items = [Tolerance("launch_speed", "lot", 0.02), Tolerance("restitution", "lot", 0.0003),
+             Tolerance("rise", "each", 0.001), Tolerance("tread", "each", 0.001)]
+    if friction:
+        items.append(Tolerance("friction", "lot", friction))
+    tols = Tolerances(tuple(items))
     stages, builds = 10, 200_000
     g, sd, names = row_reliability(scene, design, tols, stages)
     tails = ndtr(-g / sd)
     order = np.argsort(tails)[::-1]
     assert names[order[0]] == "skipped_step" and order[0] == max(
         i for i, n in enumerate(names) if n == "skipped_step")  # the last landing's
-    assert tails[order[1]] < 1e-3 * tails[order[0]]
+    assert tails[order[1]] < 1e-2 * tails[order[0]]
     lin = linearised_yield(scene, design, tols, stages)
-    assert 0.98 < lin["yield"] < 0.999  # a yield a sample of this size resolves
+    assert 0.95 < lin["yield"] < 0.999  # a yield a sample of this size resolves
     out = run_builds(scene, design, draw(tols, builds, stages, seed=5), stages)
     assert out.closed_form.all()
     low, high = wilson(out.passed.sum(), builds)
     assert low <= lin["yield"] <= high, (lin["yield"], low, high)
-    # every failure is the last landing's overshoot: beyond the tread, or onto its nose (the
-    # map names a disc that overshoots by less than its radius and touches the nose nose_hit)
+    # the failures are overshoots (beyond the tread, or onto its nose: the map names a disc
+    # that overshoots by less than its radius and touches the nose nose_hit), nearly all the
+    # last landing's
     failed = ~out.passed
     assert set(out.failure[failed]) <= {"skipped_step", "nose_hit"}
-    assert np.all(out.stages_passed[failed] == stages - 1)
+    assert np.mean(out.stages_passed[failed] == stages - 1) > 0.98
     print(f"linearised {lin['yield']:.5f}, map {out.passed.mean():.5f} ({low:.5f}-{high:.5f})")
 
 
@@ -142,3 +161,52 @@ def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_build
     print(f"builds only max_yield passes: {better}, only the worst case: {worse}, "
           f"p = {p_value:.2g}")
     assert better > worse and p_value < 0.05, (better, worse, p_value)
+
+
+def test_max_yield_is_refused_in_words_on_manipulators_with_real_links_or_pivots():
+    # the manipulators' linearised yield is the paper's plain device: a row on real links or
+    # with pivot friction is refused (exit 2 at the CLI) rather than optimised for a yield
+    # that leaves them out
+    from pdm_design.errors import SpecError
+
+    base = {"scene": {"kind": "manipulators", "body": {"mass": 1.0, "width": 0.4,
+                                                       "height": 0.2},
+                      "palm": {"width": 1.6, "thickness": 0.05, "friction": 0.8}},
+            "initial": {"position": [-1.25, 3.05], "velocity": [3.0, 0.0]},
+            "design": {"alpha": {"min": 0.0, "max": 0.6}, "beta": 0.5, "link_length": 2.0,
+                       "mass_ratio": 10.0},
+            "objective": {"max_yield": 1.0}, "tolerances": {"pivot_x": {"value": 0.01}}}
+    assert parse_spec(base).objective == {"max_yield": 1.0}
+    for extra in ({"links": {"mass": 0.5}}, {"pivots": {"friction_torque": 0.2}}):
+        data = {**base, "scene": {**base["scene"], **extra}}
+        with pytest.raises(SpecError, match="objective.max_yield.*massless links"):
+            parse_spec(data)
+
+
+@pytest.mark.parametrize("eps", [0.05, 0.5, 0.99])
+def test_the_linearised_yield_is_the_same_at_any_size_and_finite_at_extreme_restitutions(eps):
+    # lengths x k, speeds x sqrt(k), length tolerances x k: the same staircase at another
+    # size, the same yield (every row is divided by the tread); at restitution 0.05 the
+    # nominal build already lands twice on a tread (the map fails every build): yield 0
+    from pdm_design.scenes.stairs import Ball, StairsInitial, StairsScene
+
+    def at(k):
+        scene = StairsScene(initial=StairsInitial(drop_height=k), ball=Ball(radius=0.05 * k))
+        design = StairsDesign(restitution=eps, launch_speed=3.0 * math.sqrt(k))
+        tols = Tolerances((Tolerance("rise", "each", 0.005 * k),
+                           Tolerance("tread", "each", 0.005 * k),
+                           Tolerance("launch_speed", "lot", 0.015 * math.sqrt(k)),
+                           Tolerance("restitution", "lot", min(0.0015, (1.0 - eps) / 3.0))))
+        return scene, design, tols, linearised_yield(scene, design, tols, 30)
+
+    scene, design, tols, unit = at(1.0)
+    assert np.isfinite(unit["min_beta"]) and 0.0 <= unit["yield"] <= 1.0
+    for k in (1e-3, 1e3):
+        other = at(k)[3]
+        assert other["min_beta"] == pytest.approx(unit["min_beta"], rel=1e-9)
+        assert other["failure_bound"] == pytest.approx(unit["failure_bound"], rel=1e-8)
+    out = run_builds(scene, design, draw(tols, 4000, 30, seed=1), 30)
+    if eps == 0.05:
+        assert unit["yield"] == 0.0 and not out.passed.any()
+    else:  # the union bound is a bound: at most the map's yield (and its interval's top)
+        assert unit["yield"] <= wilson(out.passed.sum(), 4000)[1]
