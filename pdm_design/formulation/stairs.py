@@ -59,7 +59,7 @@ import casadi as ca
 from ..errors import SpecError
 from ..physics import stairs as phys
 from ..scenes import StairsDesign
-from . import allocation
+from . import allocation, statistical_stairs
 from .common import (
     MARGIN,
     MODEL,
@@ -139,7 +139,7 @@ def build(spec):
             "max_min_margin": t if epigraph else ca.SX(0.0),
             "min_drop": ca.SX(m.rise) if not isinstance(m.rise, ca.SX) else m.rise,
             "fastest_convergence": m.eps**2,
-            "max_yield": ca.SX(0.0),  # manipulators only (the loader refuses it here)
+            "max_yield": statistical_stairs.objective_term(spec, m),
         },
         margin_symbol=t, aux_init=aux_init,
         derived={"rise": m.rise, "tread": m.tread, "landing_offset": m.L1,

@@ -41,15 +41,15 @@ import casadi as ca
 import numpy as np
 
 from ..physics import manipulators as phys
+from . import chain_moments
+from .chain_moments import nines
 
 PARTS = ("pivot_x", "pivot_y", "link_length", "back_stop", "palm_mass")
 LOTS = ("friction", "object_mass", "object_width", "feed_x", "feed_speed") + tuple(
     f"{q}_lot" for q in PARTS)
 DESIGN = ("alpha", "beta", "link_length", "mass_ratio", "first_pivot_x", "first_pivot_y")
-FAILURE_FLOOR = 1e-300  # the union bound never below this: its logarithm stays finite
 # Failures the event simulator carries on from (the map leaves them to it): not counted.
 SURVIVED = ("slip",)
-VARIANCE_FLOOR = 1e-24  # added to every row's variance: a row no deviation moves has sd 1e-12
 
 
 def sigmas(tolerances, scale=1.0):
@@ -176,78 +176,17 @@ class Chain:
     def _linearised(self, rows, state, inputs):
         """Function (x, s, Sz) -> (g + tr(H Sz) / 2, dg/dz, tr((H Sz)^2) / 2 of each row[,
         s' + tr(H Sz) / 2, ds'/dz, tr(H_a Sz H_b Sz) / 2 of the state's two]) at e = 0,
-        z = (s, e_k, e_k1, e_lot), Sz the covariance of z: the second-order mean and the
-        quadratic term's own variance (exact for a quadratic of normal z)."""
-        z = ca.vertcat(self.s, self.ek, self.ek1, self.el)
-        Sz = ca.SX.sym("Sz", z.numel(), z.numel())
-        outs = []
-        names = tuple(name for name, _ in rows)
-        rows = ca.vertcat(*[row for _, row in rows])
-        for is_state, f in enumerate([rows] + ([state] if state is not None else [])):
-            J = ca.jacobian(f, z)
-            HS = [ca.jacobian(J[i, :].T, z) @ Sz for i in range(f.numel())]
-            mean = ca.vertcat(*[0.5 * ca.trace(h) for h in HS])
-            if is_state:  # the 2 x 2 covariance of the state's quadratic terms
-                spread = ca.blockcat([[0.5 * ca.trace(HS[a] @ HS[b]) for b in range(2)]
-                                      for a in range(2)])
-            else:
-                spread = ca.vertcat(*[0.5 * ca.trace(h @ h) for h in HS])
-            outs += [f + mean, J, spread]
-        deviations = [self.ek, self.ek1, self.el]
-        outs = ca.substitute(outs, deviations, [ca.DM.zeros(v.shape) for v in deviations])
-        fn = ca.Function("stage_linearised", [self.x, self.s, Sz], outs)
-        return fn, names
+        z = (s, e_k, e_k1, e_lot), Sz the covariance of z (chain_moments.linearise)."""
+        return chain_moments.linearise(rows, state, self.x, self.s, self.ek, self.ek1, self.el)
 
 
 def reliability(chain: Chain, x, stages: int, sigma_each, sigma_lot):
     """(g, sd) of every row of a row of `stages` palms: mean values (to second order) and
     standard deviations (first order), CasADi expressions of x (DM for a number x)."""
-    Se = ca.diag(ca.vertcat(*[s**2 for s in sigma_each]))
-    Sl = ca.diag(ca.vertcat(*[s**2 for s in sigma_lot]))
-    ne, nl = Se.shape[0], Sl.shape[0]
-    R, C, L = ca.DM.zeros(2, 2), ca.DM.zeros(2, ne), ca.DM.zeros(2, nl)
-    fn, names = chain.first
-    g, Gz, q, s, Fz, Q = fn(x, ca.DM.zeros(2), _covariance(R, C, L, Se, Sl))
-    gs, vs, labels = [g], [_variance(Gz, R, C, L, Se, Sl) + q], list(names)
-    R, C, L = Q, Fz[:, 2:2 + ne], Fz[:, 2 + 2 * ne:]
-    for k in range(stages):
-        fn, names = chain.last if k == stages - 1 else chain.middle
-        out = fn(x, s, _covariance(R, C, L, Se, Sl))
-        g, Gz, q = out[:3]
-        gs.append(g)
-        labels += names
-        vs.append(_variance(Gz, R, C, L, Se, Sl) + q)
-        if k < stages - 1:
-            s, Fz, Q = out[3:]
-            A, Bk, Bk1, BL = Fz[:, :2], Fz[:, 2:2 + ne], Fz[:, 2 + ne:2 + 2 * ne], Fz[:, 2 + 2 * ne:]
-            AC = A @ C + Bk
-            R = A @ R @ A.T + AC @ Se @ AC.T + Q
-            C, L = Bk1, A @ L + BL
-    return ca.vertcat(*gs), ca.sqrt(ca.vertcat(*vs) + VARIANCE_FLOOR), tuple(labels)
+    def stage(k):
+        return chain.last if k == stages - 1 else chain.middle
 
-
-def _covariance(R, C, L, Se, Sl):
-    """Covariance of z = (s, e_k, e_k1, e_lot) from the state's parts (R, C on e_k, L on
-    the lot)."""
-    ne, nl = Se.shape[0], Sl.shape[0]
-    Z = ca.DM.zeros
-    Ss = R + C @ Se @ C.T + L @ Sl @ L.T
-    CS, LS = C @ Se, L @ Sl
-    return ca.blockcat([[Ss, CS, Z(2, ne), LS],
-                        [CS.T, Se, Z(ne, ne), Z(ne, nl)],
-                        [Z(ne, 2), Z(ne, ne), Se, Z(ne, nl)],
-                        [LS.T, Z(nl, ne), Z(nl, ne), Sl]])
-
-
-def _variance(Gz, R, C, L, Se, Sl):
-    ne = Se.shape[0]
-    Gs, Gk, Gk1, GL = Gz[:, :2], Gz[:, 2:2 + ne], Gz[:, 2 + ne:2 + 2 * ne], Gz[:, 2 + 2 * ne:]
-    return (_quad(Gs, R) + _quad(Gs @ C + Gk, Se) + _quad(Gk1, Se) + _quad(Gs @ L + GL, Sl))
-
-
-def _quad(G, S):
-    """diag(G S G^T) for a symmetric S."""
-    return ca.sum2((G @ S) * G)
+    return chain_moments.reliability(chain.first, stage, x, stages, sigma_each, sigma_lot)
 
 
 def counted(names) -> ca.DM:
@@ -258,13 +197,7 @@ def counted(names) -> ca.DM:
 def failure_bound(g, sd, names):
     """sum_i Phi(-beta_i) over the counted rows, beta_i = g_i / sd_i (a row of no spread: 0
     if it holds, else 1)."""
-    beta = g / sd
-    return ca.sum1(counted(names) * 0.5 * (1.0 - ca.erf(beta / math.sqrt(2.0))))  # no erfc in CasADi
-
-
-def nines(bound):
-    """-log10 of the failure bound: 3 for a linearised yield of 99.9 %."""
-    return -ca.log10(ca.fmax(bound, FAILURE_FLOOR))
+    return chain_moments.failure_bound(g, sd, counted(names))
 
 
 def design_vector(values: dict):
@@ -310,12 +243,5 @@ def row_reliability(scene, design, tolerances, stages: int):
 def linearised_yield(scene, design, tolerances, stages: int) -> dict:
     """The linearised yield of a fixed design: the union bound's yield, the failure bound, the
     smallest reliability index and the row count, as numbers."""
-    from scipy.special import ndtr
-
     g, sd, names = row_reliability(scene, design, tolerances, stages)
-    with np.errstate(invalid="ignore"):  # a spread that leaves the closed forms: not a number
-        beta = g / sd
-    mask = np.asarray(counted(names)).ravel() > 0.0
-    bound = float(np.sum(ndtr(-beta[mask])))  # NaN where the spread leaves the closed forms
-    return {"yield": max(0.0, 1.0 - bound), "failure_bound": bound,
-            "min_beta": float(beta[mask].min()), "rows": int(mask.sum())}
+    return chain_moments.summary(g, sd, np.asarray(counted(names)).ravel() > 0.0)

@@ -169,7 +169,7 @@ def _parse(data: Any, source: str) -> Spec:
         raise _Invalid("expect.min_yield", "a [tolerances] table to draw the builds from",
                        "no [tolerances]")
     objective = _named_numbers(data, "objective", OBJECTIVES, _WEIGHT)
-    _check_max_yield(objective, kind.scene.kind, tolerances)
+    _check_max_yield(objective, scene, tolerances)
     _check_yield_target(kind.scene.kind, tolerances)
     return Spec(
         source=source,
@@ -312,13 +312,15 @@ _STRICT_BOOL = TypeAdapter(Annotated[bool, Strict()], config=CONFIG)
 _FRACTION = TypeAdapter(Annotated[float, Strict(), Field(gt=0, lt=1)], config=CONFIG)
 
 
-def _check_max_yield(objective: dict, kind: str, tolerances) -> None:
-    """objective.max_yield needs a manipulators row and tolerances that all have values."""
+def _check_max_yield(objective: dict, scene, tolerances) -> None:
+    """objective.max_yield needs tolerances that all have values, and on manipulators the
+    paper's plain mechanism (its linearised yield does not model links or pivot friction)."""
     if not objective.get("max_yield"):
         return
-    if kind != "manipulators":
-        raise _Invalid("objective.max_yield", "a manipulators scene (the yield objective is "
-                       "the manipulators' linearised yield)", f"kind = {kind!r}")
+    if scene.kind == "manipulators" and not scene.plain_mechanism:
+        raise _Invalid("objective.max_yield", "massless links and frictionless pivots (the "
+                       "linearised yield is the paper's device's; `pdm-design yield` judges "
+                       "a design on real links and pivots)", "[scene.links] or [scene.pivots]")
     if not tolerances or any(t.value is None for t in tolerances):
         raise _Invalid("objective.max_yield", "a [tolerances] table whose every quantity has "
                        "a value (the yield is at given tolerances)",
