@@ -31,7 +31,7 @@ from ..tolerances.model import allocation_shares
 # Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
 ALLOCATABLE = {
     "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
-                     "palm_mass", "object_mass", "back_stop"),
+                     "palm_mass", "object_mass", "back_stop", "link_mass", "pivot_friction"),
     "stairs": ("rise", "tread", "launch_x"),
 }
 # Why the others are refused: what a sound bound of them would need (the words of the error).
@@ -39,8 +39,6 @@ NOT_YET = {
     "link_length": "every stage's handover angle, speed map and landing place move with each "
                    "link's own length; no outer bound of the speed interval over a box of link "
                    "lengths is derived yet",
-    "link_mass": "no outer bound over a box of link masses is derived yet",
-    "pivot_friction": "no outer bound over a box of pivot frictions is derived yet",
 }
 STAIRS_NOT_YET = ("restitution and launch speed move the periodic orbit itself, and friction "
                   "the rolling speed of every flight; no outer bound over their box is "
@@ -77,13 +75,8 @@ def check(spec) -> None:
                         "velocity[1] = 0) to bound the feed speed's tolerance (along a sloped "
                         "start it moves the fall speed as well; not derived yet)",
                         found=f"initial.velocity[1] = {spec.scene.initial.velocity[1]:g}")
-    masses = [t.quantity for t in spec.tolerances
-              if t.quantity in ("palm_mass", "object_mass", "back_stop")]
-    if spec.kind == "manipulators" and masses and not spec.scene.plain_mechanism:
-        raise SpecError(source, f"tolerances.{masses[0]}", "the paper's device (massless "
-                        "links, frictionless pivots) to bound a mass's or a stop's tolerance "
-                        "(with links or pivot friction they enter the carry; not derived yet)",
-                        found="scene.links or scene.pivots")
+    if spec.kind == "manipulators":
+        _check_mechanism(spec, source)
     for tol in spec.tolerances:
         if tol.quantity in allowed:
             continue
@@ -94,6 +87,24 @@ def check(spec) -> None:
                         "a quantity the worst-case allocation can bound: "
                         + ", ".join(allowed) + f" ({why})",
                         found=tol.quantity)
+
+
+def _check_mechanism(spec, source) -> None:
+    """The built device's quantities: link_mass needs links that weigh something (its box's
+    lower end is a link no workshop makes otherwise), and back_stop the paper's device (with
+    links or pivot friction the stops enter the carry's contact force; not derived yet)."""
+    names = {t.quantity for t in spec.tolerances}
+    if "link_mass" in names and spec.scene.links.mass <= 0.0:
+        raise SpecError(source, "tolerances.link_mass", "scene.links.mass > 0 to bound a link "
+                        "mass's tolerance (massless links: any error makes a negative mass)",
+                        found=f"scene.links.mass = {spec.scene.links.mass:g}")
+    built = not spec.scene.plain_mechanism or names & {"link_mass", "pivot_friction"}
+    if "back_stop" in names and built:
+        raise SpecError(source, "tolerances.back_stop", "the paper's device (massless links, "
+                        "frictionless pivots, neither toleranced) to bound a back stop's "
+                        "tolerance (with links or pivot friction the stop enters the carry's "
+                        "contact force and over-the-top need; not derived yet)",
+                        found="scene.links, scene.pivots or their tolerances")
 
 
 def half_widths(spec, s) -> dict[str, object]:

@@ -206,6 +206,7 @@ class _Model:
         self.g = scene.gravity
         self.a, self.b = values["alpha"], values["beta"]
         self.l, self.q = values["link_length"], values["mass_ratio"]
+        self.mass_ratio = self.q  # the design's m / M (self.q becomes the carry's q_e below)
         self.pivot = (values["first_pivot_x"], values["first_pivot_y"])
         # links and pivot friction (physics.carry_terms): effective mass ratio and gravity of
         # the carry, friction per carried mass; q and g themselves on the paper's device

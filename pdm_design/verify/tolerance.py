@@ -60,7 +60,8 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
     """Simulate the corner patterns and `samples` uniform random builds inside the box (fewer
     on rows longer than RANDOM_ROW: `random_builds`). lots: an allocated tolerance list
     (formulation/allocation.py); its quantities other than the pivots' (feed_x, feed_speed,
-    friction, object_width, object_mass: one value a build; palm_mass: every palm alike) take
+    friction, object_width, object_mass: one value a build; palm_mass, link_mass,
+    pivot_friction: every manipulator alike) take
     every sign corner with every pivot pattern, and a uniform value in each random build."""
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
@@ -127,7 +128,8 @@ def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
     return simulate_build(spec.scene, design, built, stages, accuracy=accuracy)
 
 
-PER_PART = ("palm_mass", "link_length", "back_stop")  # quantities of every manipulator
+# quantities of every manipulator: a corner takes them all high or all low
+PER_PART = ("palm_mass", "link_length", "back_stop", "link_mass", "pivot_friction")
 
 
 def _axes(spec: Spec) -> tuple[str, str]:
