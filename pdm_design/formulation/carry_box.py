@@ -45,6 +45,8 @@ class CarryEnds:
     q: list
     g: list
     f: list
+    # (the lightest palm's weight plus half its links', in kg; the largest torque) when f varies
+    empty: tuple | None = None
 
     @property
     def carry_varies(self) -> bool:
@@ -90,11 +92,11 @@ def terms(m, box) -> CarryEnds:
         g = _ordered(m.g * (m_lo + M_lo + W_hi) / (m_lo + M_lo + J_hi),
                      m.g * (m_hi + M_hi + W_lo) / (m_hi + M_hi + J_lo), W_hi - J_hi)
     torque = scene.pivots.friction_torque
-    f = [m.f]
-    if rows.nonzero(t_t) or (masses and torque != 0.0):
-        tau_lo = ca.fmax(torque - t_t, 0.0) if rows.nonzero(t_t) else torque
-        f = [tau_lo / (m_hi + M_hi + J_hi), (torque + t_t) / (m_lo + M_lo + J_lo)]
-    return CarryEnds(q, g, f)
+    if not (rows.nonzero(t_t) or (masses and torque != 0.0)):
+        return CarryEnds(q, g, [m.f])
+    tau_lo = ca.fmax(torque - t_t, 0.0) if rows.nonzero(t_t) else torque
+    f = [tau_lo / (m_hi + M_hi + J_hi), (torque + t_t) / (m_lo + M_lo + J_lo)]
+    return CarryEnds(q, g, f, (M_lo + W_lo, torque + t_t))
 
 
 def _links(scene, l, mass):
@@ -128,7 +130,10 @@ def at(m, gravity, friction):
 def validity_rows(m, f):
     """Links keep a mass within their tolerance (link mass 0 is a build, below it none; the
     ends of q_e, g_e and f are the extremes only over masses >= 0); with the carry varying, it
-    descends over every handover angle (F increases with g_e only where cos a >= cos th)."""
+    descends over every handover angle (F increases with g_e only where cos a >= cos th); with
+    the friction varying, every empty palm swings on to its front stop (the parked palms' rows
+    take it there): gravity's torque on the lightest palm at the smallest handover angle beats
+    the largest friction torque, and grows on to pi/2."""
     t_l = f.box.get("link_mass", 0.0)
     if rows.nonzero(t_l):
         mass = m.scene.links.mass
@@ -137,5 +142,10 @@ def validity_rows(m, f):
     if f.robust and len(f.terms.g) > 1:
         f.add(("palm_clearance",), "the carry descends to every handover angle",
               phys.cos_difference(m.a, f.th_lo), 1.0, kind=VALIDITY)
+    if f.robust and f.terms.empty is not None:
+        weight, torque = f.terms.empty
+        push = weight * m.g * m.l
+        f.add(("parked_palms",), "every empty palm swings on to its front stop",
+              push * ca.sin(f.th_lo) - torque, push, kind=VALIDITY)
 
 
