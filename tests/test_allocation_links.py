@@ -204,10 +204,10 @@ def test_every_quantity_with_the_pivots(every):
 @pytest.mark.parametrize("base, extra, key, words", [
     ((ROOT / "problems" / "manipulators_robust.toml").read_text().split("[expect]")[0],
      "link_mass = { allocate = true }\n", "tolerances.link_mass", "scene.links.mass > 0"),
-    (BASE, "back_stop = { allocate = true }\n", "tolerances.back_stop", "the paper's device"),
     ((ROOT / "problems" / "manipulators_robust.toml").read_text().split("[expect]")[0],
-     "back_stop = { allocate = true }\npivot_friction = { allocate = true }\n",
-     "tolerances.back_stop", "neither toleranced"),
+     "pivot_friction = { allocate = true }\n", "tolerances.pivot_friction",
+     "scene.pivots.friction_torque > 0"),
+    (BASE, "back_stop = { allocate = true }\n", "tolerances.back_stop", "the paper's device"),
 ])
 def test_refused_in_words(tmp_path, base, extra, key, words):
     path = tmp_path / "bad.toml"

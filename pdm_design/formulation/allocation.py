@@ -90,21 +90,24 @@ def check(spec) -> None:
 
 
 def _check_mechanism(spec, source) -> None:
-    """The built device's quantities: link_mass needs links that weigh something (its box's
-    lower end is a link no workshop makes otherwise), and back_stop the paper's device (with
-    links or pivot friction the stops enter the carry's contact force; not derived yet)."""
+    """The built device's quantities: link_mass and pivot_friction need a nominal above 0 (a
+    box around 0 is half made of parts below their limit, as `yield` refuses it too), and
+    back_stop the paper's device (with links or pivot friction the stops enter the carry's
+    contact force; not derived yet)."""
     names = {t.quantity for t in spec.tolerances}
-    if "link_mass" in names and spec.scene.links.mass <= 0.0:
-        raise SpecError(source, "tolerances.link_mass", "scene.links.mass > 0 to bound a link "
-                        "mass's tolerance (massless links: any error makes a negative mass)",
-                        found=f"scene.links.mass = {spec.scene.links.mass:g}")
-    built = not spec.scene.plain_mechanism or names & {"link_mass", "pivot_friction"}
-    if "back_stop" in names and built:
+    scene = spec.scene
+    for name, key, nominal in (("link_mass", "scene.links.mass", scene.links.mass),
+                               ("pivot_friction", "scene.pivots.friction_torque",
+                                scene.pivots.friction_torque)):
+        if name in names and nominal <= 0.0:
+            raise SpecError(source, f"tolerances.{name}", f"{key} > 0 to bound a tolerance of "
+                            f"it (a box around 0 is half made of parts below 0)",
+                            found=f"{key} = {nominal:g}")
+    if "back_stop" in names and not scene.plain_mechanism:
         raise SpecError(source, "tolerances.back_stop", "the paper's device (massless links, "
-                        "frictionless pivots, neither toleranced) to bound a back stop's "
-                        "tolerance (with links or pivot friction the stop enters the carry's "
-                        "contact force and over-the-top need; not derived yet)",
-                        found="scene.links, scene.pivots or their tolerances")
+                        "frictionless pivots) to bound a back stop's tolerance (with links or "
+                        "pivot friction the contact force at the back stop is not monotone in "
+                        "the stop's angle; not derived yet)", found="scene.links or scene.pivots")
 
 
 def half_widths(spec, s) -> dict[str, object]:

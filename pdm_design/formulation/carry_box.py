@@ -77,7 +77,7 @@ def terms(m, box) -> CarryEnds:
     if not (masses or rows.nonzero(t_t)):
         return CarryEnds([m.q], [m.gc], [m.f])
     scene = m.scene
-    if scene.plain_mechanism and not (rows.nonzero(t_l) or rows.nonzero(t_t)):
+    if scene.plain_mechanism:  # link_mass, pivot_friction need a nominal: allocation.check
         return CarryEnds(m.mass_ratios(box), [m.gc], [m.f])
     obj = scene.body.mass
     palm = obj / m.mass_ratio

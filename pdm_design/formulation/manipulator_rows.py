@@ -210,8 +210,7 @@ def carry_rows(m, f):
         for i, top in enumerate(tops):
             add(OVER_THE_TOP, version("slowest landing on any palm", i, tops),
                 u_lo**2 - top, u_lo**2)
-    plain = m.plain and not f.terms.carry_varies
-    f.fp_back, f.fp_front = (_plain_contact_rows if plain else _contact_rows)(m, f)
+    f.fp_back, f.fp_front = (_plain_contact_rows if m.plain else _contact_rows)(m, f)
     # the object's base stays above palm K + 1 while cos th_K <= cos a_K
     clearance = m.pitch_y if not f.stopped else l * (f.d_lo - f.d_hi) + m.pitch_y
     add("palm_clearance", "next palm below the object until the handover",

@@ -38,8 +38,9 @@ Bounds that are not exact are outer bounds, so the box found is sound (never too
 Allocated tolerances ([tolerances] with allocate = true, formulation/allocation.py): the same
 rows over a box with one half-width per quantity, `box` {quantity: half-width}: the pivots'
 places and heights apart, the feed's place and speed, the friction, the object's width, the
-masses (the mass ratio's ends) and the back stops (their ends, and the drift they add along the
-row); docs/optimizer.md section 4a derives each.
+masses (the mass ratio's ends; with links or pivot friction the carry's q_e, g_e and f ends,
+with the links' masses and the pivots' torques: formulation/carry_box.py) and the back stops
+(their ends, and the drift they add along the row); docs/optimizer.md section 4a derives each.
 """
 
 from __future__ import annotations
