@@ -216,3 +216,21 @@ def test_refused_in_words(tmp_path, base, extra, key, words):
                          capture_output=True, text=True, cwd=ROOT)
     assert run.returncode == 2
     assert key in run.stderr and words in run.stderr and "Traceback" not in run.stderr
+
+
+def test_verification_draws_a_part_quantity_palm_by_palm(tmp_path):
+    """The optimizer's random builds draw a part's quantity for every manipulator on its own:
+    three times the link-mass box puts some link below 0 kg in most builds (invalid_part),
+    and each such build lists its six different link-mass deviations."""
+    from pdm_design.verify.tolerance import verify_tolerance
+
+    spec = _spec(tmp_path, _line("link_mass"))
+    result = optimize(spec, verify=False)
+    t = 3.0 * result.tolerances[0]["value"]
+    box = verify_tolerance(spec, _design(spec, result), {"dx": 0.0, "dy": 0.0}, samples=8,
+                           lots=[{"quantity": "link_mass", "value": t}])
+    drawn = [(f["lots"]["link_mass"], f["failure"]) for f in box["failures"]
+             if f["build"].startswith("random")]
+    assert drawn and all(len(set(d)) == 6 and max(map(abs, d)) <= t for d, _ in drawn)
+    negative = [why for d, why in drawn if min(d) < -spec.scene.links.mass]
+    assert negative and all(why.startswith("invalid_part") for why in negative)

@@ -61,8 +61,8 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
     on rows longer than RANDOM_ROW: `random_builds`). lots: an allocated tolerance list
     (formulation/allocation.py); its quantities other than the pivots' (feed_x, feed_speed,
     friction, object_width, object_mass: one value a build; palm_mass, link_mass,
-    pivot_friction: every manipulator alike) take
-    every sign corner with every pivot pattern, and a uniform value in each random build."""
+    pivot_friction: every manipulator alike) take every sign corner with every pivot pattern,
+    and a uniform value in each random build (a part's quantity: one per manipulator)."""
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
@@ -74,7 +74,8 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
               for signs_l in itertools.product((1.0, -1.0), repeat=len(lot))]
     for i in range(random_builds(samples, stages)):
         draws = rng.uniform(-1.0, 1.0, size=(stages, 2)) * np.asarray(half)
-        built = {q: float(rng.uniform(-t, t)) for q, t in lot.items()}
+        built = {q: rng.uniform(-t, t, stages).tolist() if q in PER_PART  # palm by palm
+                 else float(rng.uniform(-t, t)) for q, t in lot.items()}
         builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws], built))
 
     failures = []
@@ -124,7 +125,8 @@ def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
     built = {"pivot_x": np.array([[e[0] for e in errors]]),
              "pivot_y": np.array([[e[1] for e in errors]])}
     for q, dev in deviations.items():
-        built[q] = np.full((1, stages), dev) if q in PER_PART else np.array([dev])
+        built[q] = (np.broadcast_to(np.asarray(dev, float), (stages,))[None, :].copy()
+                    if q in PER_PART else np.array([dev]))
     return simulate_build(spec.scene, design, built, stages, accuracy=accuracy)
 
 
