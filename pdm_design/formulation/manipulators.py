@@ -294,7 +294,8 @@ class _Model:
     def contact(self, th, v2):
         """(lift-off capacity of v^2, friction demand, force point / height) of the stuck
         object at th moving at v^2 on real links or pivots (physics.carry_force_ratio)."""
-        along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f)
+        along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f,
+                                 link_length=self.l)
         ratio = phys.carry_force_ratio(th, v2, gravity=self.g, link_length=self.l, along=along)
         held = phys.lift_off_capacity(th, gravity=self.g, link_length=self.l, along=along)
         return held, phys.friction_demand(th, ratio), phys.carry_force_point(th, 1.0, ratio)
@@ -304,7 +305,8 @@ class _Model:
         (links or pivot friction: physics.carry_force_ratio, monotone in v^2)."""
         out = []
         for th, v2 in ends:
-            along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f)
+            along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f,
+                                     link_length=self.l)
             out.append(phys.carry_force_ratio(th, v2, gravity=self.g, link_length=self.l,
                                               along=along))
         return out
