@@ -234,3 +234,30 @@ def test_verification_draws_a_part_quantity_palm_by_palm(tmp_path):
     assert drawn and all(len(set(d)) == 6 and max(map(abs, d)) <= t for d, _ in drawn)
     negative = [why for d, why in drawn if min(d) < -spec.scene.links.mass]
     assert negative and all(why.startswith("invalid_part") for why in negative)
+
+
+def _scaled(text, k):
+    """The same device k times larger (lengths x k, speeds x sqrt k, torques x k: f / (g l)
+    and every angle unchanged), the torque's weight / k so that its share is the same."""
+    for key, value in (("width = 0.4 ", 0.4), ("height = 0.2 ", 0.2), ("width = 1.6 ", 1.6),
+                       ("thickness = 0.05 ", 0.05), ("friction_torque = 0.2 ", 0.2),
+                       ("link_length = 2.0 ", 2.0)):
+        assert key in text
+        text = text.replace(key, f"{key.split('=')[0]}= {value * k!r} ")
+    text = text.replace("position = [-1.25, 3.05]", f"position = [{-1.25 * k!r}, {3.05 * k!r}]")
+    return text.replace("velocity = [3.0, 0.0]", f"velocity = [{3.0 * k ** 0.5!r}, 0.0]")
+
+
+@pytest.mark.parametrize("k", [100.0, 1e4])
+def test_a_larger_device_gets_the_same_masses_and_k_times_the_torque(tmp_path, k):
+    """Scale: the device k times larger is the same device in units of l and sqrt(g l), so the
+    allocated masses are the same and the torque k times it (no size enters the bounds)."""
+    lines = "".join(_line(q) for q in ("link_mass", "object_mass")) + _line("palm_mass", 5.0)
+    one = optimize(_spec(tmp_path, lines + _line("pivot_friction"), "one.toml"), verify=False)
+    big = optimize(_spec(tmp_path, lines + _line("pivot_friction", 1.0 / k), "big.toml",
+                         base=_scaled(BASE, k)), verify=False)
+    assert one.status.value == big.status.value == "optimal"
+    small = {e["quantity"]: e["value"] for e in one.tolerances}
+    for e in big.tolerances:
+        factor = k if e["quantity"] == "pivot_friction" else 1.0
+        assert e["value"] / factor == pytest.approx(small[e["quantity"]], rel=1e-6)
