@@ -83,14 +83,16 @@ def terms(m, box) -> CarryEnds:
     palm = obj / m.mass_ratio
     m_lo, m_hi = obj - t_m, obj + t_m
     M_lo, M_hi = palm - t_M, palm + t_M
-    links = [_links(scene, m.l, None)] if not rows.nonzero(t_l) else [
+    nominal = _links(scene, m.l, None)
+    links = [nominal] if not rows.nonzero(t_l) else [
         _links(scene, m.l, scene.links.mass + s * t_l) for s in (-1.0, 1.0)]
     (J_lo, W_lo), (J_hi, W_hi) = links[0], links[-1]
     q = [m.q] if not masses else [m_lo / (M_hi + J_hi), m_hi / (M_lo + J_lo)]
     g = [m.gc]
     if masses and not (phys.is_exact_zero(J_hi) and phys.is_exact_zero(W_hi)):
         g = _ordered(m.g * (m_lo + M_lo + W_hi) / (m_lo + M_lo + J_hi),
-                     m.g * (m_hi + M_hi + W_lo) / (m_hi + M_hi + J_lo), W_hi - J_hi)
+                     m.g * (m_hi + M_hi + W_lo) / (m_hi + M_hi + J_lo),
+                     nominal[1] - nominal[0])
     torque = scene.pivots.friction_torque
     if not (rows.nonzero(t_t) or (masses and torque != 0.0)):
         return CarryEnds(q, g, [m.f])
@@ -109,7 +111,9 @@ def _links(scene, l, mass):
 
 def _ordered(first, second, sign):
     """[low, high] of g_e's two corner values: `first` (light carry, heavy links) is the
-    larger when W >= J (sign >= 0); min / max when the sign is a symbol."""
+    larger when W >= J (sign = W - J at the nominal link mass: both are proportional to it, so
+    one sign for the box); min / max when the sign is a symbol (a given inertia on a free link
+    length)."""
     if isinstance(sign, (int, float)):
         return [second, first] if sign >= 0.0 else [first, second]
     return [ca.fmin(first, second), ca.fmax(first, second)]
