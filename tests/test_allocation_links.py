@@ -26,7 +26,7 @@ from pdm_design.verify.tolerance import corner_patterns, random_builds
 
 ROOT = Path(__file__).resolve().parent.parent
 BASE = (ROOT / "problems" / "manipulators_real_links.toml").read_text().split("[expect]")[0]
-PER_PART = ("palm_mass", "link_mass", "pivot_friction")
+PER_PART = ("palm_mass", "link_mass", "pivot_friction", "back_stop")
 # weights: a share of each quantity that matters next to the pivots' (+-29 mm: +-0.29 N m of
 # friction, +-73 g of link and object, +-15 g of palm)
 WEIGHTS = {"link_mass": 0.4, "pivot_friction": 0.1, "object_mass": 0.4, "palm_mass": 2.0}
@@ -207,7 +207,6 @@ def test_every_quantity_with_the_pivots(every):
     ((ROOT / "problems" / "manipulators_robust.toml").read_text().split("[expect]")[0],
      "pivot_friction = { allocate = true }\n", "tolerances.pivot_friction",
      "scene.pivots.friction_torque > 0"),
-    (BASE, "back_stop = { allocate = true }\n", "tolerances.back_stop", "the paper's device"),
 ])
 def test_refused_in_words(tmp_path, base, extra, key, words):
     path = tmp_path / "bad.toml"
@@ -261,3 +260,33 @@ def test_a_larger_device_gets_the_same_masses_and_k_times_the_torque(tmp_path, k
     for e in big.tolerances:
         factor = k if e["quantity"] == "pivot_friction" else 1.0
         assert e["value"] / factor == pytest.approx(small[e["quantity"]], rel=1e-6)
+
+
+# -- the back stops on real links ---------------------------------------------------------------
+
+@pytest.mark.parametrize("others, scale", [
+    ("", 2.5),  # the simulator's first failure at 1.95 times (a tip), bisected once
+    (_line("link_mass", 0.4) + _line("pivot_friction", 0.1), 2.5),  # 2.42 times (a stall)
+])
+def test_back_stops_on_real_links_hold_at_the_corners(tmp_path, others, scale):
+    """The stops over [a_lo, a_hi] at the back stop's contact rows (carry_box.back_contact):
+    every pivot pattern with the stops (and the others) all high, all low and palm by palm
+    alternating passes; a larger box fails."""
+    spec = _spec(tmp_path, PIVOTS + _line("back_stop", 10.0) + others)
+    result = optimize(spec)
+    assert result.status.value == "optimal" and result.verification["passed"]
+    assert _failures(spec, result, 1.0, alternate=True) == []
+    assert _failures(spec, result, scale, first=True)
+
+
+def test_back_stops_alone_on_real_links_are_held_by_their_range(tmp_path):
+    """Alone, the stops take the whole of alpha (the validity row back_stop_range: no stop
+    beyond the vertical; the design moves alpha to it): both ends pass, 1.5 times fails."""
+    spec = _spec(tmp_path, _line("back_stop"))
+    result = optimize(spec)
+    assert result.status.value == "optimal"
+    t = result.tolerances[0]["value"]
+    # alpha - t >= the solver's backoff (the row's scale is 1 rad)
+    assert t == pytest.approx(result.analysis.design["alpha"] - DEFAULT_BACKOFF, abs=1e-8)
+    assert _failures(spec, result, 1.0) == [] and _failures(spec, result, 1.0, alternate=True) == []
+    assert _failures(spec, result, 1.5, first=True)

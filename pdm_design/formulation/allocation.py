@@ -91,9 +91,7 @@ def check(spec) -> None:
 
 def _check_mechanism(spec, source) -> None:
     """The built device's quantities: link_mass and pivot_friction need a nominal above 0 (a
-    box around 0 is half made of parts below their limit, as `yield` refuses it too), and
-    back_stop the paper's device (with links or pivot friction the stops enter the carry's
-    contact force; not derived yet)."""
+    box around 0 is half made of parts below their limit, as `yield` refuses it too)."""
     names = {t.quantity for t in spec.tolerances}
     scene = spec.scene
     for name, key, nominal in (("link_mass", "scene.links.mass", scene.links.mass),
@@ -103,11 +101,6 @@ def _check_mechanism(spec, source) -> None:
             raise SpecError(source, f"tolerances.{name}", f"{key} > 0 to bound a tolerance of "
                             f"it (a box around 0 is half made of parts below 0)",
                             found=f"{key} = {nominal:g}")
-    if "back_stop" in names and not scene.plain_mechanism:
-        raise SpecError(source, "tolerances.back_stop", "the paper's device (massless links, "
-                        "frictionless pivots) to bound a back stop's tolerance (with links or "
-                        "pivot friction the contact force at the back stop is not monotone in "
-                        "the stop's angle; not derived yet)", found="scene.links or scene.pivots")
 
 
 def half_widths(spec, s) -> dict[str, object]:

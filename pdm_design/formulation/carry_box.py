@@ -126,9 +126,33 @@ def at(m, gravity, friction):
         return m
     view = copy.copy(m)
     view.gc, view.f = gravity, friction
-    view.top_needed = phys.top_speed_squared_needed(m.a, gravity=gravity, link_length=m.l,
-                                                    friction=friction)
     return view
+
+
+def back_contact(m, f, v, slow2, fast2):
+    """The back stops toleranced on real links: (l N_lo at the fastest landing, [r_lo, r_hi] at
+    each landing speed) over every stop angle a in [a_lo, a_hi] of the model view v (one
+    vertex of the (g_e, f) box). At the back stop -a, per object mass,
+        N = g - g_e sin^2 a - (u^2 / l) cos a - (f / l) sin a,
+        F = -g_e sin a cos a - (f / l) cos a + (u^2 / l) sin a,
+    both with |d2/da2| <= S = 2 g_e + u^2 / l + f / l, so each lies within its ends' range
+    widened by S (a_hi - a_lo)^2 / 8 (a function is within that of its chord), and F / N within
+    the quotients of those ranges (N_lo > 0: the lift-off row)."""
+    l, g = m.l, m.g
+
+    def forces(stop, u2):  # (friction, normal) at the back stop -stop
+        along = phys.carry_along(-stop, gravity=g, carry_gravity=v.gc, friction=v.f,
+                                 link_length=l)
+        return phys.carry_contact_force(-stop, u2, gravity=g, link_length=l, along=along)
+
+    out = []
+    for u2 in (slow2, fast2):
+        (f1, n1), (f2, n2) = forces(f.a_lo, u2), forces(f.a_hi, u2)
+        sag = (2.0 * v.gc + u2 / l + v.f / l) * (f.a_hi - f.a_lo) ** 2 / 8.0
+        n_lo, n_hi = ca.fmin(n1, n2) - sag, ca.fmax(n1, n2) + sag
+        f_lo, f_hi = ca.fmin(f1, f2) - sag, ca.fmax(f1, f2) + sag
+        out.append((n_lo, [ca.fmin(f_lo / n_lo, f_lo / n_hi), ca.fmax(f_hi / n_lo, f_hi / n_hi)]))
+    return l * out[1][0], out[0][1] + out[1][1]
 
 
 def validity_rows(m, f):
@@ -145,7 +169,7 @@ def validity_rows(m, f):
               (1.0 - rows.MASS_KEPT) * mass - t_l, mass, kind=VALIDITY)
     if f.robust and len(f.terms.g) > 1:
         f.add(("palm_clearance",), "the carry descends to every handover angle",
-              phys.cos_difference(m.a, f.th_lo), 1.0, kind=VALIDITY)
+              phys.cos_difference(f.a_hi, f.th_lo), 1.0, kind=VALIDITY)
     if f.robust and f.terms.empty is not None:
         weight, torque = f.terms.empty
         push = weight * m.g * m.l

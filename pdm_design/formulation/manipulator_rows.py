@@ -206,7 +206,8 @@ def carry_rows(m, f):
         # convex in (g_e, f), increasing in f: the worse g_e end with the most friction
         tops = [m.top_needed if not f.stopped else phys.top_speed_squared_needed(
             f.a_hi, gravity=m.gc, link_length=l, friction=m.f)] if not f.terms.carry_varies \
-            else [carry_box.at(m, g_e, f.terms.f[-1]).top_needed for g_e in f.terms.g]
+            else [phys.top_speed_squared_needed(f.a_hi, gravity=g_e, link_length=l,
+                                                friction=f.terms.f[-1]) for g_e in f.terms.g]
         for i, top in enumerate(tops):
             add(OVER_THE_TOP, version("slowest landing on any palm", i, tops),
                 u_lo**2 - top, u_lo**2)
@@ -245,13 +246,20 @@ def _contact_rows(m, f):
     u_lo, u_hi, th_lo, th_hi = f.u_lo, f.u_hi, f.th_lo, f.th_hi
     back, front = [], []
     for corner, v in f.terms.corners(m):
+        if f.stopped:  # over every stop angle in [a_lo, a_hi]: bounds (carry_box.back_contact)
+            held, ratios = carry_box.back_contact(m, f, v, u_lo**2, u_hi**2)
+            add(LIFT_OFF, join("at every back stop, fastest landing", corner), held, g * l)
+        else:
+            add(LIFT_OFF, join("at the back stop, fastest landing", corner),
+                v.contact(-a, u_hi**2)[0] - u_hi**2, g * l)
+            ratios = v.carry_ratios([(-a, u_lo**2), (-a, u_hi**2)])
         v2 = v.carry_v2(u_hi, th_hi, a=f.a_lo)
-        for where, th, speed2 in (("at the back stop, fastest landing", -a, u_hi**2),
-                                  ("at the handover, fastest carry", th_hi, v2)):
-            add(LIFT_OFF, join(where, corner), v.contact(th, speed2)[0] - speed2, g * l)
-        back += v.carry_ratios([(-a, u_lo**2), (-a, u_hi**2)])
-        front += v.carry_ratios([(th, v.carry_v2(u, th)) for th in (th_lo, th_hi)
-                                 for u in (u_lo, u_hi)])
+        add(LIFT_OFF, join("at the handover, fastest carry", corner),
+            v.contact(th_hi, v2)[0] - v2, g * l)
+        back += ratios
+        # the slowest carry from the highest stop, the fastest from the lowest: v^2's ends
+        front += v.carry_ratios([(th, v.carry_v2(u, th, a=stop)) for th in (th_lo, th_hi)
+                                 for u, stop in ((u_lo, f.a_hi), (u_hi, f.a_lo))])
     for i, r in enumerate(back + front):
         add("slip_carry", version("at the ends of the carry", i, back + front),
             mu - phys.friction_demand(None, r), mu)

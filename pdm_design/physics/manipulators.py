@@ -210,6 +210,14 @@ def carry_along(theta, *, gravity, carry_gravity, friction, link_length):
     return (carry_gravity - gravity) * sin(theta) - friction / link_length
 
 
+def carry_contact_force(theta, v2, *, gravity, link_length, along):
+    """(friction, normal) per object mass of the palm's force m (A t + (g cos th - v^2 / l) r)
+    on the stuck object moving at v (v2 = v^2): its parts along the palm (x) and across it,
+    A cos th + B sin th and B cos th - A sin th, B = g cos th - v^2 / l."""
+    radial = gravity * cos(theta) - v2 / link_length
+    return along * cos(theta) + radial * sin(theta), radial * cos(theta) - along * sin(theta)
+
+
 def carry_force_ratio(theta, v2, *, gravity, link_length, along):
     """Friction / normal of the palm's force m (A t + (g cos th - v^2 / l) r) on the stuck object
     moving at v (v2 = v^2): tan th + A / (cos th N / m), N / m = (g cos th - v^2 / l) cos th -
