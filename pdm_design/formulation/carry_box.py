@@ -126,6 +126,7 @@ def at(m, gravity, friction):
         return m
     view = copy.copy(m)
     view.gc, view.f = gravity, friction
+    del view.top_needed  # the nominal need: the rows take each corner's (carry_rows)
     return view
 
 
