@@ -240,7 +240,7 @@ def _stage_margins(scene, design, velocity, offset) -> dict[str, float]:
     half_h = body.height / 2
     ends = ((-a, u * u), (b, v_beta2))
     along = [None if carry.plain else float(phys.carry_along(
-        th, gravity=g, carry_gravity=g_e, friction=f)) for th, _ in ends]
+        th, gravity=g, carry_gravity=g_e, friction=f, link_length=l)) for th, _ in ends]
     ratio = [None if A is None else float(phys.carry_force_ratio(
         th, v2, gravity=g, link_length=l, along=A)) for (th, v2), A in zip(ends, along)]
     demand = (float(phys.friction_demand(max(a, b))) if carry.plain

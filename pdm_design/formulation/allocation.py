@@ -31,13 +31,12 @@ from ..tolerances.model import allocation_shares
 # Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
 ALLOCATABLE = {
     "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
-                     "palm_mass", "object_mass", "back_stop", "link_length"),
+                     "palm_mass", "object_mass", "back_stop", "link_length", "link_mass",
+                     "pivot_friction"),
     "stairs": ("rise", "tread", "launch_x", "restitution", "friction", "launch_speed"),
 }
 # Why the others are refused: what a sound bound of them would need (the words of the error).
-NOT_YET = {
-    "link_mass": "no outer bound over a box of link masses is derived yet",
-    "pivot_friction": "no outer bound over a box of pivot frictions is derived yet",
+NOT_YET: dict[str, str] = {
 }
 STAIRS_NOT_YET = "no outer bound over its box is derived yet"
 
@@ -75,15 +74,9 @@ def check(spec) -> None:
                         "velocity[1] = 0) to bound the feed speed's tolerance (along a sloped "
                         "start it moves the fall speed as well; not derived yet)",
                         found=f"initial.velocity[1] = {spec.scene.initial.velocity[1]:g}")
-    masses = [t.quantity for t in spec.tolerances
-              if t.quantity in ("palm_mass", "object_mass", "back_stop")]
-    if spec.kind == "manipulators" and masses and not spec.scene.plain_mechanism:
-        raise SpecError(source, f"tolerances.{masses[0]}", "the paper's device (massless "
-                        "links, frictionless pivots) to bound a mass's or a stop's tolerance "
-                        "(with links or pivot friction they enter the carry; not derived yet)",
-                        found="scene.links or scene.pivots")
     if spec.kind == "manipulators":
         _check_links(spec, source)
+        _check_mechanism(spec, source)
     for tol in spec.tolerances:
         if tol.quantity in allowed:
             continue
@@ -104,6 +97,20 @@ def _check_links(spec, source) -> None:
                         "frictionless pivots) to bound the link lengths' tolerance (with links "
                         "or pivot friction a link's length enters the carry's effective mass and "
                         "gravity; not derived yet)", found="scene.links or scene.pivots")
+
+
+def _check_mechanism(spec, source) -> None:
+    """The built device's quantities: link_mass and pivot_friction need a nominal above 0 (a
+    box around 0 is half made of parts below their limit, as `yield` refuses it too)."""
+    names = {t.quantity for t in spec.tolerances}
+    scene = spec.scene
+    for name, key, nominal in (("link_mass", "scene.links.mass", scene.links.mass),
+                               ("pivot_friction", "scene.pivots.friction_torque",
+                                scene.pivots.friction_torque)):
+        if name in names and nominal <= 0.0:
+            raise SpecError(source, f"tolerances.{name}", f"{key} > 0 to bound a tolerance of "
+                            f"it (a box around 0 is half made of parts below 0)",
+                            found=f"{key} = {nominal:g}")
 
 
 def half_widths(spec, s) -> dict[str, object]:

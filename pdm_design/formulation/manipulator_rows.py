@@ -16,6 +16,7 @@ import math
 import casadi as ca
 
 from ..physics import manipulators as phys
+from . import carry_box
 from . import manipulator_links as links
 from .common import MARGIN, MODEL, VALIDITY, Condition, fmax_all, fmin_all
 
@@ -110,7 +111,8 @@ def model_rows(m, f):
         add((), "periodic handover speed: S (1 - c) = D", S * (1 - m.c) - m.D,
             kind=MODEL, equality=True)
     speeds = f.speeds = m.feed_speeds(box := f.box)  # u_1 increases with them and the mass ratio
-    qs = f.qs = m.mass_ratios(box)
+    f.terms = carry_box.terms(m, box)  # the ends of q_e, g_e and f over the box
+    qs = f.qs = f.terms.q
     # u_1 = k (vx cos a_1 - Q sin a_1): decreasing in a_1 in [0, pi/2) for vx >= 0
     f.u1_lo = m.first_speed(f.Q_hi, speeds[0], qs[0], f.a_hi)
     u1_hi = m.first_speed(f.Qs[0][1], speeds[-1], qs[-1], f.a_lo)
@@ -136,10 +138,15 @@ def _robust_interval_rows(m, f, model):
     # <= cot^2(th_lo) / 8 - sec^2(a + th_lo) =: M; M+ = smooth max(M, 0) >= max(M, 0).
     # (with pivot friction f: cot th_lo becomes cos th_lo / (sin th_lo - f / (g l)),
     # the same maximum over 1 / v^2 of g l cos th / v^2 - 2 (g l sin th - f)^2 / v^4)
-    lean = ca.sin(th_lo) if phys.is_exact_zero(m.f) else (
-        ca.sin(th_lo) - m.f / (m.gc * l))
-    def curvature(stop):  # the landing palm's stop angle enters the sec^2 term only
-        bound = (ca.cos(th_lo) / lean) ** 2 / 8 - 1 / ca.cos(stop + th_lo) ** 2
+    # F increases with g_e and decreases with f (masses, links, pivot friction toleranced:
+    # docs/optimizer.md 4a): the low rows take the slowest carry, the high rows the fastest,
+    # each with its own curvature bound (m itself for both when they are exact)
+    low, high = f.terms.low(m), f.terms.high(m)
+    leans = {id(v): ca.sin(th_lo) if phys.is_exact_zero(v.f) else (
+        ca.sin(th_lo) - v.f / (v.gc * l)) for v in (low, high)}
+
+    def curvature(stop, v=low):  # the landing palm's stop angle enters the sec^2 term only
+        bound = (ca.cos(th_lo) / leans[id(v)]) ** 2 / 8 - 1 / ca.cos(stop + th_lo) ** 2
         return (bound + ca.sqrt(bound**2 + 1e-12)) / 2
 
     # F is decreasing in both palms' stop angles (the carry's start, the landing's
@@ -151,14 +158,14 @@ def _robust_interval_rows(m, f, model):
     sag = ca.exp(-curv * (th_hi - th_lo) ** 2 / 8)
     for where, th in thetas:
         add((), f"interval invariant (low, {where})",
-            m.next_speed(u_lo, th, qs[0], a_hi, f.l_lo) * sag - u_lo, **model)
+            low.next_speed(u_lo, th, qs[0], a_hi, f.l_lo) * sag - u_lo, **model)
     # High end: ln F <= ln F(b) + lambda (th - b) + M+ (th - b)^2 / 2 (Taylor), convex in
     # th so largest at an end; lambda = d ln F / d th at b by CasADi AD.
     th_s = ca.SX.sym("th")
-    dlog = ca.substitute(ca.jacobian(ca.log(m.next_speed(u_hi, th_s, a=a_lo, l=f.l_hi)),
+    dlog = ca.substitute(ca.jacobian(ca.log(high.next_speed(u_hi, th_s, a=a_lo, l=f.l_hi)),
                                      th_s), th_s, b)
-    u_b = m.next_speed(u_hi, b, qs[-1], a_lo, f.l_hi)  # ln F's th-derivatives are free of q
-    curv = curvature(a_lo) if f.stopped else curv
+    u_b = high.next_speed(u_hi, b, qs[-1], a_lo, f.l_hi)  # ln F's th-derivatives are free of q
+    curv = curvature(a_lo, high) if f.stopped or high is not low else curv
     for where, th in thetas:
         bound = u_b * ca.exp(dlog * (th - b) + curv * (th - b) ** 2 / 2)
         add((), f"interval invariant (high, {where})", u_hi - bound, **model)
@@ -190,13 +197,16 @@ def validity_rows(m, f):
             ca.sqrt(g * l), kind=VALIDITY)
     m_obj = m.scene.body.mass
     for name, mass, t_mass in (("object", m_obj, box.get("object_mass", 0.0)),
-                               ("every palm", m_obj / m.q, box.get("palm_mass", 0.0))):
+                               ("every palm", m_obj / m.mass_ratio,
+                                box.get("palm_mass", 0.0))):
         if nonzero(t_mass):  # a build with no mass is none: the mass ratio's ends hold
             add(("positive_mass",), f"{name} keeps a mass within its tolerance",
                 (1.0 - MASS_KEPT) * mass - t_mass, mass, kind=VALIDITY)
-    if f.robust and not phys.is_exact_zero(m.f):
+    g_lo, f_hi = f.terms.g[0], f.terms.f[-1]  # m.gc and m.f when they are exact
+    if f.robust and not phys.is_exact_zero(f_hi):
         add(("over_the_top",), "gravity beats the pivot friction at the handover",
-            m.gc * l * ca.sin(f.th_lo) - m.f, m.gc * l, kind=VALIDITY)
+            g_lo * l * ca.sin(f.th_lo) - f_hi, g_lo * l, kind=VALIDITY)
+    carry_box.validity_rows(m, f)
 
 
 def carry_rows(m, f):
@@ -207,10 +217,15 @@ def carry_rows(m, f):
         add(OVER_THE_TOP, "slowest landing on any palm, slowest point (integrated)",
             m.carry_v2(u_lo, b, lowest=True)[1], u_lo**2)
     else:
-        top = m.top_needed if not (f.stopped or f.linked) else phys.top_speed_squared_needed(
-            f.a_hi, gravity=m.gc, link_length=f.l_hi, friction=m.f)
-        add(OVER_THE_TOP, "slowest landing on any palm",
-            u_lo**2 - top, u_lo**2)
+        # convex in (g_e, f), increasing in f: the worse g_e end with the most friction
+        tops = [m.top_needed if not (f.stopped or f.linked) else phys.top_speed_squared_needed(
+            f.a_hi, gravity=m.gc, link_length=f.l_hi, friction=m.f)] \
+            if not f.terms.carry_varies else [
+                phys.top_speed_squared_needed(f.a_hi, gravity=g_e, link_length=l,
+                                              friction=f.terms.f[-1]) for g_e in f.terms.g]
+        for i, top in enumerate(tops):
+            add(OVER_THE_TOP, version("slowest landing on any palm", i, tops),
+                u_lo**2 - top, u_lo**2)
     f.fp_back, f.fp_front = (_plain_contact_rows if m.plain else _contact_rows)(m, f)
     # the object's base stays above palm K + 1 while cos th_K <= cos a_K
     clearance = m.pitch_y if not f.stopped else l * (f.d_lo - f.d_hi) + m.pitch_y
@@ -246,16 +261,28 @@ def _plain_contact_rows(m, f):
 
 def _contact_rows(m, f):
     """Lift-off and slip during the carry on real links or pivots, where the contact force's
-    tangential part depends on the speed: both ends of each; (fp_back, fp_front)."""
+    tangential part depends on the speed: both ends of each; (fp_back, fp_front). With the
+    carry's g_e and f over a box (carry_box), at every vertex of it: the normal force and the
+    friction are affine in (g_e, f, v^2), so each lift-off row is least at a vertex and the
+    friction / normal ratio, linear-fractional with a positive denominator, is extreme at one."""
     a, l, g, add, mu, h = m.a, m.l, m.g, f.add, f.mu, f.h
     u_lo, u_hi, th_lo, th_hi = f.u_lo, f.u_hi, f.th_lo, f.th_hi
-    v2 = m.carry_v2(u_hi, th_hi, a=f.a_lo)
-    for where, th, speed2 in (("at the back stop, fastest landing", -a, u_hi**2),
-                              ("at the handover, fastest carry", th_hi, v2)):
-        add(LIFT_OFF, where, m.contact(th, speed2)[0] - speed2, g * l)
-    back = m.carry_ratios([(-a, u_lo**2), (-a, u_hi**2)])
-    front = m.carry_ratios([(th, m.carry_v2(u, th)) for th in (th_lo, th_hi)
-                            for u in (u_lo, u_hi)])
+    back, front = [], []
+    for corner, v in f.terms.corners(m):
+        if f.stopped:  # over every stop angle in [a_lo, a_hi]: bounds (carry_box.back_contact)
+            held, ratios = carry_box.back_contact(m, f, v, u_lo**2, u_hi**2)
+            add(LIFT_OFF, join("at every back stop, fastest landing", corner), held, g * l)
+        else:
+            add(LIFT_OFF, join("at the back stop, fastest landing", corner),
+                v.contact(-a, u_hi**2)[0] - u_hi**2, g * l)
+            ratios = v.carry_ratios([(-a, u_lo**2), (-a, u_hi**2)])
+        v2 = v.carry_v2(u_hi, th_hi, a=f.a_lo)
+        add(LIFT_OFF, join("at the handover, fastest carry", corner),
+            v.contact(th_hi, v2)[0] - v2, g * l)
+        back += ratios
+        # the slowest carry from the highest stop, the fastest from the lowest: v^2's ends
+        front += v.carry_ratios([(th, v.carry_v2(u, th, a=stop)) for th in (th_lo, th_hi)
+                                 for u, stop in ((u_lo, f.a_hi), (u_hi, f.a_lo))])
     for i, r in enumerate(back + front):
         add("slip_carry", version("at the ends of the carry", i, back + front),
             mu - phys.friction_demand(None, r), mu)

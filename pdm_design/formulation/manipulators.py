@@ -38,9 +38,10 @@ Bounds that are not exact are outer bounds, so the box found is sound (never too
 Allocated tolerances ([tolerances] with allocate = true, formulation/allocation.py): the same
 rows over a box with one half-width per quantity, `box` {quantity: half-width}: the pivots'
 places and heights apart, the feed's place and speed, the friction, the object's width, the
-masses (the mass ratio's ends), the back stops (their ends, and the drift they add along the
-row) and the links' lengths (formulation/manipulator_links.py); docs/optimizer.md section 4a
-derives each.
+masses (the mass ratio's ends; with links or pivot friction the carry's q_e, g_e and f ends,
+with the links' masses and the pivots' torques: formulation/carry_box.py), the back stops
+(their ends, and the drift they add along the row) and the links' lengths
+(formulation/manipulator_links.py); docs/optimizer.md section 4a derives each.
 """
 
 from __future__ import annotations
@@ -219,6 +220,7 @@ class _Model:
         self.g = scene.gravity
         self.a, self.b = values["alpha"], values["beta"]
         self.l, self.q = values["link_length"], values["mass_ratio"]
+        self.mass_ratio = self.q  # the design's m / M (self.q becomes the carry's q_e below)
         self.pivot = (values["first_pivot_x"], values["first_pivot_y"])
         # links and pivot friction (physics.carry_terms): effective mass ratio and gravity of
         # the carry, friction per carried mass; q and g themselves on the paper's device
@@ -305,7 +307,8 @@ class _Model:
     def contact(self, th, v2):
         """(lift-off capacity of v^2, friction demand, force point / height) of the stuck
         object at th moving at v^2 on real links or pivots (physics.carry_force_ratio)."""
-        along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f)
+        along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f,
+                                 link_length=self.l)
         ratio = phys.carry_force_ratio(th, v2, gravity=self.g, link_length=self.l, along=along)
         held = phys.lift_off_capacity(th, gravity=self.g, link_length=self.l, along=along)
         return held, phys.friction_demand(th, ratio), phys.carry_force_point(th, 1.0, ratio)
@@ -315,7 +318,8 @@ class _Model:
         (links or pivot friction: physics.carry_force_ratio, monotone in v^2)."""
         out = []
         for th, v2 in ends:
-            along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f)
+            along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f,
+                                     link_length=self.l)
             out.append(phys.carry_force_ratio(th, v2, gravity=self.g, link_length=self.l,
                                               along=along))
         return out

@@ -203,10 +203,19 @@ def palm_terms(mass_ratio, *, object_mass, gravity, link_length, link_mass=0.0,
     return felt, gravity * (palm + 0.5 * link_mass) / felt, friction_torque / felt
 
 
-def carry_along(theta, *, gravity, carry_gravity, friction):
+def carry_along(theta, *, gravity, carry_gravity, friction, link_length):
     """A = l th'' - g sin th on a forward stuck carry: the object's tangential acceleration
-    beyond what gravity alone gives it, (g_e - g) sin th - f (zero on the paper's device)."""
-    return (carry_gravity - gravity) * sin(theta) - friction
+    beyond what gravity alone gives it, (g_e - g) sin th - f / l (zero on the paper's device;
+    f, carry_terms' friction, is a torque per carried mass: l^2 th'' = g_e l sin th - f)."""
+    return (carry_gravity - gravity) * sin(theta) - friction / link_length
+
+
+def carry_contact_force(theta, v2, *, gravity, link_length, along):
+    """(friction, normal) per object mass of the palm's force m (A t + (g cos th - v^2 / l) r)
+    on the stuck object moving at v (v2 = v^2): its parts along the palm (x) and across it,
+    A cos th + B sin th and B cos th - A sin th, B = g cos th - v^2 / l."""
+    radial = gravity * cos(theta) - v2 / link_length
+    return along * cos(theta) + radial * sin(theta), radial * cos(theta) - along * sin(theta)
 
 
 def carry_force_ratio(theta, v2, *, gravity, link_length, along):

@@ -253,7 +253,8 @@ class _Builds:
         g, l = self.g, self.v["link_length"][k]
         along = ratio = None
         if self.real:
-            along = phys.carry_along(theta, gravity=g, carry_gravity=terms[1], friction=terms[2])
+            along = phys.carry_along(theta, gravity=g, carry_gravity=terms[1], friction=terms[2],
+                                     link_length=l)
             ratio = phys.carry_force_ratio(theta, v2, gravity=g, link_length=l, along=along)
         return [("lift_off", _margin(phys.lift_off_capacity(theta, gravity=g, link_length=l,
                                                             along=along), v2), False),

@@ -62,11 +62,11 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
     """Simulate the corner patterns and `samples` uniform random builds inside the box (fewer
     on rows longer than RANDOM_ROW: `random_builds`). lots: an allocated tolerance list
     (formulation/allocation.py); its quantities other than the pivots' or the steps' (feed_x,
-    feed_speed, friction, object_width, object_mass: one value a build; palm_mass: every palm
-    alike; on stairs the lots restitution, friction, launch_speed, launch_x) take every sign
-    corner with every pivot or step pattern, and a uniform value in each random build;
-    link_length (ALTERNATING) also alternately long and short, and its own value on every
-    manipulator in a random build."""
+    feed_speed, friction, object_width, object_mass: one value a build; palm_mass, link_mass,
+    pivot_friction: every manipulator alike; on stairs the lots restitution, friction,
+    launch_speed, launch_x) take every sign corner with every pivot or step pattern, and a
+    uniform value in each random build (a part's quantity: one per manipulator); link_length
+    (ALTERNATING) also alternately long and short."""
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
@@ -78,8 +78,8 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
               for signs_l in itertools.product(*(_lot_signs(q, stages) for q in lot))]
     for i in range(random_builds(samples, stages)):
         draws = rng.uniform(-1.0, 1.0, size=(stages, 2)) * np.asarray(half)
-        built = {q: (rng.uniform(-t, t, size=stages).tolist() if q in ALTERNATING
-                     else float(rng.uniform(-t, t))) for q, t in lot.items()}
+        built = {q: rng.uniform(-t, t, stages).tolist() if q in PER_PART  # palm by palm
+                 else float(rng.uniform(-t, t)) for q, t in lot.items()}
         builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws], built))
 
     failures = []
@@ -143,12 +143,13 @@ def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
     built = {"pivot_x": np.array([[e[0] for e in errors]]),
              "pivot_y": np.array([[e[1] for e in errors]])}
     for q, dev in deviations.items():  # a list: every part its own value
-        built[q] = (np.array([dev]) if isinstance(dev, list) else
-                    np.full((1, stages), dev) if q in PER_PART else np.array([dev]))
+        built[q] = (np.broadcast_to(np.asarray(dev, float), (stages,))[None, :].copy()
+                    if q in PER_PART else np.array([dev]))
     return simulate_build(spec.scene, design, built, stages, accuracy=accuracy)
 
 
-PER_PART = ("palm_mass", "link_length", "back_stop")  # quantities of every manipulator
+# quantities of every manipulator: a corner takes them all high or all low
+PER_PART = ("palm_mass", "link_length", "back_stop", "link_mass", "pivot_friction")
 ALTERNATING = ("link_length",)  # per-part quantities whose corners also alternate part by part
 
 
