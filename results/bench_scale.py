@@ -52,6 +52,9 @@ AGREEMENT_SAMPLE = 200  # rows of the new table compared with optimize of their 
 def run(code: Path, args: list[str], timeout: float) -> dict:
     """One `python -m pdm_design ARGS` of the code in `code`: wall s, peak MB, exit, stdout."""
     env = dict(os.environ, PYTHONPATH=str(code))  # not a tty: no progress bars
+    # as installed code runs: its bytecode cached (pip compiles it; a checkout writes it on the
+    # first run), not compiled again at every start as PYTHONDONTWRITEBYTECODE makes it
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     with tempfile.TemporaryFile() as out:
         tic = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "pdm_design", *args], cwd=code, env=env,
@@ -239,6 +242,8 @@ def write_markdown(rows, tables, args, quick: bool) -> None:
         "time end to end and peak resident memory (os.wait4). The machine is shared: load "
         f"average at the end {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} on {os.cpu_count()} "
         "cores, so times are upper bounds; old and new run alternately, under the same load. "
+        "Bytecode is cached, as an installed package has it (the first of the repeated runs "
+        "writes it). "
         "The tolerances differ where the new landing-drift bound (docs/optimizer.md section 4) "
         "gives a larger sound box.",
         "",

@@ -8,7 +8,8 @@ to allocate with weight 1, every other part at its given tolerance, stop angles 
 * fixed design: the spec's guess (the long row's alpha 0.0613, beta 0.4928) sized alone, the
   largest common scale s at which its linearised yield reaches the target (grid and bisection:
   solve/yield_allocation.allocate_for_yield);
-* optimize: the design and s together (formulation/yield_target.py: one NLP, log s maximised,
+* optimize: the design and s together (formulation/manipulators/yield_target.py: one NLP, log s
+maximised,
   the nines of the union bound >= those of the target);
 
 then each built BUILDS times with the same seed (the same deviations per unit tolerance) and
@@ -37,8 +38,8 @@ STAGES = (20, 100)
 def run(stages: int, builds: int) -> list[dict]:
     """The fixed design's and the optimized answer's s, linearised and Monte Carlo yields."""
     from pdm_design.formulation import formulate
-    from pdm_design.formulation.statistical import linearised_yield
-    from pdm_design.formulation.yield_target import AUX
+    from pdm_design.formulation.manipulators.statistical import linearised_yield
+    from pdm_design.formulation.manipulators.yield_target import AUX
     from pdm_design.solve import optimize
     from pdm_design.solve.yield_allocation import allocate_for_yield, with_scale
     from pdm_design.spec import load_spec

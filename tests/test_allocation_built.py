@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pdm_design.formulation import carry_box
+from pdm_design.formulation.manipulators import carry_box
 from pdm_design.formulation.common import DEFAULT_BACKOFF
-from pdm_design.formulation.manipulator_rows import MASS_KEPT
+from pdm_design.formulation.manipulators.rows import MASS_KEPT
 from pdm_design.formulation.manipulators import _Model
 from pdm_design.physics import manipulators as phys
 from pdm_design.api import optimize

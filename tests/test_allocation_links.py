@@ -1,5 +1,5 @@
 """Worst-case allocation of the link lengths, every manipulator its own (docs/optimizer.md
-section 4a, `link_length`; formulation/manipulator_links.py): the event simulator passes the
+section 4a, `link_length`; formulation/manipulators/links.py): the event simulator passes the
 allocated box at the pivots' corner patterns with the links all long, all short and
 alternating, and at random builds inside it; it fails some build at 1.5 times the box, and its
 own limit along those patterns lies between 1 and 1.5 times the box. The landing place's map
@@ -104,8 +104,8 @@ def test_the_link_box_is_the_right_size(case, request):
 
 
 def test_links_and_stops_hold_at_the_corners(tmp_path_factory):
-    """Links and back stops together (manipulator_links.Rest): the pivots' patterns with the
-    links and the stops each all high, all low and alternating either way pass; 1.5 times
+    """Links and back stops together (formulation.manipulators.links.Rest): the pivots' patterns
+    with the links and the stops each all high, all low and alternating either way pass; 1.5 times
     the box fails some."""
     spec, design, value = _allocated(tmp_path_factory,
                                      WITH_PIVOTS + "back_stop = { allocate = true, weight = 10 }\n")
@@ -140,7 +140,7 @@ def test_lot_of_links_is_bounded_as_each(tmp_path_factory, alone):
 
 
 def test_landing_place_map_of_the_links(alone):
-    """The map the bound stands on (manipulator_links): with every link e longer, each
+    """The map the bound stands on (formulation.manipulators.links): with every link e longer, each
     handover moves the landing on the next palm by G(e, e cos a) + e sin a, and to first
     order by c_m e, c_m = (1 - cos(a + b)) / sin b; the simulator's landings agree."""
     spec, design, _ = alone

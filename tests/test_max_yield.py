@@ -1,5 +1,5 @@
-"""The max_yield objective: the linearised yield (formulation/statistical.py) against exact
-probabilities and the closed-form map, and the optimised design's Monte Carlo yield against
+"""The max_yield objective: the linearised yield (formulation/manipulators/statistical.py) against
+exact probabilities and the closed-form map, and the optimised design's Monte Carlo yield against
 the worst-case optimum's on the same builds."""
 
 import dataclasses
@@ -11,7 +11,7 @@ import pytest
 from scipy.special import ndtr
 
 from pdm_design.errors import SpecError
-from pdm_design.formulation.statistical import linearised_yield, row_reliability
+from pdm_design.formulation.manipulators.statistical import linearised_yield, row_reliability
 from pdm_design.spec import load_spec
 from pdm_design.spec.loader import parse_spec
 from pdm_design.tolerances import Tolerance, Tolerances, run_builds

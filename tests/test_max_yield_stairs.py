@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.special import ndtr
 
-from pdm_design.formulation.statistical_stairs import linearised_yield, row_reliability
+from pdm_design.formulation.stairs.statistical import linearised_yield, row_reliability
 from pdm_design.scenes import StairsDesign
 from pdm_design.spec import load_spec
 from pdm_design.spec.loader import parse_spec

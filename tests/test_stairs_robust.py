@@ -86,7 +86,7 @@ def test_claimed_error_box_passes_the_simulator(tmp_path, restitution):
 
 
 def test_nlp_and_simulator_number_the_step_errors_alike(tmp_path):
-    # The NLP's explicit-error conditions (formulation/stairs_errors.py, used for the sampled
+    # The NLP's explicit-error conditions (formulation/stairs/errors.py, used for the sampled
     # re-check and the linearised boxes) land the ball where the simulator does, step by step,
     # for the first riser alone (tread 1 lower, the launcher fixed: the first landing moves by
     # v0 (t(h0 + e) - t(h0))) and for a random build inside the box.
@@ -115,7 +115,7 @@ def test_nlp_and_simulator_number_the_step_errors_alike(tmp_path):
 
 def launch_window(eps, spin, v0, *, g=9.81, h0=1.0, r=0.05, m=1.0, J=0.001):
     """(lowest, highest) landing_offset L1 that the NLP's documented nominal rows allow at launch
-    speed v0 (formulation/stairs.py docstring; written afresh here): the ball leaves its apex h0
+    speed v0 (formulation/stairs/__init__.py docstring; written afresh here): the ball leaves its apex h0
     above tread 1 at v0 and ends the first impact rolling at vx = (m r^2 v0 - J r spin) /
     (m r^2 + J); rise = (1 - eps^2) h0 and tread = vx (1 + eps) T, T = sqrt(2 h0 / g), so every
     flight is the periodic one (V = g T) and lands at L1 again.

@@ -11,7 +11,9 @@ import casadi as ca
 
 from ..analysis.result import required
 from ..lru import Bounded
-from . import manipulator_offsets, manipulators, parametric, stairs, stairs_errors
+from . import manipulators, parametric, stairs
+from .manipulators import offsets as manipulator_offsets
+from .stairs import errors as stairs_errors
 from .common import Formulation, assemble, spec_key
 
 _CACHE: Bounded = Bounded()  # the specs formulated last

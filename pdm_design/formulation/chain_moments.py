@@ -1,6 +1,7 @@
 """Moments of a chain of linearised stage maps and bounds on the probability that a row
-fails: the statistical linearisation both scenes' `max_yield` share (formulation/statistical.py
-for manipulators, statistical_stairs.py for stairs; docs/optimizer.md section 10).
+fails: the statistical linearisation both scenes' `max_yield` share
+(formulation/manipulators/statistical.py, formulation/stairs/statistical.py; docs/optimizer.md
+section 10).
 
 A row of stages: stage k reads the state s_k (ns numbers), part k's deviations e_k, part
 k + 1's e_{k+1} (ne numbers each: every part's independent of every other's) and the lot's
@@ -29,6 +30,21 @@ import casadi as ca
 FAILURE_FLOOR = 1e-300  # the union bound never below this: its logarithm stays finite
 VARIANCE_FLOOR = 1e-24  # added to every row's variance: a row no deviation moves has sd 1e-12
 
+
+def sigmas(tolerances, parts, lots, scale=1.0):
+    """(sigma of each part quantity, sigma of each lot quantity) as lists of floats or SX
+    (scale: a common factor, a number or a symbol), in the order of `parts` and `lots` (a part's
+    quantity toleranced per lot is the lot's `NAME_lot`)."""
+    each, lot = [0.0] * len(parts), [0.0] * len(lots)
+    for tol in tolerances:
+        s = tol.sigma * scale
+        if tol.applies_to == "each":
+            each[parts.index(tol.quantity)] = s
+        elif tol.quantity in parts:
+            lot[lots.index(f"{tol.quantity}_lot")] = s
+        else:
+            lot[lots.index(tol.quantity)] = s
+    return each, lot
 
 def linearise(rows, state, x, s, ek, ek1, el):
     """(Function (x, s, Sz) -> (g + tr(H Sz) / 2, dg/dz, tr((H Sz)^2) / 2 of each row[,

@@ -138,7 +138,7 @@ class SceneModel:
     # rows' evaluation, is an iteration's cost, and where the starts need alike iteration counts.
     stack_starts: bool = True
     # a term maximised besides the [objective] table's (None: none): the allocated scale's
-    # log s of a yield target (formulation/yield_target.py)
+    # log s of a yield target (formulation/manipulators/yield_target.py)
     extra_objective: object = None
 
 
@@ -468,7 +468,8 @@ def _fixed_values(spec) -> dict[str, float]:
             if not isinstance(v, (Bounds, ca.SX))}
 
 
-# Requirements that add rows when above 0 (the stairs' exact nose rows, formulation/stairs.py).
+# Requirements that add rows when above 0 (the stairs' exact nose rows,
+# formulation/stairs/__init__.py).
 ROW_ADDING_REQUIREMENTS = ("first_nose_clearance", "nose_clearance")
 
 
@@ -488,7 +489,7 @@ def spec_key(spec) -> str:
              if pivots is not None and (pivots.damping or forced) else None)
     tolerances = getattr(spec, "tolerances", ())
     allocated = tuple(tolerances) if any(t.allocate for t in tolerances) else ()  # allocation.py
-    from .yield_target import active  # tolerances sized for a yield target
+    from .manipulators.yield_target import active  # tolerances sized for a yield target
 
     stated = repr(tolerances) if spec.objective.get("max_yield") or active(spec) \
         else None  # statistical.py

@@ -150,8 +150,8 @@ SPEC_WORDS = "the spec's statistical tolerance"
 def allocated_entries(entries, target: float | None = None) -> tuple:
     """ToleranceEntry of every allocated or given tolerance of an optimize answer other than
     the pivots' (the sheet's own box lists those), on its part, with what limits it; with a
-    yield `target` (tolerances sized for it, formulation/yield_target.py: no box) the pivots'
-    too, statistical."""
+    yield `target` (tolerances sized for it, formulation/manipulators/yield_target.py: no box) the
+    pivots' too, statistical."""
     from ..solve.binding import SHARED, in_words
     from .parts import ToleranceEntry
 
@@ -171,7 +171,7 @@ def allocated_entries(entries, target: float | None = None) -> tuple:
 
 def _yield_target(spec) -> float | None:
     """The yield target the answer's tolerances are sized for (None: a worst-case box)."""
-    from ..formulation.yield_target import active
+    from ..formulation.manipulators.yield_target import active
 
     return spec.tolerances.yield_target if active(spec) else None
 

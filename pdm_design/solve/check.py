@@ -94,7 +94,7 @@ def _pattern_value(sign, K: int) -> float:
 
 def _streamed_check(form, x, p, tau, samples: int, seed: int) -> dict:
     """sampled_offsets_check of a manipulators row, streamed stage by stage through its stage
-    maps (formulation/manipulator_offsets.py): the fixed patterns, random corners and uniform
+    maps (formulation/manipulators/offsets.py): the fixed patterns, random corners and uniform
     points, each pivot's offsets drawn when the row reaches it. Memory flat in the stages.
     tau: the box's half-width, or (dx, dy) half-widths of an allocated box."""
     half = np.broadcast_to(np.asarray(tau, dtype=float), (2,))

@@ -56,7 +56,7 @@ CONDITIONS = {
 
 
 # The way to move a nose_clearance row's landing depends on the phase of the flight its `where`
-# names (formulation/stairs.py NOSE_ENDS): landing_offset is measured from the back of the
+# names (formulation/stairs/__init__.py NOSE_ENDS): landing_offset is measured from the back of the
 # tread, so a smaller one takes off further behind the nose ahead, a larger one nearer to it.
 _BACK = "land further back on the tread (a smaller landing_offset)"
 _FORWARD = "land further forward on the tread (a larger landing_offset)"

@@ -1,6 +1,7 @@
 """Tolerances allocated for a yield target: the largest common scale s of the tolerances to
-allocate (each t_q = s * w_min / w_q, SI: tolerances.model.allocation_shares) at which a design's linearised yield
-(formulation/statistical.py: the union bound 1 - sum_i Phi(-beta_i)) still reaches the target.
+allocate (each t_q = s * w_min / w_q, SI: tolerances.model.allocation_shares) at which a design's
+linearised yield (formulation/manipulators/statistical.py: the union bound 1 - sum_i Phi(-beta_i))
+still reaches the target.
 
 The design is fixed (the spec's, or the optimizer's answer). The linearised yield falls as the
 tolerances grow (every row's spread grows with s; the second-order mean shift with s^2), so s
@@ -49,7 +50,7 @@ def allocate_for_yield(scene, design, tolerances: Tolerances, *, stages: int,
     """The largest scale s whose allocated tolerances keep the linearised yield >= target
     (default: tolerances.yield_target). ValueError in words when nothing is to be allocated,
     no target is given, or no scale meets it."""
-    from ..formulation.statistical import linearised_yield
+    from ..formulation.manipulators.statistical import linearised_yield
 
     target = tolerances.yield_target if target is None else target
     if target is None or not 0.0 < target < 1.0:
@@ -91,7 +92,7 @@ def dominant_rows(scene, design, tolerances: Tolerances, stages: int, *,
     import numpy as np
     from scipy.special import ndtr
 
-    from ..formulation.statistical import Chain, counted, row_reliability
+    from ..formulation.manipulators.statistical import Chain, counted, row_reliability
 
     g, sd, names = row_reliability(scene, design, tolerances, stages)
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -4,7 +4,7 @@ pivot, link length, back stop and palm mass, and the lot's friction, object and 
 Build n, palm k (0-based) has pivot P_k (nominal pitch plus its deviations), link l_k, back stop
 a_k (it rests at -a_k) and palm mass M_k; the lot has friction mu, object mass m and width w,
 and the feed x and speed. Stage by stage, with physics.manipulators on numpy arrays (the
-per-stage logic of formulation/manipulator_offsets.py, extended to every part's own values):
+per-stage logic of formulation/manipulators/offsets.py, extended to every part's own values):
 
   first landing   palm 1's top at C = P_1 + l_1 (-sin a_1, cos a_1); fall H = y0 - C_y,
                   Q = sqrt(vy0^2 + 2 g H), offset o = x0 + vx0 (vy0 + Q) / g - C_x

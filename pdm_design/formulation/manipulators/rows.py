@@ -1,5 +1,5 @@
-"""The manipulators NLP's rows, one function per group (formulation/manipulators.py's module
-docstring and docs/optimizer.md sections 4 and 4a derive each bound).
+"""The manipulators NLP's rows, one function per group (formulation/manipulators/__init__.py's
+module docstring and docs/optimizer.md sections 4 and 4a derive each bound).
 
 `Frame` holds what every group shares over the box {quantity: half-width}: the handover
 angles' and the fall speed's ends, the back stops' ends, the sizes and the rows written so far.
@@ -15,10 +15,10 @@ import math
 
 import casadi as ca
 
-from ..physics import manipulators as phys
+from ...physics import manipulators as phys
 from . import carry_box
-from . import manipulator_links as links
-from .common import MARGIN, MODEL, VALIDITY, Condition, fmax_all, fmin_all
+from . import links
+from ..common import MARGIN, MODEL, VALIDITY, Condition, fmax_all, fmin_all
 
 START_CLEARANCE = 1e-3  # (x link length): the object starts at least this far above palm 1
 # Margins whose periodic and first_ versions are one row (the speed interval covers both): the
@@ -62,7 +62,7 @@ class Frame:
         d_lo, d_hi = ((0.0, 0.0) if not stopped else
                       (ca.cos(a_hi) - ca.cos(a), ca.cos(a_lo) - ca.cos(a)))
         raise_lo, raise_hi = (-tau, tau) if not stopped else (-tau + l * d_lo, tau + l * d_hi)
-        # the links' lengths (manipulator_links): palm 1's top, the handover and the carry
+        # the links' lengths (links.py): palm 1's top, the handover and the carry
         # move with them (and the stops, with both: a links.Rest)
         self.l_lo, self.l_hi = links.ends(m, box)
         self.linked, self.t_l = self.l_lo is not self.l_hi, box.get("link_length", 0.0)
@@ -245,7 +245,7 @@ def _plain_contact_rows(m, f):
     add(LIFT_OFF, "at the back stop, fastest landing",
         held - f.u_hi**2, held)
     if f.linked:  # held - v2 = 3 g (l cos b + z) - 2 g l_K cos a_K - u^2 with l_K cos th_K =
-        # l cos b + z_K (manipulator_links): least at z_lo and l_K cos a_K = l cos a + q_hi
+        # l cos b + z_K (links.py): least at z_lo and l_K cos a_K = l cos a + q_hi
         lowest = m.l * ca.cos(m.b) + f.rest.z_range(f.tau)[0]
         held = g * lowest
         v2 = f.u_hi**2 + 2 * g * (m.l * ca.cos(m.a) + f.rest.q_hi - lowest)

@@ -1,7 +1,7 @@
 """The manipulators NLP: periodic handover, first approach and robust offset tolerance.
 
 Every condition is written with the closed forms of `physics.manipulators` on CasADi symbols;
-the rows themselves, one function per group, are in formulation/manipulator_rows.py.
+the rows themselves, one function per group, are in formulation/manipulators/rows.py.
 
 Decision vector x = [free design variables (alpha, beta, link_length, mass_ratio, first_pivot_x,
 first_pivot_y: whichever the spec leaves free), S (periodic handover speed squared), u_lo, u_hi
@@ -39,9 +39,9 @@ Allocated tolerances ([tolerances] with allocate = true, formulation/allocation.
 rows over a box with one half-width per quantity, `box` {quantity: half-width}: the pivots'
 places and heights apart, the feed's place and speed, the friction, the object's width, the
 masses (the mass ratio's ends; with links or pivot friction the carry's q_e, g_e and f ends,
-with the links' masses and the pivots' torques: formulation/carry_box.py), the back stops
-(their ends, and the drift they add along the row) and the links' lengths
-(formulation/manipulator_links.py); docs/optimizer.md section 4a derives each.
+with the links' masses and the pivots' torques: carry_box.py), the back stops (their ends, and
+the drift they add along the row) and the links' lengths (links.py); docs/optimizer.md section
+4a derives each.
 """
 
 from __future__ import annotations
@@ -50,15 +50,16 @@ import math
 
 import casadi as ca
 
-from ..errors import SpecError
-from ..physics import manipulators as phys
-from . import allocation, yield_target
-from . import manipulator_links as links
-from . import manipulator_rows as rows
-from ..scenes import ManipulatorsDesign
-from .common import SceneModel, design_inputs, fmax_all, fmin_all, objective_scale
-from .manipulator_rows import LIFT_OFF, OVER_THE_TOP
-from .manipulator_rows import nonzero as _nonzero
+from ...errors import SpecError
+from ...physics import manipulators as phys
+from . import yield_target
+from .. import allocation
+from . import links
+from . import rows
+from ...scenes import ManipulatorsDesign
+from ..common import SceneModel, design_inputs, fmax_all, fmin_all, objective_scale
+from .rows import LIFT_OFF, OVER_THE_TOP
+from .rows import nonzero as _nonzero
 
 DEFAULTS = {"first_pivot_x": 0.0, "first_pivot_y": 0.0}
 FALL_FLOOR = 1e-9  # (x g l): the fall speed squared never below this (far below the clearance's)
@@ -141,7 +142,8 @@ def build(spec, parameters=None):
 
 
 def _yield_term(spec, values):
-    """max_yield: nines of the linearised yield (formulation/statistical.py), when asked."""
+    """max_yield: nines of the linearised yield (formulation/manipulators/statistical.py), when
+    asked."""
     if not float(spec.objective.get("max_yield", 0.0)) > 0.0:
         return ca.SX(0.0)
     from .statistical import yield_term
@@ -360,7 +362,7 @@ class _Model:
         places, vx0 the start speed (a number, or an expression of unknown sign: then both
         cases' bounds, the larger and the smaller of them), stops the back stops' angles
         (docs/optimizer.md section 4a: palm 1's top and every palm's centre move with them),
-        t_l the links' lengths (formulation/manipulator_links.py: with them every palm's rest,
+        t_l the links' lengths (formulation/manipulators/links.py: with them every palm's rest,
         link and stop together, is a links.Rest)."""
         a, b, l = self.a, self.b, self.l
         stopped, linked = stops[0] is not stops[1], _nonzero(t_l)
@@ -425,7 +427,7 @@ class _Model:
     def conditions(self, S, u_lo, u_hi, box, robust):
         """Every condition over the box {quantity: half-width} (pivot_x, pivot_y, feed_x,
         friction, object_width; a quantity left out is exact): outer bounds, module docstring
-        and docs/optimizer.md section 4a; one function per group of rows in manipulator_rows."""
+        and docs/optimizer.md section 4a; one function per group of rows in rows.py."""
         return rows.conditions(self, S, u_lo, u_hi, box, robust)
 
 

@@ -36,9 +36,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..physics import stairs as phys
-from ..physics.ops import where
-from . import chain_moments
+from ...physics import stairs as phys
+from ...physics.ops import where
+from .. import chain_moments
 
 DESIGN = ("restitution", "launch_speed", "rise", "tread", "landing_offset")
 PARTS = ("rise", "tread")
@@ -50,16 +50,7 @@ NEWTON_STEPS = 4  # from a start within a fraction of the radius: converged to r
 def sigmas(tolerances, scale=1.0):
     """(sigma of each step's rise and tread (2,), sigma of each lot quantity (6,)) as lists of
     floats or SX (scale: a common factor) from the tolerances."""
-    each, lot = [0.0] * len(PARTS), [0.0] * len(LOTS)
-    for tol in tolerances:
-        s = tol.sigma * scale
-        if tol.applies_to == "each":
-            each[PARTS.index(tol.quantity)] = s
-        elif tol.quantity in PARTS:
-            lot[LOTS.index(f"{tol.quantity}_lot")] = s
-        else:
-            lot[LOTS.index(tol.quantity)] = s
-    return each, lot
+    return chain_moments.sigmas(tolerances, PARTS, LOTS, scale)
 
 
 class StairsChain:
@@ -220,7 +211,7 @@ def rows_function(scene, stages: int):
 def design_values(scene, design) -> dict:
     """The DESIGN values of a fixed design (scenes.StairsDesign), rise, tread and landing
     offset derived as the simulator derives them."""
-    from ..sim.stairs import stairs_geometry
+    from ...sim.stairs import stairs_geometry
 
     geo = stairs_geometry(scene, design)
     return {"restitution": design.restitution, "launch_speed": design.launch_speed,
@@ -251,7 +242,7 @@ def linearised_yield(scene, design, tolerances, stages: int) -> dict:
 
 
 def objective_term(spec, model):
-    """The stairs NLP's max_yield term (formulation/stairs.py's closed forms `model`: the
+    """The stairs NLP's max_yield term (formulation/stairs/__init__.py's closed forms `model`: the
     design's restitution, launch speed, rise, tread and landing offset, numbers or symbols);
     0 unless the spec asks for it."""
     if not float(spec.objective.get("max_yield", 0.0)) > 0.0:

@@ -4,8 +4,8 @@ A manipulators spec whose `[tolerances]` has a `yield_target` and quantities mar
 `allocate = true`, and whose `[objective]` does not ask for the worst-case box
 (`max_offset_tolerance`), asks `optimize` for the design and the largest common scale s of the
 allocated tolerances (t_q = s * w_min / w_q: tolerances.model.allocation_shares) at which the
-row's linearised yield (formulation/statistical.py: the union bound 1 - sum_i Phi(-beta_i))
-reaches the target. One NLP:
+row's linearised yield (formulation/manipulators/statistical.py: the union bound 1 - sum_i
+Phi(-beta_i)) reaches the target. One NLP:
 
     maximise  log s
     subject to  the design's nominal rows (every condition at zero tolerance, as for any spec)
@@ -40,7 +40,7 @@ def active(spec) -> bool:
 def check(spec) -> None:
     """Refuse (SpecError, exit 2) what the linearised yield cannot size: another objective
     (the scale is the objective), a quantity it does not model, links or pivot friction."""
-    from ..errors import SpecError
+    from ...errors import SpecError
     from .statistical import LOTS, PARTS
 
     source = spec.source or "<spec>"
@@ -84,7 +84,7 @@ def target_rows(spec, values: dict, symbols: dict, bounds: dict) -> TargetRows:
     """The yield target's variable, row and objective on the design `values` (SX where free)."""
     import casadi as ca
 
-    from .common import VALIDITY, Condition
+    from ..common import VALIDITY, Condition
     from .statistical import Chain, design_vector, failure_bound, reliability
 
     check(spec)
@@ -108,7 +108,7 @@ def target_rows(spec, values: dict, symbols: dict, bounds: dict) -> TargetRows:
 def scaled_sigmas(tolerances, s):
     """statistical.sigmas with every allocated tolerance at s times its share (w_min / w) and
     the given ones at their values: (part sigmas, lot sigmas), SX where s is."""
-    from ..tolerances.model import allocation_shares
+    from ...tolerances.model import allocation_shares
     from .statistical import sigmas
 
     shares = allocation_shares(tolerances)

@@ -56,11 +56,12 @@ from typing import NamedTuple
 
 import casadi as ca
 
-from ..errors import SpecError
-from ..physics import stairs as phys
-from ..scenes import StairsDesign
-from . import allocation, statistical_stairs
-from .common import (
+from ...errors import SpecError
+from ...physics import stairs as phys
+from ...scenes import StairsDesign
+from . import statistical as statistical_stairs
+from .. import allocation
+from ..common import (
     MARGIN,
     MODEL,
     ROW_ADDING_REQUIREMENTS,

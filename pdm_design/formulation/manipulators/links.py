@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from ..physics.manipulators import cos_difference
-from .common import fmax_all, fmin_all
+from ...physics.manipulators import cos_difference
+from ..common import fmax_all, fmin_all
 
 
 def ends(m, box):

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from ..physics import stairs as phys
-from .common import MARGIN, ConditionInfo, Scenario
+from ...physics import stairs as phys
+from ..common import MARGIN, ConditionInfo, Scenario
 
 
 def scenario(spec, model, m) -> Scenario:

@@ -30,9 +30,9 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from ..physics import manipulators as phys
-from . import manipulator_rows as rows
-from .common import VALIDITY
+from ...physics import manipulators as phys
+from . import rows
+from ..common import VALIDITY
 
 QUANTITIES = ("object_mass", "palm_mass", "link_mass", "pivot_friction")
 

@@ -40,9 +40,9 @@ import math
 import casadi as ca
 import numpy as np
 
-from ..physics import manipulators as phys
-from . import chain_moments
-from .chain_moments import nines
+from ...physics import manipulators as phys
+from .. import chain_moments
+from ..chain_moments import nines
 
 PARTS = ("pivot_x", "pivot_y", "link_length", "back_stop", "palm_mass")
 LOTS = ("friction", "object_mass", "object_width", "feed_x", "feed_speed") + tuple(
@@ -55,16 +55,7 @@ SURVIVED = ("slip",)
 def sigmas(tolerances, scale=1.0):
     """(sigma of each part quantity (5,), sigma of each lot quantity (10,)) as lists of
     floats or SX (scale: a common factor, a number or a symbol) from the tolerances."""
-    each, lot = [0.0] * len(PARTS), [0.0] * len(LOTS)
-    for tol in tolerances:
-        s = tol.sigma * scale
-        if tol.applies_to == "each":
-            each[PARTS.index(tol.quantity)] = s
-        elif tol.quantity in PARTS:
-            lot[LOTS.index(f"{tol.quantity}_lot")] = s
-        else:
-            lot[LOTS.index(tol.quantity)] = s
-    return each, lot
+    return chain_moments.sigmas(tolerances, PARTS, LOTS, scale)
 
 
 class Chain:

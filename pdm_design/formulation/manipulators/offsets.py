@@ -29,9 +29,9 @@ from dataclasses import replace
 import casadi as ca
 import numpy as np
 
-from ..physics import manipulators as phys
-from .common import MARGIN, VALIDITY, ConditionInfo, Scenario
-from .manipulator_rows import impact_rows, scene_sizes
+from ...physics import manipulators as phys
+from ..common import MARGIN, VALIDITY, ConditionInfo, Scenario
+from .rows import impact_rows, scene_sizes
 
 
 class Stages:
