@@ -14,7 +14,7 @@ from pdm_design.cli import main
 from pdm_design.sim.manipulators import simulate_manipulators
 from pdm_design.spec import load_spec
 from pdm_design.spec.model import ManipulatorOffset
-from pdm_design.tolerances import Tolerance, Tolerances, run_builds
+from pdm_design.tolerances import run_builds
 from pdm_design.tolerances.command import yield_text
 from pdm_design.tolerances.draw import draw
 from pdm_design.tolerances.manipulators import simulate_build

@@ -88,7 +88,7 @@ def _first_stall_torque(scene, design):
     palm, ml = m / design.mass_ratio, scene.links.mass
     a, b = design.alpha, design.beta
     inertia, weight = m + palm + 2 * ml / 3, m + palm + ml
-    (x0, y0), (vx, vy) = scene.initial.position, scene.initial.velocity
+    (_, y0), (vx, vy) = scene.initial.position, scene.initial.velocity
     fall = math.sqrt(vy * vy + 2 * g * (y0 - l * math.cos(a)))
     u = m * (vx * math.cos(a) - fall * math.sin(a)) / inertia
 

@@ -96,7 +96,7 @@ def analyse_manipulators(scene: ManipulatorsScene, design: ManipulatorsDesign,
                          stages: int | None = None) -> Analysis:
     """stages: manipulators in the row (default APPROACH_STAGES); palms parked behind the
     carrying one are checked as far back as the row has them."""
-    g, l = scene.gravity, design.link_length
+    l = design.link_length
     a, b = design.alpha, design.beta
     body, palm = scene.body, scene.palm
     carry = carry_terms(scene, design)

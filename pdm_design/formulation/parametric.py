@@ -22,10 +22,8 @@ from __future__ import annotations
 import copy
 from dataclasses import replace
 
-import casadi as ca
 import numpy as np
 
-from ..spec.model import Bounds
 
 # spec paths ("design.mass_ratio", "scene.palm.friction") that can be NLP parameters, by kind
 PARAMETRIC = {

@@ -243,7 +243,6 @@ class _Model:
 
     def __init__(self, scene, values, stages, rise_unit=0.0):
         self.scene, self.stages, self.g = scene, stages, scene.gravity
-        ball = scene.ball
         self.eps, self.v0 = values["restitution"], values["launch_speed"]
         h0 = self.h0 = scene.initial.drop_height
         self.vy1 = phys.impact_speed_vertical(self.g, h0)

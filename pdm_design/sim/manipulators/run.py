@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from . import phases as ph
-from ..core import Event, Outcome, SimulationRefused, SimulationResult
+from ..core import Event, Outcome, SimulationResult
 from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
