@@ -203,10 +203,11 @@ LINKS = "[scene.links]\nmass = 0.5\ncount = 2\n"
 
 
 @pytest.mark.parametrize("extra, key, why", [
-    ("link_length = { allocate = true }\n" + LINKS, "tolerances.link_length",
-     "expected the paper's device"),
-    ("pivot_x = { allocate = true }\nlink_length = { value = 0.01 }\n" + LINKS,
-     "tolerances.link_length", "expected the paper's device"),
+    ("link_length = { allocate = true }\nback_stop = { allocate = true }\n" + LINKS,
+     "tolerances.link_length", "expected the back stops exact"),
+    ("pivot_x = { allocate = true }\nlink_length = { value = 0.01 }\n"
+     "back_stop = { value = 0.001 }\n" + LINKS, "tolerances.link_length",
+     "expected the back stops exact"),
 ])
 def test_unbounded_quantities_are_refused(tmp_path, extra, key, why):
     path = tmp_path / "bad.toml"

@@ -306,23 +306,27 @@ class _Model:
         return phys.integrated_carry_speed_squared(u, self.a, th, damping=self.delta,
                                                    steps=self.steps, lowest=lowest, **kw)
 
-    def contact(self, th, v2):
+    def contact(self, th, v2, l=None):
         """(lift-off capacity of v^2, friction demand, force point / height) of the stuck
-        object at th moving at v^2 on real links or pivots (physics.carry_force_ratio)."""
+        object at th moving at v^2 on real links or pivots (physics.carry_force_ratio; l: the
+        carrying palm's link, the design's by default)."""
+        l = self.l if l is None else l
         along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f,
-                                 link_length=self.l)
-        ratio = phys.carry_force_ratio(th, v2, gravity=self.g, link_length=self.l, along=along)
-        held = phys.lift_off_capacity(th, gravity=self.g, link_length=self.l, along=along)
+                                 link_length=l)
+        ratio = phys.carry_force_ratio(th, v2, gravity=self.g, link_length=l, along=along)
+        held = phys.lift_off_capacity(th, gravity=self.g, link_length=l, along=along)
         return held, phys.friction_demand(th, ratio), phys.carry_force_point(th, 1.0, ratio)
 
-    def carry_ratios(self, ends):
+    def carry_ratios(self, ends, l=None):
         """Friction / normal of the stuck object's contact force at each (th, v^2) of `ends`
-        (links or pivot friction: physics.carry_force_ratio, monotone in v^2)."""
+        (links or pivot friction: physics.carry_force_ratio, monotone in v^2; l: the carrying
+        palm's link, the design's by default)."""
+        l = self.l if l is None else l
         out = []
         for th, v2 in ends:
             along = phys.carry_along(th, gravity=self.g, carry_gravity=self.gc, friction=self.f,
-                                     link_length=self.l)
-            out.append(phys.carry_force_ratio(th, v2, gravity=self.g, link_length=self.l,
+                                     link_length=l)
+            out.append(phys.carry_force_ratio(th, v2, gravity=self.g, link_length=l,
                                               along=along))
         return out
 

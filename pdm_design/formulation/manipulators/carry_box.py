@@ -173,7 +173,7 @@ def validity_rows(m, f):
               phys.cos_difference(f.a_hi, f.th_lo), 1.0, kind=VALIDITY)
     if f.robust and f.terms.empty is not None:
         weight, torque = f.terms.empty
-        push = weight * m.g * m.l
+        push = weight * m.g * f.l_lo  # the shortest link's torque (m.l when it is exact)
         f.add(("parked_palms",), "every empty palm swings on to its front stop",
               push * ca.sin(f.th_lo) - torque, push, kind=VALIDITY)
 

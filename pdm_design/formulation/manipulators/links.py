@@ -1,6 +1,8 @@
 """The manipulators' rows over a box of link lengths, every palm its own (docs/optimizer.md
 section 4a, `link_length`): palm K's link l_K = l + e_K, |e_K| <= t_l, and with it, when
-toleranced too, its back stop a_K in [a_lo, a_hi]; on the paper's device (allocation.check).
+toleranced too, its back stop a_K in [a_lo, a_hi] (the stops only on the paper's device:
+allocation.check; on real links the carry's terms are free of a build's link, and the rows
+take both link ends where they are not monotone in it: rows._top_needs, _contact_rows).
 
 The pivots stay where the design puts them (each within its own box). Palm j resting on its
 back stop has its top at P_j + l_j (-sin a_j, cos a_j): q_j = l_j cos a_j - l cos a higher and

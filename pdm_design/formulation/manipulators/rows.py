@@ -142,8 +142,9 @@ def _robust_interval_rows(m, f, model):
     # docs/optimizer.md 4a): the low rows take the slowest carry, the high rows the fastest,
     # each with its own curvature bound (m itself for both when they are exact)
     low, high = f.terms.low(m), f.terms.high(m)
+    # (the shortest link's: f / (g_e l) is largest there, the bound with it; l-free otherwise)
     leans = {id(v): ca.sin(th_lo) if phys.is_exact_zero(v.f) else (
-        ca.sin(th_lo) - v.f / (v.gc * l)) for v in (low, high)}
+        ca.sin(th_lo) - v.f / (v.gc * f.l_lo)) for v in (low, high)}
 
     def curvature(stop, v=low):  # the landing palm's stop angle enters the sec^2 term only
         bound = (ca.cos(th_lo) / leans[id(v)]) ** 2 / 8 - 1 / ca.cos(stop + th_lo) ** 2
@@ -205,7 +206,7 @@ def validity_rows(m, f):
     g_lo, f_hi = f.terms.g[0], f.terms.f[-1]  # m.gc and m.f when they are exact
     if f.robust and not phys.is_exact_zero(f_hi):
         add(("over_the_top",), "gravity beats the pivot friction at the handover",
-            g_lo * l * ca.sin(f.th_lo) - f_hi, g_lo * l, kind=VALIDITY)
+            g_lo * f.l_lo * ca.sin(f.th_lo) - f_hi, g_lo * l, kind=VALIDITY)
     carry_box.validity_rows(m, f)
 
 
@@ -217,12 +218,7 @@ def carry_rows(m, f):
         add(OVER_THE_TOP, "slowest landing on any palm, slowest point (integrated)",
             m.carry_v2(u_lo, b, lowest=True)[1], u_lo**2)
     else:
-        # convex in (g_e, f), increasing in f: the worse g_e end with the most friction
-        tops = [m.top_needed if not (f.stopped or f.linked) else phys.top_speed_squared_needed(
-            f.a_hi, gravity=m.gc, link_length=f.l_hi, friction=m.f)] \
-            if not f.terms.carry_varies else [
-                phys.top_speed_squared_needed(f.a_hi, gravity=g_e, link_length=l,
-                                              friction=f.terms.f[-1]) for g_e in f.terms.g]
+        tops = _top_needs(m, f)
         for i, top in enumerate(tops):
             add(OVER_THE_TOP, version("slowest landing on any palm", i, tops),
                 u_lo**2 - top, u_lo**2)
@@ -236,6 +232,21 @@ def carry_rows(m, f):
     if palm.front_stop < math.pi / 2:
         add("front_stop", "largest handover angle before the front stop",
             palm.front_stop - f.th_hi, palm.front_stop, epigraph=False)
+
+
+def _top_needs(m, f):
+    """The over-the-top need's versions: max over th of 2 g_e l_K (cos th - cos a) + 2 f (th +
+    a), a maximum of functions affine in (g_e l_K, f), so convex in them, increasing in f and
+    in a: at a_hi, f hi and each end of g_e l_K (g_e and l_K > 0: (g_e lo, l_lo), (g_e hi,
+    l_hi)); one version, at l_hi, where f = 0 (the need then increases with g_e l_K)."""
+    frictionless = phys.is_exact_zero(m.f) and not f.terms.carry_varies
+    if not f.terms.carry_varies and (frictionless or not f.linked):
+        return [m.top_needed if not (f.stopped or f.linked) else phys.top_speed_squared_needed(
+            f.a_hi, gravity=m.gc, link_length=f.l_hi, friction=m.f)]
+    g = f.terms.g
+    pairs = [(g[0], f.l_lo), (g[-1], f.l_hi)] if f.linked else [(g_e, m.l) for g_e in g]
+    return [phys.top_speed_squared_needed(f.a_hi, gravity=g_e, link_length=length,
+                                          friction=f.terms.f[-1]) for g_e, length in pairs]
 
 
 def _plain_contact_rows(m, f):
@@ -268,21 +279,27 @@ def _contact_rows(m, f):
     a, l, g, add, mu, h = m.a, m.l, m.g, f.add, f.mu, f.h
     u_lo, u_hi, th_lo, th_hi = f.u_lo, f.u_hi, f.th_lo, f.th_hi
     back, front = [], []
-    for corner, v in f.terms.corners(m):
+    # the links' lengths (stops exact: allocation._check_links): N and F are affine in
+    # (u^2 / l_K, 1 / l_K) at fixed (g_e, f) (v^2 / l_K = u^2 / l_K + 2 g_e (cos a - cos th)
+    # - 2 f (a + th) / l_K), each (u^2, l_K) end a vertex of that trapezoid: at both links
+    lengths = [(None, "")] if not f.linked else [(f.l_lo, "link short"), (f.l_hi, "link long")]
+    for (corner, v), (link, lw) in itertools.product(f.terms.corners(m), lengths):
+        corner = join(corner, lw)
         if f.stopped:  # over every stop angle in [a_lo, a_hi]: bounds (carry_box.back_contact)
             held, ratios = carry_box.back_contact(m, f, v, u_lo**2, u_hi**2)
             add(LIFT_OFF, join("at every back stop, fastest landing", corner), held, g * l)
         else:
             add(LIFT_OFF, join("at the back stop, fastest landing", corner),
-                v.contact(-a, u_hi**2)[0] - u_hi**2, g * l)
-            ratios = v.carry_ratios([(-a, u_lo**2), (-a, u_hi**2)])
-        v2 = v.carry_v2(u_hi, th_hi, a=f.a_lo)
+                v.contact(-a, u_hi**2, link)[0] - u_hi**2, g * l)
+            ratios = v.carry_ratios([(-a, u_lo**2), (-a, u_hi**2)], link)
+        v2 = v.carry_v2(u_hi, th_hi, a=f.a_lo, l=link)
         add(LIFT_OFF, join("at the handover, fastest carry", corner),
-            v.contact(th_hi, v2)[0] - v2, g * l)
+            v.contact(th_hi, v2, link)[0] - v2, g * l)
         back += ratios
         # the slowest carry from the highest stop, the fastest from the lowest: v^2's ends
-        front += v.carry_ratios([(th, v.carry_v2(u, th, a=stop)) for th in (th_lo, th_hi)
-                                 for u, stop in ((u_lo, f.a_hi), (u_hi, f.a_lo))])
+        front += v.carry_ratios([(th, v.carry_v2(u, th, a=stop, l=link))
+                                 for th in (th_lo, th_hi)
+                                 for u, stop in ((u_lo, f.a_hi), (u_hi, f.a_lo))], link)
     for i, r in enumerate(back + front):
         add("slip_carry", version("at the ends of the carry", i, back + front),
             mu - phys.friction_demand(None, r), mu)
