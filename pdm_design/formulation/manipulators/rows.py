@@ -131,7 +131,7 @@ def model_rows(m, f):
 
 def _robust_interval_rows(m, f, model):
     """The interval [u_lo, u_hi] mapped into itself over the handover angles' range."""
-    b, l, add, qs, u_lo, u_hi = m.b, m.l, f.add, f.qs, f.u_lo, f.u_hi
+    b, add, qs, u_lo, u_hi = m.b, f.add, f.qs, f.u_lo, f.u_hi
     th_lo, th_hi, a_lo, a_hi, thetas = f.th_lo, f.th_hi, f.a_lo, f.a_hi, f.thetas
     # Curvature bound of ln F(u, th) on the whole interval, for every u (docs/optimizer.md):
     # d2 ln F / d th2 = -sec^2(a + th) + (y cos th - y^2 sin^2 th) / 2 with y = 2 g l / v^2
