@@ -11,7 +11,7 @@ its rows' expressions, never to decide the NLP's shape (how many parked palms ar
 tolerance variable's bound, the objective's scale read the alpha, beta and link length the box
 allows, so those stay constants). The symbolic build also checks this: a number compared or
 converted to a float while the NLP is built raises there, and the spec falls back to its own
-NLP (`usable`). A spec asks for parameters with `Spec.nlp_parameters` (the table sets it to its
+NLP (formulation/build.py). A spec asks for parameters with `Spec.nlp_parameters` (the table sets it to its
 swept paths, sweep/run.py); `optimize` of one spec builds its NLP with constants, as before.
 The parameters change the NLP's arithmetic, not its rows: a point's answer is the one its own
 NLP gives, to IPOPT's tolerance (tests/test_parametric.py).
@@ -23,7 +23,6 @@ import copy
 from dataclasses import replace
 
 import numpy as np
-
 
 # spec paths ("design.mass_ratio", "scene.palm.friction") that can be NLP parameters, by kind
 PARAMETRIC = {

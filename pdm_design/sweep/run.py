@@ -109,7 +109,6 @@ def table_verification(spec):
     TABLE_SAMPLE_DIVISOR (at least one when it asks for any); the nominal run and every corner
     pattern as `optimize` simulates them, and the design itself unchanged (the random builds
     are drawn after it is found). docs/tables.md, "Verification in a table"."""
-    from dataclasses import replace
 
     asked = spec.verification.samples
     samples = -(-asked // TABLE_SAMPLE_DIVISOR)  # rounded up: 0 stays 0, 1 stays 1
