@@ -1,7 +1,8 @@
 """Tolerances allocated for a yield target: the largest common scale s of the tolerances to
 allocate (each t_q = s * w_min / w_q, SI: tolerances.model.allocation_shares) at which a design's
-linearised yield (formulation/manipulators/statistical.py: the union bound 1 - sum_i Phi(-beta_i))
-still reaches the target.
+linearised yield still reaches the target: the scene's own (`linearised_yield_function`): the
+manipulators' union bound 1 - sum_i Phi(-beta_i) (formulation/manipulators/statistical.py), the
+stairs' Hunter's bound (formulation/stairs/statistical.py).
 
 The design is fixed (the spec's, or the optimizer's answer). The linearised yield falls as the
 tolerances grow (every row's spread grows with s; the second-order mean shift with s^2), so s
@@ -9,8 +10,8 @@ is found on a grid in log s (the largest grid scale that meets it), then by bise
 the next grid scale. The yield need not fall monotonically with s: with the pivots exact, a
 design sized for their drift can drift the other way and fail sooner.
 Check the answer by Monte Carlo (tolerances.yield_.yield_of on `Allocation.tolerances`): the
-union bound is conservative where several rows can fail, and first order (with a second-order
-mean) in the deviations.
+union bound is conservative where several rows can fail (Hunter's bound less so), and first
+order (with a second-order mean) in the deviations.
 """
 
 from __future__ import annotations
@@ -45,13 +46,22 @@ def with_scale(tolerances: Tolerances, scale: float) -> Tolerances:
     return replace(tolerances, items=items)
 
 
+def linearised_yield_function(scene):
+    """The scene's linearised yield of a fixed design, (scene, design, tolerances, stages) ->
+    dict with "yield": the stairs' or the manipulators' statistical.linearised_yield."""
+    if scene.kind == "stairs":
+        from ..formulation.stairs.statistical import linearised_yield
+    else:
+        from ..formulation.manipulators.statistical import linearised_yield
+    return linearised_yield
+
+
 def allocate_for_yield(scene, design, tolerances: Tolerances, *, stages: int,
                        target: float | None = None) -> Allocation:
     """The largest scale s whose allocated tolerances keep the linearised yield >= target
     (default: tolerances.yield_target). ValueError in words when nothing is to be allocated,
     no target is given, or no scale meets it."""
-    from ..formulation.manipulators.statistical import linearised_yield
-
+    linearised_yield = linearised_yield_function(scene)
     target = tolerances.yield_target if target is None else target
     if target is None or not 0.0 < target < 1.0:
         raise ValueError(f"a yield target in (0, 1) is needed, got {target!r}")
