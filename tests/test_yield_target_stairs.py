@@ -1,8 +1,11 @@
-"""Stairs tolerances sized for a yield target (solve/yield_allocation.py with the stairs'
-linearised yield, formulation/stairs/statistical.py: 1 - Hunter's bound): the scale found
-meets the target exactly (bisection), is the largest that does, and the Monte Carlo yield of
-the closed-form map at the sized tolerances (a second method) agrees with the target."""
+"""Stairs tolerances sized for a yield target: at a fixed design (solve/yield_allocation.py
+with the stairs' linearised yield, formulation/stairs/statistical.py: 1 - Hunter's bound) the
+scale found meets the target exactly (bisection) and is the largest that does; with the design
+(`optimize`, formulation/yield_target.py) the NLP's scale is at least the fixed design's and
+the fixed-design search at its answer finds it again (a second method); the Monte Carlo yield
+of the closed-form map at the sized tolerances agrees with the target."""
 
+import json
 import re
 from pathlib import Path
 
@@ -94,23 +97,89 @@ def test_the_yield_command_sizes_the_stairs_tolerances(tmp_path, spec):
     assert re.search(rf"(?m)^\s+tread\s+\+-{re.escape(shown)}\s+each", run.output), run.output
 
 
-@pytest.mark.parametrize("edit, found", [
-    # a free design: the optimizer does not size a staircase's tolerances
-    (lambda t: t.replace("restitution = 0.8\n",
-                         "restitution = { min = 0.5, max = 0.9, initial = 0.8 }\n", 1),
-     "free restitution"),
+FREE = {"restitution = 0.8\n": "restitution = { min = 0.5, max = 0.9, initial = 0.8 }\n",
+        "launch_speed = 3.0 ": "launch_speed = { min = 0.5, max = 3.0, initial = 2.0 } ",
+        "landing_offset = 1.38 ": "landing_offset = { min = 0.0, max = 3.0, initial = 0.8 } "}
+
+
+def free_text() -> str:
+    """sized_text with stairs_yield_design's free restitution, launch speed and landing
+    offset (its bounds and guesses)."""
+    text = sized_text()
+    for old, new in FREE.items():
+        assert old in text
+        text = text.replace(old, new, 1)
+    return text
+
+
+@pytest.fixture(scope="module")
+def answer(tmp_path_factory):
+    """(the spec, the optimized design, s*, optimize's JSON)."""
+    path = tmp_path_factory.mktemp("stairs") / "free.toml"
+    path.write_text(free_text())
+    spec = load_spec(path)
+    assert set(spec.free_variables) == {"restitution", "launch_speed", "landing_offset"}
+    run = CliRunner().invoke(main, ["optimize", str(path), "--format", "json", "--no-verify"])
+    assert run.exit_code == 0, run.output
+    out = json.loads(run.output)
+    values = {t["quantity"]: t for t in out["tolerances"]}
+    assert values["rise"]["allocated"] and values["tread"]["allocated"]
+    scale = values["rise"]["value"]
+    assert values["tread"]["value"] == scale
+    assert values["restitution"]["value"] == 0.0015 and not values["restitution"]["allocated"]
+    design = spec.design_at({n: out["design"][n] for n in spec.free_variables})
+    return spec, design, scale, out
+
+
+def test_optimized_scale_beats_the_fixed_design_and_meets_the_target(answer):
+    spec, design, scale, out = answer
+    target = spec.tolerances.yield_target
+    fixed = allocate_for_yield(spec.scene, spec.design_at(), spec.tolerances, stages=STAGES)
+    assert scale >= fixed.scale * (1.0 - 1e-6), (scale, fixed.scale)
+    # the nines row is active: the linearised yield at the answer is the target
+    lin = linearised_yield(spec.scene, design, with_scale(spec.tolerances, scale), STAGES)
+    assert lin["yield"] == pytest.approx(target, abs=1e-6)
+    # the fixed-design search at the answer's design finds the NLP's s (the largest there)
+    again = allocate_for_yield(spec.scene, design, spec.tolerances, stages=STAGES)
+    assert again.scale == pytest.approx(scale, rel=1e-5)
+    limits = next(t for t in out["tolerances"] if t["quantity"] == "rise")["limited_by"]
+    assert limits and {e["condition"] for e in limits} <= {"nose_hit", "skipped_step",
+                                                          "no_rebound", "unbuildable_step"}
+    assert 0.5 < sum(e["share"] for e in limits) <= 1.0 + 1e-12
+    assert all(re.fullmatch(r"bounce \d+|bounces \d+-\d+, the most at bounce \d+", e["where"])
+               for e in limits), limits
+    print(f"s* = {scale * 1e3:.2f} mm; fixed design {fixed.scale * 1e3:.2f} mm")
+
+
+def test_monte_carlo_yield_at_the_optimized_answer_matches_the_target(answer):
+    # the margin of test_monte_carlo_yield_at_the_sized_tolerances_matches_the_target;
+    # measured 99.68 % (99.59-99.75 %) of 20 000 builds by `pdm-design yield`
+    from pdm_design.tolerances.yield_ import yield_of
+
+    spec, design, scale, _ = answer
+    fail = 1.0 - spec.tolerances.yield_target
+    r = yield_of(spec.scene, design, with_scale(spec.tolerances, scale), builds=40000,
+                 stages=STAGES, seed=0, confirm=0, scales=(), sensitivity_samples=0)
+    assert 1.0 - r.ci_high < 1.25 * fail, (r.estimate, r.ci_low, r.ci_high)
+    assert 1.0 - r.ci_low > 0.5 * fail, (r.estimate, r.ci_low, r.ci_high)
+
+
+@pytest.mark.parametrize("edit, key, found", [
     # nothing to allocate
     (lambda t: re.sub(r"(?m)^(rise|tread) = .*$", r'\1 = { value = 0.005, applies_to = "each" }',
-                      t), "no tolerance to allocate"),
+                      t), "tolerances.yield_target", "no tolerance to allocate"),
     # not a fraction
-    (lambda t: t.replace("yield_target = 0.9973", "yield_target = 1.5"), "yield_target"),
+    (lambda t: t.replace("yield_target = 0.9973", "yield_target = 1.5"),
+     "tolerances.yield_target", "1.5"),
+    # another objective: the scale is the objective
+    (lambda t: t.replace("[tolerances]", "[objective]\nmin_drop = 1.0\n\n[tolerances]", 1),
+     "objective.min_drop", "min_drop = 1"),
 ])
-def test_bad_stairs_yield_target_specs_exit_2_naming_the_key(tmp_path, edit, found):
+def test_bad_stairs_yield_target_specs_exit_2_naming_the_key(tmp_path, edit, key, found):
     path = tmp_path / "bad.toml"
-    text = edit(sized_text())
-    assert text != sized_text()
+    text = edit(free_text())
+    assert text != free_text()
     path.write_text(text)
-    for command in ("yield", "optimize"):
-        run = CliRunner().invoke(main, [command, str(path)])
-        assert run.exit_code == 2, run.output
-        assert "tolerances.yield_target" in run.output and found in run.output, run.output
+    run = CliRunner().invoke(main, ["optimize", str(path), "--no-verify"])
+    assert run.exit_code == 2, run.output
+    assert key in run.output and found in run.output, run.output

@@ -170,7 +170,7 @@ def _parse(data: Any, source: str) -> Spec:
                        "no [tolerances]")
     objective = _named_numbers(data, "objective", OBJECTIVES, _WEIGHT)
     _check_max_yield(objective, scene, tolerances)
-    _check_yield_target(kind.scene.kind, tolerances, design)
+    _check_yield_target(kind.scene.kind, tolerances)
     return Spec(
         source=source,
         scene=scene,
@@ -327,20 +327,14 @@ def _check_max_yield(objective: dict, scene, tolerances) -> None:
                        "no [tolerances]" if not tolerances else "a tolerance to allocate")
 
 
-def _check_yield_target(kind: str, tolerances, design) -> None:
+def _check_yield_target(kind: str, tolerances) -> None:
     """tolerances.yield_target sizes allocated tolerances by the scene's linearised yield: it
-    needs a quantity with allocate = true, and on a staircase a fixed design (the optimizer
-    does not size them there: `pdm-design yield` does, solve/yield_allocation.py)."""
+    needs a quantity with allocate = true."""
     if tolerances.yield_target is None:
         return
     if not any(t.allocate for t in tolerances):
         raise _Invalid("tolerances.yield_target", "a quantity with allocate = true (the "
                        "tolerances sized for the target)", "no tolerance to allocate")
-    free = [k for k, v in design.items() if isinstance(v, Bounds)]
-    if kind == "stairs" and free:
-        raise _Invalid("tolerances.yield_target", "a fixed stairs design (the tolerances are "
-                       "sized for the target at a given design; the optimizer does not size "
-                       "them on a staircase)", f"free {', '.join(free)}")
 
 
 def _tolerances(table: dict, kind: str):
