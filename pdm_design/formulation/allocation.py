@@ -44,7 +44,7 @@ STAIRS_NOT_YET = "no outer bound over its box is derived yet"
 def allocating(spec) -> bool:
     """Whether the spec's [tolerances] asks the optimizer to allocate a worst-case tolerance
     (not one sized for a yield target: formulation/manipulators/yield_target.py)."""
-    from .manipulators.yield_target import active
+    from .yield_target import active
 
     return any(t.allocate for t in getattr(spec, "tolerances", ())) and not active(spec)
 

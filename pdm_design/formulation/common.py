@@ -489,7 +489,7 @@ def spec_key(spec) -> str:
              if pivots is not None and (pivots.damping or forced) else None)
     tolerances = getattr(spec, "tolerances", ())
     allocated = tuple(tolerances) if any(t.allocate for t in tolerances) else ()  # allocation.py
-    from .manipulators.yield_target import active  # tolerances sized for a yield target
+    from .yield_target import active  # tolerances sized for a yield target
 
     stated = repr(tolerances) if spec.objective.get("max_yield") or active(spec) \
         else None  # statistical.py

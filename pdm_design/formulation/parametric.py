@@ -36,7 +36,7 @@ def names(spec) -> tuple[str, ...]:
     """The spec's nlp_parameters that its NLP can take as parameters: a fixed number at a
     PARAMETRIC path, and no linearised yield in the NLP (max_yield, a yield target: its chain
     of stage maps reads the scene as numbers, formulation/manipulators/statistical.py)."""
-    from .manipulators.yield_target import active
+    from .yield_target import active
 
     asked = getattr(spec, "nlp_parameters", ())
     if not asked or spec.objective.get("max_yield") or active(spec):

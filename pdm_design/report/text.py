@@ -112,7 +112,7 @@ def optimize_text(outcome: DesignOutcome) -> str:
 def _allocation_heading(spec) -> str:
     """What the allocated tolerances promise: every build inside them works (worst case), or
     the row's linearised yield reaches the target (docs/optimizer.md section 10)."""
-    from ..formulation.manipulators.yield_target import active
+    from ..formulation.yield_target import active
 
     if active(spec):
         return (f"allocated tolerances (sized for a linearised yield of "

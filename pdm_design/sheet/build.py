@@ -171,7 +171,7 @@ def allocated_entries(entries, target: float | None = None) -> tuple:
 
 def _yield_target(spec) -> float | None:
     """The yield target the answer's tolerances are sized for (None: a worst-case box)."""
-    from ..formulation.manipulators.yield_target import active
+    from ..formulation.yield_target import active
 
     return spec.tolerances.yield_target if active(spec) else None
 

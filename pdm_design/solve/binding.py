@@ -79,7 +79,7 @@ def limits_of_quantities(spec, solution, entries) -> list[dict]:
     binding bounds (they hold every allocated quantity back); [] for a given tolerance."""
     from ..formulation import formulate
     from ..formulation.build import FULL
-    from ..formulation.manipulators.yield_target import active
+    from ..formulation.yield_target import active
 
     if active(spec):  # sized for a yield target: the union bound's dominant rows
         from .yield_allocation import limits_at_target

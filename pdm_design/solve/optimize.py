@@ -12,7 +12,7 @@ from ..formulation.allocation import allocating, pivot_box, values_at
 from ..formulation import build
 from ..formulation.build import FULL
 from ..formulation.common import BACKOFF_FACTOR, MODEL, OBJECTIVE_SENSE
-from ..formulation.manipulators.yield_target import AUX as TARGET_SCALE
+from ..formulation.yield_target import AUX as TARGET_SCALE
 from ..status import Status
 from . import check, elastic
 from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs

@@ -1,7 +1,8 @@
 """Tolerances allocated for a yield target: the largest common scale s of the tolerances to
 allocate (each t_q = s * w_min / w_q, SI: tolerances.model.allocation_shares) at which a design's
-linearised yield (formulation/manipulators/statistical.py: the union bound 1 - sum_i Phi(-beta_i))
-still reaches the target.
+linearised yield still reaches the target: the scene's own (`linearised_yield_function`): the
+manipulators' union bound 1 - sum_i Phi(-beta_i) (formulation/manipulators/statistical.py), the
+stairs' Hunter's bound (formulation/stairs/statistical.py).
 
 The design is fixed (the spec's, or the optimizer's answer). The linearised yield falls as the
 tolerances grow (every row's spread grows with s; the second-order mean shift with s^2), so s
@@ -9,8 +10,8 @@ is found on a grid in log s (the largest grid scale that meets it), then by bise
 the next grid scale. The yield need not fall monotonically with s: with the pivots exact, a
 design sized for their drift can drift the other way and fail sooner.
 Check the answer by Monte Carlo (tolerances.yield_.yield_of on `Allocation.tolerances`): the
-union bound is conservative where several rows can fail, and first order (with a second-order
-mean) in the deviations.
+union bound is conservative where several rows can fail (Hunter's bound less so), and first
+order (with a second-order mean) in the deviations.
 """
 
 from __future__ import annotations
@@ -45,13 +46,22 @@ def with_scale(tolerances: Tolerances, scale: float) -> Tolerances:
     return replace(tolerances, items=items)
 
 
+def linearised_yield_function(scene):
+    """The scene's linearised yield of a fixed design, (scene, design, tolerances, stages) ->
+    dict with "yield": the stairs' or the manipulators' statistical.linearised_yield."""
+    if scene.kind == "stairs":
+        from ..formulation.stairs.statistical import linearised_yield
+    else:
+        from ..formulation.manipulators.statistical import linearised_yield
+    return linearised_yield
+
+
 def allocate_for_yield(scene, design, tolerances: Tolerances, *, stages: int,
                        target: float | None = None) -> Allocation:
     """The largest scale s whose allocated tolerances keep the linearised yield >= target
     (default: tolerances.yield_target). ValueError in words when nothing is to be allocated,
     no target is given, or no scale meets it."""
-    from ..formulation.manipulators.statistical import linearised_yield
-
+    linearised_yield = linearised_yield_function(scene)
     target = tolerances.yield_target if target is None else target
     if target is None or not 0.0 < target < 1.0:
         raise ValueError(f"a yield target in (0, 1) is needed, got {target!r}")
@@ -86,48 +96,70 @@ def dominant_rows(scene, design, tolerances: Tolerances, stages: int, *,
                   floor: float = 0.01) -> list[dict]:
     """What limits tolerances sized for a yield: the failures that make up the union bound
     sum_i Phi(-beta_i) at this design and these (valued) tolerances, by name, each with its
-    share of the bound and where along the row its rows are ("palm k": the carry on palm k and
-    the handover to k + 1, the landing on k + 1; "the first landing"), the largest first;
-    those holding less than `floor` of it left out."""
+    share of the bound and where along the row its rows are (`_rows_placed`: "palm k" or
+    "the first landing" on a row of manipulators, "bounce k" on a staircase), the largest
+    first; those holding less than `floor` of it left out."""
     import numpy as np
     from scipy.special import ndtr
 
-    from ..formulation.manipulators.statistical import Chain, counted, row_reliability
-
-    g, sd, names = row_reliability(scene, design, tolerances, stages)
+    g, sd, names, weight, place, word = _rows_placed(scene, design, tolerances, stages)
     with np.errstate(invalid="ignore", divide="ignore"):
-        tail = ndtr(-g / sd) * np.asarray(counted(names)).ravel()
+        tail = ndtr(-g / sd) * weight
     total = float(np.sum(tail))
     if not total > 0.0:
         return []
-    chain = Chain(scene)
-    sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1) + [len(chain.last[1])]
-    place = np.repeat(np.arange(len(sizes)), sizes)  # 0: the first landing, k: palm k
     out = []
     for name in dict.fromkeys(names):
         mine = np.array([n == name for n in names]) & (tail > 0.0)
         share = float(tail[mine].sum()) / total
         if share < floor:
             continue
-        out.append({"condition": name, "where": _places(place[mine], tail[mine], total),
+        out.append({"condition": name, "where": _places(place[mine], tail[mine], total, word),
                     "share": share})
     return sorted(out, key=lambda e: -e["share"])
 
 
-def _places(places, tails, total) -> str:
-    """Where one failure's share of the union bound lies, in words: the palms whose rows
-    hold at least a thousandth of it, and the largest."""
+def _rows_placed(scene, design, tolerances, stages):
+    """(g, sd, names, the union bound's weight of each row, its place, word(place)) of the
+    scene's linearised rows: on a row of manipulators place 0 is the first landing, k palm k
+    (the carry on palm k, the handover to and the landing on k + 1), slips not counted; on a
+    staircase place k is bounce k (the flight to step k and the landing there)."""
     import numpy as np
 
-    def word(k):
-        return "the first landing" if k == 0 else f"palm {k}"
+    if scene.kind == "stairs":
+        from ..formulation.stairs import statistical as st
+
+        g, sd, names = st.row_reliability(scene, design, tolerances, stages)
+        chain = st.StairsChain(scene)
+        sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1)
+        return (g, sd, names, np.ones(len(names)), np.repeat(np.arange(1, stages + 1), sizes),
+                ("bounce", "bounces", None))
+    from ..formulation.manipulators.statistical import Chain, counted, row_reliability
+
+    g, sd, names = row_reliability(scene, design, tolerances, stages)
+    chain = Chain(scene)
+    sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1) + [len(chain.last[1])]
+    return (g, sd, names, np.asarray(counted(names)).ravel(),
+            np.repeat(np.arange(len(sizes)), sizes), ("palm", "palms", "the first landing"))
+
+
+def _places(places, tails, total, word) -> str:
+    """Where one failure's share of the union bound lies, in words: the places whose rows
+    hold at least a thousandth of it, and the largest. word: (a place's noun, its plural,
+    place 0's name or None)."""
+    import numpy as np
+
+    noun, plural, zero = word
+
+    def one(k):
+        return zero if k == 0 and zero else f"{noun} {k}"
 
     kept = places[tails >= 1e-3 * total] if np.any(tails >= 1e-3 * total) else places
     top = int(places[int(np.argmax(tails))])
     lo, hi = int(kept.min()), int(kept.max())
     if lo == hi:
-        return word(top)
-    return f"{word(lo) if lo == 0 else f'palms {lo}'}-{hi}, the most at {word(top)}"
+        return one(top)
+    return f"{one(lo) if lo == 0 and zero else f'{plural} {lo}'}-{hi}, the most at {one(top)}"
 
 
 def limits_at_target(spec, solution, entries) -> list[dict]:

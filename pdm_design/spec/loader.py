@@ -328,13 +328,10 @@ def _check_max_yield(objective: dict, scene, tolerances) -> None:
 
 
 def _check_yield_target(kind: str, tolerances) -> None:
-    """tolerances.yield_target sizes allocated tolerances by the manipulators' linearised yield:
-    it needs a manipulators row and a quantity with allocate = true."""
+    """tolerances.yield_target sizes allocated tolerances by the scene's linearised yield: it
+    needs a quantity with allocate = true."""
     if tolerances.yield_target is None:
         return
-    if kind != "manipulators":
-        raise _Invalid("tolerances.yield_target", "a manipulators scene (the tolerances are "
-                       "sized by the manipulators' linearised yield)", f"kind = {kind!r}")
     if not any(t.allocate for t in tolerances):
         raise _Invalid("tolerances.yield_target", "a quantity with allocate = true (the "
                        "tolerances sized for the target)", "no tolerance to allocate")

@@ -17,12 +17,12 @@ def spec_tolerances(spec, source: str):
     if not spec.tolerances:
         raise SpecError(source, "tolerances", "a [tolerances] table with at least one quantity "
                         "and its value (docs/tolerances.md)", "none")
-    sized = spec.tolerances.yield_target is not None and spec.kind == "manipulators"
+    sized = spec.tolerances.yield_target is not None
     for tol in spec.tolerances:
         if tol.value is None and not sized:
             raise SpecError(source, f"tolerances.{tol.quantity}.value", "a value (+-, SI) for "
                             "a yield: allocate = true asks the optimizer for one, or "
-                            "tolerances.yield_target for a manipulators row",
+                            "tolerances.yield_target",
                             "allocate = true")
         if spec.kind == "stairs" and tol.quantity == "friction" and spec.scene.ball.radius == 0:
             raise SpecError(source, "tolerances.friction", "no friction tolerance for a point "

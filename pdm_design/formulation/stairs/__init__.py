@@ -60,7 +60,7 @@ from ...errors import SpecError
 from ...physics import stairs as phys
 from ...scenes import StairsDesign
 from . import statistical as statistical_stairs
-from .. import allocation
+from .. import allocation, yield_target
 from ..common import (
     MARGIN,
     MODEL,
@@ -127,14 +127,18 @@ def build(spec):
     if epigraph:
         aux.append(("min_margin", t, 0.0, 1.0))
         start.append(0.0)
+    target = _target(spec, m, symbols, bounds, start[:1]) if yield_target.active(spec) else None
+    if target is not None:  # tolerances sized for a yield target
+        aux.append((yield_target.AUX, target.scale, *target.bounds))
+        start.append(target.start)
     xd = ca.vertcat(*symbols.values()) if symbols else ca.SX(0, 1)
     aux_init = ca.Function("aux_init", [xd], [ca.vertcat(*start) if start else ca.SX(0, 1)])
 
+    conditions = allocation.box_conditions(spec, lambda box: m.conditions(box, robust, exact),
+                                           {"rise": tau, "tread": tau}, tau)
     model = SceneModel(
         kind="stairs", design_symbols=symbols, aux=tuple(aux),
-        conditions=tuple(allocation.box_conditions(
-            spec, lambda box: m.conditions(box, robust, exact),
-            {"rise": tau, "tread": tau}, tau)),
+        conditions=tuple(conditions) + ((target.condition,) if target is not None else ()),
         objective_terms={
             "max_offset_tolerance": tau if robust else ca.SX(0.0),
             "max_min_margin": t if epigraph else ca.SX(0.0),
@@ -154,8 +158,16 @@ def build(spec):
         # 611 ms against 303 ms one at a time, before the stacked solver's creation
         # (results/bench_optimize.md).
         stack_starts=False,
+        extra_objective=target.objective if target is not None else None,
     )
     return model, bounds, m
+
+
+def _target(spec, m, symbols, bounds, v_start):
+    """The yield target's rows (stairs/statistical.py target_rows), the periodic vertical
+    speed of a given rise at its start (v_start: [] when the rise is derived)."""
+    aux_start = {m.V_symbol: v_start[0]} if m.V_symbol is not None else {}
+    return statistical_stairs.target_rows(spec, m, symbols, bounds, aux_start)
 
 
 # Lots the exact nose rows are not shown monotone in (docs/optimizer.md section 4a): why.

@@ -167,8 +167,13 @@ def yield_term(scene, design: dict, tolerances, stages: int, scale=1.0):
     """The max_yield objective term: nines of Hunter's bound on the failure probability (the
     union bound less every row's failures shared with its own one bounce before). design:
     the DESIGN values by name (numbers or CasADi expressions)."""
-    chain = StairsChain(scene)
     each, lot = sigmas(tolerances, scale)
+    return _nines(scene, design, stages, each, lot)
+
+
+def _nines(scene, design: dict, stages: int, each, lot):
+    """Nines of Hunter's bound at these step and lot sigmas (numbers or SX)."""
+    chain = StairsChain(scene)
     x = ca.vertcat(*[design[n] for n in DESIGN])
     g, sd, names, previous, cross = reliability(chain, x, stages, each, lot, neighbours=True)
     return chain_moments.tree_nines(g, sd, _drifting(previous, names), cross)
@@ -247,6 +252,33 @@ def objective_term(spec, model):
     0 unless the spec asks for it."""
     if not float(spec.objective.get("max_yield", 0.0)) > 0.0:
         return ca.SX(0.0)
-    design = {"restitution": model.eps, "launch_speed": model.v0, "rise": model.rise,
-              "tread": model.tread, "landing_offset": model.L1}
-    return yield_term(spec.scene, design, spec.tolerances, spec.verification.stages)
+    return yield_term(spec.scene, model_design(model), spec.tolerances,
+                      spec.verification.stages)
+
+
+def model_design(model) -> dict:
+    """The DESIGN values of the stairs NLP's closed forms `model` (numbers or symbols)."""
+    return {"restitution": model.eps, "launch_speed": model.v0, "rise": model.rise,
+            "tread": model.tread, "landing_offset": model.L1}
+
+
+def target_rows(spec, model, symbols: dict, bounds: dict, aux_start: dict):
+    """A yield target's variable, row and objective (formulation/yield_target.py) on the
+    closed forms `model`, the nines row Hunter's bound's (yield_term's) with the allocated
+    sigmas s times their shares; aux_start: {auxiliary symbol: its start, an expression of
+    the design} (the periodic vertical speed of a given rise), for the start of s."""
+    from .. import yield_target
+
+    yield_target.refuse_objectives(spec)
+    design = model_design(model)
+
+    def nines_of(s):
+        each, lot = yield_target.scaled_sigmas(spec.tolerances, s, sigmas)
+        return _nines(spec.scene, design, spec.verification.stages, each, lot)
+
+    def at_start(expression):
+        for symbol, start in aux_start.items():
+            expression = ca.substitute(expression, symbol, start)
+        return expression
+
+    return yield_target.target_rows(spec, symbols, bounds, nines_of, at_start)

@@ -1,0 +1,124 @@
+"""Tolerances allocated for a yield target, with the design (docs/optimizer.md section 10):
+what every scene's NLP shares.
+
+A spec whose `[tolerances]` has a `yield_target` and quantities marked `allocate = true`, and
+whose `[objective]` does not ask for the worst-case box (`max_offset_tolerance`), asks
+`optimize` for the design and the largest common scale s of the allocated tolerances
+(t_q = s * w_min / w_q: tolerances.model.allocation_shares) at which the scene's linearised
+yield reaches the target. One NLP:
+
+    maximise  log s
+    subject to  the design's nominal rows (every condition at zero tolerance, as for any spec)
+                nines(x, s) >= -log10(1 - target)                           (the nines row)
+
+s an auxiliary variable (`yield_scale`), the allocated quantities' sigmas s times their shares
+(given tolerances at their values), nines the scene's -log10 of its bound on the failure
+probability: the manipulators' union bound (manipulators/yield_target.py), the stairs'
+Hunter's bound (stairs/statistical.py). The nines row is well scaled (2.57 for 99.73 %) where
+the yield itself is within 3e-3 of 1; log s makes the objective free of the units s is in (a
+length, an angle, a mass: whichever quantity has the smallest weight).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+AUX = "yield_scale"
+SCALE_BOUNDS = (1e-9, 1e3)  # s within these (SI units of the smallest-weight quantity)
+START_GRID = 49  # scales tried at the spec's guess for the start of s (evenly in log s)
+CONDITION = "yield_target"  # the nines row's name (a validity row: no margin, no requirement)
+KINDS = ("manipulators", "stairs")  # scenes whose NLP sizes tolerances for a yield target
+
+
+def active(spec) -> bool:
+    """Whether `optimize(spec)` allocates tolerances for a yield target (module docstring)."""
+    tolerances = getattr(spec, "tolerances", ())
+    return (spec.kind in KINDS
+            and getattr(tolerances, "yield_target", None) is not None
+            and any(t.allocate for t in tolerances)
+            and not float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0)
+
+
+def refuse_objectives(spec) -> None:
+    """Refuse (SpecError, exit 2) another objective: the scale is the objective."""
+    from ..errors import SpecError
+
+    for name, weight in spec.objective.items():
+        if float(weight) > 0.0:
+            raise SpecError(spec.source or "<spec>", f"objective.{name}", "no objective with "
+                            "tolerances.yield_target and allocated tolerances (the optimizer "
+                            "maximises the allocated tolerances' scale at the target; "
+                            "max_offset_tolerance asks for the worst-case box instead)",
+                            found=f"{name} = {weight:g}")
+
+
+def needed_nines(target: float) -> float:
+    """-log10(1 - target): 2.57 for 99.73 %."""
+    return -math.log10(1.0 - target)
+
+
+@dataclass(frozen=True)
+class TargetRows:
+    """What the yield target adds to the NLP: the scale variable, its bounds and start, the
+    nines row and the objective term (log s, maximised)."""
+
+    scale: object
+    bounds: tuple[float, float]
+    start: float
+    condition: object
+    objective: object
+
+
+def target_rows(spec, symbols: dict, bounds: dict, nines_of, at_start=None) -> TargetRows:
+    """The yield target's variable, row and objective: nines_of(s) the scene's nines (SX in s
+    and the free design `symbols`); at_start(expression): the expression in the design and s
+    alone (the scene's auxiliaries at their starts), for the start of s."""
+    import casadi as ca
+
+    from .common import VALIDITY, Condition
+
+    s = ca.SX.sym(AUX)
+    target = spec.tolerances.yield_target
+    nines = nines_of(s)
+    need = needed_nines(target)
+    row = Condition((CONDITION,), f"linearised yield >= {target:g}", nines - need, need,
+                    kind=VALIDITY)
+    xd = ca.vertcat(*symbols.values()) if symbols else ca.SX(0, 1)
+    guess = [bounds[n][2] for n in symbols]
+    alone = nines if at_start is None else at_start(nines)
+    start = start_scale(ca.Function("nines", [xd, s], [alone]), guess, need)
+    return TargetRows(s, SCALE_BOUNDS, start, row, ca.log(s))
+
+
+def scaled_sigmas(tolerances, s, sigmas):
+    """The scene's `sigmas` (tolerances, scale) -> (part sigmas, lot sigmas) with every
+    allocated tolerance at s times its share (w_min / w) and the given ones at their values,
+    SX where s is."""
+    from ..tolerances.model import allocation_shares
+
+    shares = allocation_shares(tolerances)
+    given = sigmas([t for t in tolerances if not t.allocate])
+    unit = sigmas([replace(t, value=shares[t.quantity]) for t in tolerances if t.allocate], s)
+    return tuple([a + b for a, b in zip(x, y)] for x, y in zip(given, unit))
+
+
+def start_scale(nines, guess, need: float) -> float:
+    """The start of s: the largest of START_GRID scales (evenly in log s over SCALE_BOUNDS)
+    whose nines at the spec's guess meet the target, refined once on a grid up to the next
+    (the smallest scale when none meets it: IPOPT starts from infeasible there)."""
+    import numpy as np
+
+    lo, hi = SCALE_BOUNDS
+    for _ in range(2):
+        grid = np.geomspace(lo, hi, START_GRID)
+        xs = np.tile(np.asarray(guess, dtype=float).reshape(-1, 1), (1, START_GRID))
+        values = np.asarray(nines.map(START_GRID)(xs, grid[None, :])).ravel()
+        meets = np.flatnonzero(values >= need)  # NaN: not met
+        if not meets.size:
+            return float(lo)
+        last = int(meets[-1])
+        if last + 1 == START_GRID:
+            return float(grid[last])
+        lo, hi = grid[last], grid[last + 1]
+    return float(lo)
