@@ -24,8 +24,13 @@ WITH_PIVOTS = ("[tolerances]\npivot_x = { allocate = true }\npivot_y = { allocat
 
 
 def _allocated(tmp_path_factory, extra):
+    return allocated(tmp_path_factory, BASE + "\n" + extra)
+
+
+def allocated(tmp_path_factory, text):
+    """(spec, its optimised design, {quantity: allocated half-width}) of the spec `text`."""
     path = tmp_path_factory.mktemp("links") / "spec.toml"
-    path.write_text(BASE + "\n" + extra)
+    path.write_text(text)
     spec = load_spec(path)
     result = optimize(spec)
     assert result.status.value == "optimal"

@@ -15,11 +15,9 @@ import numpy as np
 import pytest
 
 from pdm_design.physics import manipulators as phys
-from pdm_design.solve import optimize
-from pdm_design.spec import load_spec
 
 from test_allocation_built import BASE, ROOT
-from test_allocation_links import _links
+from test_allocation_links import _links, allocated
 
 ALONE = "link_length = { allocate = true }\n"
 PIVOTS = "pivot_x = { allocate = true }\npivot_y = { allocate = true }\n"
@@ -28,13 +26,7 @@ INERTIA = BASE.replace("count = 2 ", "inertia = 1.2\ncount = 2 ")
 
 
 def _allocated(tmp_path_factory, extra, base=BASE):
-    path = tmp_path_factory.mktemp("built_links") / "spec.toml"
-    path.write_text(base + "\n[tolerances]\n" + extra)
-    spec = load_spec(path)
-    result = optimize(spec)
-    assert result.status.value == "optimal"
-    design = spec.design_at({n: result.design[n] for n in spec.free_variables})
-    return spec, design, {e["quantity"]: e["value"] for e in result.tolerances}
+    return allocated(tmp_path_factory, base + "\n[tolerances]\n" + extra)
 
 
 @pytest.fixture(scope="module")

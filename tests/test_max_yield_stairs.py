@@ -18,6 +18,8 @@ from pdm_design.tolerances import Tolerance, Tolerances, run_builds
 from pdm_design.tolerances.draw import draw
 from pdm_design.tolerances.yield_ import wilson
 
+from test_max_yield import sign_test
+
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 
 
@@ -155,10 +157,7 @@ def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_build
         out = run_builds(asked.scene, design, deviations, stages)
         assert out.closed_form.all()
         passed[objective] = out.passed
-    better = int(np.sum(passed["max_yield"] & ~passed["max_offset_tolerance"]))
-    worse = int(np.sum(~passed["max_yield"] & passed["max_offset_tolerance"]))
-    n = better + worse
-    p_value = sum(math.comb(n, k) for k in range(better, n + 1)) / 2.0 ** n if n else 1.0
+    better, worse, p_value = sign_test(passed["max_yield"], passed["max_offset_tolerance"])
     print(f"builds only max_yield passes: {better}, only the worst case: {worse}, "
           f"p = {p_value:.2g}")
     assert better > worse and p_value < 0.05, (better, worse, p_value)
