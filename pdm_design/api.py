@@ -39,7 +39,7 @@ class DesignOutcome:
             return ("The fixed design does not meet every requirement: relax the requirements "
                     "listed as violated, or change the design or the scene.")
         if self.status is Status.INFEASIBLE and self.spec.kind == "manipulators":
-            from .spec.start import start_words
+            from .scenes.manipulators.start import start_words
 
             words = start_words(self.spec.scene.initial.position[1], self.spec.design,
                                 self.analysis.design)

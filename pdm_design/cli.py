@@ -282,7 +282,8 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
     from .report.simulation import simulation_text
     from .sim.core import SimulationRefused
     from .spec import load_spec
-    from .spec.model import MAX_MANIPULATOR_STAGES, ManipulatorOffset, StepError
+    from .plugin import of
+    from .spec.model import ManipulatorOffset, StepError
     from .verify import simulate_spec
 
     if plot is not None:
@@ -295,9 +296,10 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
         if given and loaded.kind != kind:
             raise SpecError("command line", option, f"a {kind} spec ({option} is for {kind} "
                             f"scenes; {loaded.kind} take {other})", f"a {loaded.kind} spec")
-    if loaded.kind == "manipulators" and stages is not None and stages > MAX_MANIPULATOR_STAGES:
-        raise SpecError("command line", "--stages", f"at most {MAX_MANIPULATOR_STAGES} "
-                        "manipulators (each stage's record is kept in memory)", str(stages))
+    most, why = of(loaded).stage_limit(False)
+    if stages is not None and stages > most:
+        raise SpecError("command line", "--stages", f"at most {most} "
+                        f"{of(loaded).stage_noun[1]} ({why})", str(stages))
     row = stages or loaded.verification.stages
     kwargs = {}
     if loaded.kind == "manipulators":

@@ -104,7 +104,7 @@ class Scene:
 # ------------------------------------------------------------------ stairs
 
 def stairs_scene(which: str, bounces: int) -> Scene:
-    from pdm_design.sim.stairs import simulate_stairs
+    from pdm_design.scenes.stairs.sim import simulate_stairs
     from pdm_design.spec import load_spec
 
     spec = load_spec(ROOT / "problems" / f"paper_stairs_{which}.toml")
@@ -142,7 +142,7 @@ def stairs_scene(which: str, bounces: int) -> Scene:
 # ------------------------------------------------------------------ manipulators
 
 def paper_manipulators(friction=None, restitution=None):
-    from pdm_design.scenes import ManipulatorsScene, Palm
+    from pdm_design.scenes.manipulators.model import ManipulatorsScene, Palm
     from pdm_design.spec import load_spec
 
     spec = load_spec(ROOT / "problems" / "paper_manipulators.toml")
@@ -178,7 +178,7 @@ def mp_carry_time(u, alpha, beta, g, l):
 
 
 def manip_stick_scene(stages: int) -> Scene:
-    from pdm_design.sim.manipulators import simulate_manipulators
+    from pdm_design.scenes.manipulators.sim import simulate_manipulators
 
     scene, design = paper_manipulators()
     g, l, a, b, q = scene.gravity, design.link_length, design.alpha, design.beta, \
@@ -219,7 +219,7 @@ TIGHTEST = Accuracy("reference", rtol=MIN_RTOL, atol=1e-16, event_tol=1e-15)
 
 
 def manip_integrated_scene(name, title, stages, **palm) -> Scene:
-    from pdm_design.sim.manipulators import simulate_manipulators
+    from pdm_design.scenes.manipulators.sim import simulate_manipulators
 
     scene, design = paper_manipulators(**palm)
 
@@ -237,7 +237,7 @@ def independent_slide_check():
     handover where th = beta (the next palm's top is pitch_y lower: l cos th = l cos beta)."""
     from scipy.integrate import solve_ivp
 
-    from pdm_design.sim.manipulators import simulate_manipulators
+    from pdm_design.scenes.manipulators.sim import simulate_manipulators
 
     scene, design = paper_manipulators(friction=0.3)
     result = simulate_manipulators(scene, design, stages=2, accuracy=TIGHTEST)
@@ -282,7 +282,12 @@ def optimizer_rows(tols, *, bound_relax_factor: float):
     an optimum on an active constraint at ~1e-8 whatever tol is; the precise preset sets 0)."""
     from scipy.optimize import brentq
 
-    from pdm_design.scenes import Body, ManipulatorsInitial, ManipulatorsScene, Palm
+    from pdm_design.scenes.manipulators.model import (
+        Body,
+        ManipulatorsInitial,
+        ManipulatorsScene,
+        Palm,
+    )
     from pdm_design.solve import optimize
     from pdm_design.spec.model import Bounds, Spec
 

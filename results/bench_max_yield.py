@@ -28,7 +28,7 @@ BUILDS = 10000
 
 
 def run(objective: str, builds: int) -> dict:
-    from pdm_design.formulation.manipulators.statistical import linearised_yield
+    from pdm_design.scenes.manipulators.formulation.statistical import linearised_yield
     from pdm_design.solve import optimize
     from pdm_design.spec import load_spec
     from pdm_design.tolerances.yield_ import yield_of

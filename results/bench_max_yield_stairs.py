@@ -63,7 +63,7 @@ def sign_test(better: int, worse: int) -> float:
 
 
 def run(objective: str, spec, builds: int) -> dict:
-    from pdm_design.formulation.stairs.statistical import linearised_yield
+    from pdm_design.scenes.stairs.formulation.statistical import linearised_yield
     from pdm_design.tolerances.yield_ import wilson
 
     found, design, solve = design_of(spec, objective)

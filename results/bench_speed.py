@@ -78,7 +78,7 @@ def bench_cli(repeats):
     help_cmd = [script, "--help"] if script else [PY, "-m", "pdm_design", "--help"]
     spec = "problems/paper_manipulators.toml"
     eager = ("import pdm_design.cli, pdm_design.spec, pdm_design.api, pdm_design.verify, "
-             "pdm_design.sim.manipulators, pdm_design.sim.stairs, scipy.optimize, "
+             "pdm_design.scenes.manipulators.sim, pdm_design.scenes.stairs.sim, scipy.optimize, "
              "scipy.integrate, casadi, matplotlib.pyplot")
     rows = {
         "help": wall(help_cmd, repeats=repeats),
@@ -121,7 +121,7 @@ def optimize_before(spec, repeats):
 # ------------------------------------------------------------------ 2. vectorised maps
 
 def bench_impact_map(n=1_000_000, n_loop=100_000):
-    from pdm_design.sim.stairs import impact_map, impact_once
+    from pdm_design.scenes.stairs.sim import impact_map, impact_once
 
     rng = np.random.default_rng(1)
     vx = rng.uniform(1, 4, n)
@@ -161,7 +161,7 @@ def _impact_floor(vx, vy, om, eps, mu, r, m, J):
 
 
 def bench_bounces(samples=100_000, bounces=100):
-    from pdm_design.sim.stairs import bounce_sequence, simulate_stairs
+    from pdm_design.scenes.stairs.sim import bounce_sequence, simulate_stairs
     from pdm_design.spec import load_spec
 
     spec = load_spec(ROOT / "problems" / "paper_stairs_frictionless.toml")
@@ -180,8 +180,8 @@ def bench_bounces(samples=100_000, bounces=100):
 
 
 def bench_handover_map(n=1_000_000, n_loop=100_000):
-    from pdm_design.physics import manipulators as phys
-    from pdm_design.sim.manipulators import handover_map, simulate_manipulators
+    from pdm_design.scenes.manipulators.model import physics as phys
+    from pdm_design.scenes.manipulators.sim import handover_map, simulate_manipulators
     from pdm_design.spec import load_spec
 
     a, b, q, l = 0.2, 0.6, 10.0, 2.0
@@ -266,7 +266,7 @@ def ivp_baseline(scene, design, stages, rtol, atol):
 def bench_event_run(stages=12):
     import scipy.integrate  # noqa: F401  (warm: imports are not part of a run)
 
-    from pdm_design.sim.manipulators import simulate_manipulators
+    from pdm_design.scenes.manipulators.sim import simulate_manipulators
     from pdm_design.spec import load_spec
 
     spec = load_spec(ROOT / "problems" / "paper_manipulators.toml")
@@ -299,7 +299,7 @@ def bench_event_run(stages=12):
 
 LONG_RUN = """
 import json, sys, time
-from pdm_design.sim.stairs import simulate_stairs
+from pdm_design.scenes.stairs.sim import simulate_stairs
 from pdm_design.spec import load_spec
 
 def peak_mb():  # VmHWM: this process's peak resident set (ru_maxrss survives exec on Linux)

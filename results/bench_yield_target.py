@@ -38,8 +38,8 @@ STAGES = (20, 100)
 def run(stages: int, builds: int) -> list[dict]:
     """The fixed design's and the optimized answer's s, linearised and Monte Carlo yields."""
     from pdm_design.formulation import formulate
-    from pdm_design.formulation.manipulators.statistical import linearised_yield
-    from pdm_design.formulation.manipulators.yield_target import AUX
+    from pdm_design.scenes.manipulators.formulation.statistical import linearised_yield
+    from pdm_design.scenes.manipulators.formulation.yield_target import AUX
     from pdm_design.solve import optimize
     from pdm_design.solve.yield_allocation import allocate_for_yield, with_scale
     from pdm_design.spec import load_spec

@@ -15,9 +15,9 @@ import time
 from pathlib import Path
 from types import SimpleNamespace
 
-from pdm_design.physics import manipulators as phys
-from pdm_design.scenes import Body
-from pdm_design.sim.manipulators import simulate_manipulators
+from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators.model import Body
+from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.spec.loader import load_spec
 
 ROOT = Path(__file__).resolve().parents[1]

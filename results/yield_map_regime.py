@@ -42,7 +42,7 @@ def cases():
 def compare(scene, design, tolerances, scale) -> dict:
     from pdm_design.tolerances import Tolerance, run_builds
     from pdm_design.tolerances.draw import draw
-    from pdm_design.tolerances.manipulators import meets_another_palm, simulate_build
+    from pdm_design.scenes.manipulators.tolerances import meets_another_palm, simulate_build
 
     scaled = [Tolerance(t.quantity, t.applies_to, t.value * scale, 1.0, t.distribution)
               for t in tolerances]

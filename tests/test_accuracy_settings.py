@@ -41,7 +41,7 @@ def tolerances(accuracy) -> tuple:
 # ------------------------------------------------------------------ the spec's inline table
 
 def test_spec_table_reaches_the_simulator_and_the_report(tmp_path, monkeypatch):
-    import pdm_design.sim.manipulators as manipulators
+    import pdm_design.scenes.manipulators.sim as manipulators
     from pdm_design.api import design
     from pdm_design.spec import load_spec
 

@@ -13,7 +13,7 @@ import pytest
 
 from pdm_design.solve import optimize
 from pdm_design.spec import load_spec
-from pdm_design.tolerances.manipulators import simulate_build
+from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.verify.tolerance import corner_patterns
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -244,7 +244,7 @@ def test_stairs_equal_weights_are_todays_box(tmp_path):
 
 def _stairs_corners(spec, result, scale):
     """Corner patterns of the scaled (rise, tread) box where the simulator fails."""
-    from pdm_design.tolerances.stairs import simulate_build as simulate_stairs_build
+    from pdm_design.scenes.stairs.tolerances import simulate_build as simulate_stairs_build
 
     design = spec.design_at({n: result.design[n] for n in spec.free_variables})
     stages = spec.verification.stages
@@ -280,7 +280,7 @@ def test_stairs_launch_place_holds_at_the_corners(tmp_path):
     assert result.status.value == "optimal"
     t_l = {e["quantity"]: e["value"] for e in result.tolerances}["launch_x"]
     assert t_l == result.tolerance["rise"] == result.tolerance["tread"]
-    from pdm_design.tolerances.stairs import simulate_build as simulate_stairs_build
+    from pdm_design.scenes.stairs.tolerances import simulate_build as simulate_stairs_build
 
     design = spec.design_at({n: result.design[n] for n in spec.free_variables})
     stages = spec.verification.stages

@@ -13,7 +13,7 @@ import pytest
 
 from pdm_design.solve import optimize
 from pdm_design.spec import load_spec
-from pdm_design.tolerances.manipulators import simulate_build
+from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.verify.tolerance import corner_patterns, verify_tolerance
 
 from test_allocation import BASE

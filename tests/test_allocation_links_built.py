@@ -14,7 +14,7 @@ import sys
 import numpy as np
 import pytest
 
-from pdm_design.physics import manipulators as phys
+from pdm_design.scenes.manipulators.model import physics as phys
 
 from test_allocation_built import BASE, ROOT
 from test_allocation_links import _links, allocated
@@ -47,7 +47,7 @@ def given_inertia(tmp_path_factory):
 def _failures(case, scale):
     """(pivot pattern, link pattern, failure) of every build of the scaled box the simulator
     fails: the pivots' 12 corner patterns (none when exact) by the links' 4 patterns."""
-    from pdm_design.tolerances.manipulators import simulate_build
+    from pdm_design.scenes.manipulators.tolerances import simulate_build
     from pdm_design.verify.tolerance import corner_patterns
 
     spec, design, value = case

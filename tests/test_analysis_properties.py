@@ -9,16 +9,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pdm_design.analysis import analyse
-from pdm_design.scenes import (
-    Ball,
+from pdm_design.scenes.stairs.model import Ball, StairsDesign, StairsInitial, StairsScene
+from pdm_design.scenes.manipulators.model import (
     Body,
     ManipulatorsDesign,
     ManipulatorsInitial,
     ManipulatorsScene,
     Palm,
-    StairsDesign,
-    StairsInitial,
-    StairsScene,
 )
 
 HALF_PI = math.pi / 2
@@ -66,7 +63,7 @@ def test_no_periodic_handover_beyond_a_right_angle_the_simulator_agrees(alpha, e
     next palm's back stop, so that palm cannot carry it forward. The analysis says so, predicts
     no handover beyond the ones the simulator makes (it counts the carries that pass the top),
     and the simulator never completes a row of three however fast the object starts."""
-    from pdm_design.sim.manipulators import simulate_manipulators
+    from pdm_design.scenes.manipulators.sim import simulate_manipulators
 
     scene = manipulators_scene()
     scene = scene.__class__(body=scene.body, palm=scene.palm, initial=ManipulatorsInitial(

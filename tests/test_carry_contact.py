@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from pdm_design.physics import manipulators as phys
-from pdm_design.sim.manipulators.phases import Swing, stuck_contact_force, swing_acceleration
+from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators.sim.phases import Swing, stuck_contact_force, swing_acceleration
 
 
 def _case(rng):

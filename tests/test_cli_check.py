@@ -144,7 +144,7 @@ def test_a_design_the_simulator_refutes_fails_the_gate(tmp_path):
     """The paper's design with a bouncy palm (restitution 0.9): the closed forms, which assume a
     plastic landing, find it feasible; the simulator sees the object tip on its first palm. So
     `feasible = true` alone fails, and passes only with the refutation accepted in words."""
-    from pdm_design.sim.manipulators import simulate_manipulators
+    from pdm_design.scenes.manipulators.sim import simulate_manipulators
     from pdm_design.spec import load_spec
 
     text = PAPER.read_text().replace("restitution = 0.0 ", "restitution = 0.9 ")

@@ -27,8 +27,14 @@ from scipy.optimize import brentq
 from scipy.special import ellipkinc
 
 from pdm_design.api import evaluate
-from pdm_design.scenes import Body, ManipulatorsDesign, ManipulatorsInitial, ManipulatorsScene, Palm
-from pdm_design.sim.manipulators import EVENT_KINDS, FAILURE_KINDS, simulate_manipulators
+from pdm_design.scenes.manipulators.model import (
+    Body,
+    ManipulatorsDesign,
+    ManipulatorsInitial,
+    ManipulatorsScene,
+    Palm,
+)
+from pdm_design.scenes.manipulators.sim import EVENT_KINDS, FAILURE_KINDS, simulate_manipulators
 from pdm_design.spec.loader import load_spec
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -286,7 +292,7 @@ CASE_RUNNER = """
 import json, sys
 from types import SimpleNamespace
 from pdm_design.scenes import Body, ManipulatorsDesign, ManipulatorsInitial, ManipulatorsScene, Palm
-from pdm_design.sim.manipulators import simulate_manipulators
+from pdm_design.scenes.manipulators.sim import simulate_manipulators
 out = []
 for c in json.load(sys.stdin):
     scene = ManipulatorsScene(

@@ -11,9 +11,16 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from pdm_design.scenes import (Body, Links, ManipulatorsDesign, ManipulatorsInitial,
-                               ManipulatorsScene, Palm, Pivots)
-from pdm_design.sim.manipulators import FAILURE_KINDS, simulate_manipulators
+from pdm_design.scenes.manipulators.model import (
+    Body,
+    Links,
+    ManipulatorsDesign,
+    ManipulatorsInitial,
+    ManipulatorsScene,
+    Palm,
+    Pivots,
+)
+from pdm_design.scenes.manipulators.sim import FAILURE_KINDS, simulate_manipulators
 
 G, L, Q, M_OBJ = 9.81, 2.0, 10.0, 1.0
 PALM = M_OBJ / Q

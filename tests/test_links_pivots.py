@@ -18,12 +18,12 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from pdm_design.analysis.manipulators import analyse_manipulators
-from pdm_design.physics import manipulators as phys
-from pdm_design.scenes import Links, Pivots
-from pdm_design.sim.manipulators import phases as ph
-from pdm_design.sim.manipulators import simulate_manipulators
-from pdm_design.sim.manipulators.run import Run
+from pdm_design.scenes.manipulators.analysis import analyse_manipulators
+from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators.model import Links, Pivots
+from pdm_design.scenes.manipulators.sim import phases as ph
+from pdm_design.scenes.manipulators.sim import simulate_manipulators
+from pdm_design.scenes.manipulators.sim.run import Run
 from pdm_design.accuracy import accuracy
 from pdm_design.spec.loader import load_spec
 
@@ -294,7 +294,7 @@ def test_the_nlp_integrated_rows_agree_with_the_simulator_to_the_preset(preset):
     """With damping the NLP integrates the carry with as many steps as the accuracy asks: its
     stage map (first landing to the first handover, and the periodic fixed point) agrees with
     the simulator to the preset's agreement tolerance."""
-    from pdm_design.formulation import manipulators as form
+    from pdm_design.scenes.manipulators.model import formulation as form
 
     spec = load_spec(PAPER)
     scene = scene_with(spec, link_mass=0.3, torque=0.1, damping=0.4, mu=1.5)
@@ -332,7 +332,7 @@ def test_damped_fixed_point_and_contraction_are_the_simulated_ones():
 
 
 def test_vectorised_handover_map_with_carry_terms_is_the_simulated_map():
-    from pdm_design.sim.manipulators import handover_map
+    from pdm_design.scenes.manipulators.sim import handover_map
 
     spec = load_spec(PAPER)
     scene = scene_with(spec, link_mass=0.5, torque=0.2, mu=1.5)

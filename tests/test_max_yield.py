@@ -11,7 +11,7 @@ import pytest
 from scipy.special import ndtr
 
 from pdm_design.errors import SpecError
-from pdm_design.formulation.manipulators.statistical import linearised_yield, row_reliability
+from pdm_design.scenes.manipulators.formulation.statistical import linearised_yield, row_reliability
 from pdm_design.spec import load_spec
 from pdm_design.spec.loader import parse_spec
 from pdm_design.tolerances import Tolerance, Tolerances, run_builds

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from scipy.special import ndtr
 
-from pdm_design.formulation.stairs.statistical import linearised_yield, row_reliability
-from pdm_design.scenes import StairsDesign
+from pdm_design.scenes.stairs.formulation.statistical import linearised_yield, row_reliability
+from pdm_design.scenes.stairs.model import StairsDesign
 from pdm_design.spec import load_spec
 from pdm_design.spec.loader import parse_spec
 from pdm_design.tolerances import Tolerance, Tolerances, run_builds
@@ -81,7 +81,7 @@ def test_the_linearised_yield_is_the_monte_carlo_yield_where_one_row_dominates(
     # Every quantity varies, small: the launch speed (which moves every landing, linearly),
     # the boards' restitution (and friction), every step's rise and tread; the map's yield
     # over 200 000 builds must hold the linearised yield within its 95 % interval
-    from pdm_design.sim.stairs import stairs_geometry
+    from pdm_design.scenes.stairs.sim import stairs_geometry
 
     spec = load_spec(PROBLEMS / problem)
     scene = spec.scene
@@ -189,7 +189,7 @@ def test_the_linearised_yield_is_the_same_at_any_size_and_finite_at_extreme_rest
     # size, the same yield (every row is divided by the tread); at restitution 0.05 the
     # nominal build already lands twice on a tread (the map fails every build): yield 0;
     # at 0.5 and 0.99 (30 bounces, about 99.8 % and 98.7 %) the Monte Carlo yield
-    from pdm_design.scenes.stairs import Ball, StairsInitial, StairsScene
+    from pdm_design.scenes.stairs.model import Ball, StairsInitial, StairsScene
 
     def at(k):
         scene = StairsScene(initial=StairsInitial(drop_height=k), ball=Ball(radius=0.05 * k))

@@ -310,7 +310,7 @@ def test_simulate_says_where_it_wrote_the_figures(tmp_path):
 def _first_failure(**kw):
     from test_sim_manipulators import make
 
-    from pdm_design.sim.manipulators import simulate_manipulators
+    from pdm_design.scenes.manipulators.sim import simulate_manipulators
 
     scene, design = make(**kw)
     return simulate_manipulators(scene, design, stages=2).outcome.failure

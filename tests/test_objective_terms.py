@@ -129,7 +129,7 @@ def test_every_row_that_holds_two_margins_holds_each_to_the_others_requirement()
     # (SHARED_ROWS) holds each to the other's requirement.
     from pdm_design.analysis.result import COVERED_BY
     from pdm_design.formulation import formulate
-    from pdm_design.formulation.manipulators import SHARED_ROWS
+    from pdm_design.scenes.manipulators.formulation import SHARED_ROWS
 
     for problem in ("manipulators_robust.toml", "stairs_design.toml"):
         spec = load_spec(PROBLEMS / problem)

@@ -12,8 +12,8 @@ import pytest
 from pdm_design.analysis import analyse
 from pdm_design.api import design
 from pdm_design.formulation import formulate
-from pdm_design.physics.manipulators import parked_palm_clearance, pitch
-from pdm_design.sim.manipulators import simulate_manipulators
+from pdm_design.scenes.manipulators.physics import parked_palm_clearance, pitch
+from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.solve import optimize
 from pdm_design.spec import load_spec, parse_spec
 from pdm_design.status import Status

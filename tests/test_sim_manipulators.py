@@ -16,10 +16,16 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import ellipkinc
 
-from pdm_design.physics import manipulators as phys
-from pdm_design.scenes import Body, ManipulatorsDesign, ManipulatorsInitial, ManipulatorsScene, Palm
-from pdm_design.sim.manipulators import phases as ph
-from pdm_design.sim.manipulators import (
+from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators.model import (
+    Body,
+    ManipulatorsDesign,
+    ManipulatorsInitial,
+    ManipulatorsScene,
+    Palm,
+)
+from pdm_design.scenes.manipulators.sim import phases as ph
+from pdm_design.scenes.manipulators.sim import (
     EVENT_KINDS,
     FAILURE_KINDS,
     handover_angle,
@@ -682,7 +688,7 @@ def test_plot_writes_a_png(tmp_path):
     offs = [offset(2, 0.1, -0.2)]
     result = simulate_manipulators(scene, design, stages=4, offsets=offs, record_trajectory=True)
     assert len(result.trajectory["time"]) == len(result.trajectory["x"]) > 100
-    from pdm_design.sim.manipulators.plot import plot_manipulators
+    from pdm_design.scenes.manipulators.sim.plot import plot_manipulators
 
     out = plot_manipulators(result, scene, design, tmp_path / "run.png", offsets=offs)
     assert Path(out).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

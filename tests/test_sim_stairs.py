@@ -1,6 +1,6 @@
 """The stairs event simulator against independent numbers.
 
-Expected values come from the closed forms in pdm_design.physics.stairs, from formulas derived
+Expected values come from the closed forms in pdm_design.scenes.stairs.physics, from formulas derived
 by hand in this file (written out next to each test), or from brute-force sampling of the
 ballistic path (an independent way to find contacts) - never from the simulator's own output.
 """
@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from pdm_design.analysis import analyse
-from pdm_design.physics import stairs as phys
-from pdm_design.scenes import Ball, StairsDesign, StairsInitial, StairsScene
-from pdm_design.sim.stairs import (
+from pdm_design.scenes.stairs.model import physics as phys
+from pdm_design.scenes.stairs.model import Ball, StairsDesign, StairsInitial, StairsScene
+from pdm_design.scenes.stairs.sim import (
     bounce_sequence,
     impact_map,
     simulate_stairs,
@@ -632,7 +632,7 @@ def test_vectorised_failures_agree_with_sampling_and_the_event_simulator(frictio
 # --- plots ----------------------------------------------------------------------------------------
 
 def test_plot_writes_a_png(tmp_path):
-    from pdm_design.sim.stairs.plot import plot_stairs_run
+    from pdm_design.scenes.stairs.sim.plot import plot_stairs_run
 
     result = simulate_stairs(*paper2(), stages=5, record_trajectory=True)
     assert len(result.trajectory["time"]) > 100

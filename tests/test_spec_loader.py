@@ -14,15 +14,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pdm_design.errors import SpecError
-from pdm_design.scenes import (
-    Ball,
-    Body,
-    ManipulatorsInitial,
-    ManipulatorsScene,
-    Palm,
-    StairsInitial,
-    StairsScene,
-)
+from pdm_design.scenes.stairs.model import Ball, StairsInitial, StairsScene
+from pdm_design.scenes.manipulators.model import Body, ManipulatorsInitial, ManipulatorsScene, Palm
 from pdm_design.spec import Bounds, Spec, load_spec, parse_spec
 
 PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
@@ -228,7 +221,7 @@ BAD_VALUES = [
     ("manipulators", ("scene", "body"), 3, "scene.body", "a table"),
     ("manipulators", ("name",), 7, "name", "a string"),
     ("manipulators", ("scene", "kind"), "conveyor", "scene.kind",
-     "one of: stairs, manipulators"),
+     "one of the installed scenes: manipulators, stairs"),
     ("stairs", ("scene", "friction"), -0.5, "scene.friction", "a number >= 0"),
 ]
 

@@ -14,10 +14,10 @@ from pathlib import Path
 import pytest
 
 from pdm_design.formulation.common import DEFAULT_BACKOFF
-from pdm_design.physics import stairs as phys
+from pdm_design.scenes.stairs.model import physics as phys
 from pdm_design.solve import optimize
 from pdm_design.spec import load_spec
-from pdm_design.tolerances.stairs import simulate_build
+from pdm_design.scenes.stairs.tolerances import simulate_build
 from pdm_design.verify.tolerance import corner_patterns
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -206,7 +206,7 @@ def test_the_rolling_row_is_the_simulators_test():
     """first_impact_friction's demand is the simulator's own: at mu just above the closed-form
     demand the first impact rolls, just below it slides (physics.stairs.rolling_impulse_ratio
     against sim.stairs.impact_map)."""
-    from pdm_design.sim.stairs.maps import impact_map
+    from pdm_design.scenes.stairs.sim.maps import impact_map
 
     r, m, J, eps, v0, spin, vy = 0.5, 0.283, 0.035, 0.8, 3.0, 0.5, -math.sqrt(2 * 9.81)
     demand = phys.rolling_impulse_ratio(v0, spin, vy, eps, radius=r, mass=m, inertia=J)

@@ -18,8 +18,8 @@ from scipy.optimize import minimize_scalar
 from pdm_design.analysis import analyse
 from pdm_design.api import evaluate
 from pdm_design.formulation import formulate
-from pdm_design.physics.stairs import corner_gaps
-from pdm_design.sim.stairs import simulate_stairs
+from pdm_design.scenes.stairs.physics import corner_gaps
+from pdm_design.scenes.stairs.sim import simulate_stairs
 from pdm_design.solve import optimize
 from pdm_design.solve.words import hint
 from pdm_design.spec import load_spec, parse_spec

@@ -11,12 +11,12 @@ from click.testing import CliRunner
 from scipy.special import ndtr
 
 from pdm_design.cli import main
-from pdm_design.sim.manipulators import simulate_manipulators
-from pdm_design.sim.manipulators.geometry import Parts
+from pdm_design.scenes.manipulators.sim import simulate_manipulators
+from pdm_design.scenes.manipulators.sim.geometry import Parts
 from pdm_design.spec import load_spec
 from pdm_design.tolerances import Tolerance, Tolerances, run_builds
 from pdm_design.tolerances.draw import draw
-from pdm_design.tolerances.manipulators import meets_another_palm, simulate_build
+from pdm_design.scenes.manipulators.tolerances import meets_another_palm, simulate_build
 from pdm_design.tolerances.yield_ import wilson, yield_of
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
@@ -172,8 +172,8 @@ def test_the_maps_parked_palm_clearance_is_the_analysis_margin():
     # the clearance to the palms parked behind is analysis' parked_palms margin (its own loop
     # over the palms behind); a bound (the palm staying behind the object) stands in for it
     # only where it cannot be the build's smallest margin (here: smallest so far 0.6)
-    from pdm_design.analysis.manipulators import analyse_manipulators
-    from pdm_design.tolerances.manipulators import _Builds
+    from pdm_design.scenes.manipulators.analysis import analyse_manipulators
+    from pdm_design.scenes.manipulators.tolerances import _Builds
 
     spec = load_spec(PROBLEMS / "manipulators_long_row.toml")
     scene, design = spec.scene, spec.design_at()
@@ -315,7 +315,7 @@ def test_check_min_yield(tmp_path):
 
 def test_absurd_tolerances_fail_by_name_never_nan(paper):
     # +-100 m pivots and +-5 m links: every build fails, each by a named failure
-    from pdm_design.sim.manipulators import FAILURE_KINDS
+    from pdm_design.scenes.manipulators.sim import FAILURE_KINDS
 
     scene, design = paper
     tols = Tolerances((Tolerance("pivot_x", "each", 100.0), Tolerance("link_length", "each",

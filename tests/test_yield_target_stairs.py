@@ -13,7 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from pdm_design.cli import main
-from pdm_design.formulation.stairs.statistical import linearised_yield
+from pdm_design.scenes.stairs.formulation.statistical import linearised_yield
 from pdm_design.solve.yield_allocation import allocate_for_yield, with_scale
 from pdm_design.spec import load_spec
 

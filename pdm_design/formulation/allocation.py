@@ -132,14 +132,14 @@ def half_widths(spec, s) -> dict[str, object]:
 def values_at(spec, s: float) -> list[dict]:
     """The tolerance list of an answer with scale s: one entry per toleranced quantity, the
     allocated first ({quantity, applies_to, value (SI), unit, allocated})."""
-    from ..tolerances.model import QUANTITIES
+    from ..tolerances.model import quantities_of
 
     coeff = coefficients(spec)
     entries = []
     for tol in sorted(spec.tolerances, key=lambda t: not t.allocate):
         value = s * coeff[tol.quantity] if tol.allocate else float(tol.value)
         entries.append({"quantity": tol.quantity, "applies_to": tol.applies_to,
-                        "value": float(value), "unit": QUANTITIES[spec.kind][tol.quantity].unit,
+                        "value": float(value), "unit": quantities_of(spec.kind)[tol.quantity].unit,
                         "allocated": tol.allocate})
     return entries
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import threading
 import time
 from dataclasses import replace
@@ -11,9 +10,8 @@ import casadi as ca
 
 from ..analysis.result import required
 from ..lru import Bounded
-from . import manipulators, parametric, stairs
-from .manipulators import offsets as manipulator_offsets
-from .stairs import errors as stairs_errors
+from ..plugin import of
+from . import parametric
 from .common import Formulation, assemble, spec_key
 
 _CACHE: Bounded = Bounded()  # the specs formulated last
@@ -81,16 +79,9 @@ def _formulated(spec, key: str, chosen: tuple[str, ...], cache: bool, full: bool
     if chosen:
         symbols = ca.SX.sym("scene", len(chosen))
         spec, parameters = parametric.symbolic_spec(spec, chosen, symbols), (chosen, symbols)
-    if spec.kind == "stairs":
-        model, bounds, closed_forms = stairs.build(spec)
-        # the explicit-offset scenario grows with the row: built when first asked for
-        source = functools.partial(stairs_errors.scenario, spec, model, closed_forms)
-    else:
-        model, bounds, closed_forms = manipulators.build(
-            spec, parameters=None if parameters is None else parameters[1])
-        # the manipulators' stage maps also stream samples through the row: solve/check.py
-        source = manipulator_offsets.Stages(spec, model, closed_forms,
-                                            None if parameters is None else parameters[1])
+    # the scene's rows, and the source of its explicit-offset scenarios (solve/check.py)
+    model, bounds, closed_forms, source = of(spec).formulate(
+        spec, None if parameters is None else parameters[1])
     model = replace(model, scenario=source)
     form = assemble(spec, model, key=key, bounds=bounds, defer=not full, parameters=parameters)
     form = replace(form, build_time=time.perf_counter() - start)
@@ -106,7 +97,8 @@ def min_margin_term(kind: str, margins: dict[str, float],
     closed-form analysis'): the smallest of the margins the objective covers, each less the
     requirement the NLP holds it to (`analysis.result.required`; the plain smallest margin when
     nothing is required). None when the design has none of them."""
-    module = manipulators if kind == "manipulators" else stairs
-    covered = [n for n in margins if n not in module.OUTSIDE_MIN_MARGIN]
+    from ..plugin import scene_kind
+
+    covered = [n for n in margins if n not in scene_kind(kind).outside_min_margin]
     need = {n: required(n, requirements) for n in covered}
     return min((margins[n] - need[n] for n in covered), default=None)

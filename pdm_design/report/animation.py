@@ -86,7 +86,7 @@ def _stairs_pitch(steps):
 
 
 def _manipulators(spec, result) -> dict:
-    from ..sim.manipulators.geometry import build_row
+    from ..scenes.manipulators.sim.geometry import build_row
 
     design = spec.design_at()
     stages = max(len(result.stages), max((e.stage for e in result.events), default=1), 1)

@@ -8,7 +8,8 @@ in it is []. The analysis leaves such quantities out; this layer puts them back 
 from __future__ import annotations
 
 from ..api import DesignOutcome
-from ..scenes import ManipulatorsDesign, StairsDesign
+from ..scenes.manipulators.model import ManipulatorsDesign
+from ..scenes.stairs.model import StairsDesign
 from ..spec.model import OBJECTIVES
 from .jsonable import jsonable
 

@@ -8,11 +8,11 @@ def plot_simulation(spec, design, result, path, *, offsets=(), stages=None) -> N
     offsets and stages must be those the run used (they place the mechanisms)."""
     title = f"{spec.name or spec.source}: {'completed' if result.outcome.completed else 'failed'}"
     if spec.kind == "stairs":
-        from ..sim.stairs.plot import plot_stairs_run
+        from ..scenes.stairs.sim.plot import plot_stairs_run
 
         plot_stairs_run(result, path, title=title)
     else:
-        from ..sim.manipulators.plot import plot_manipulators
+        from ..scenes.manipulators.sim.plot import plot_manipulators
 
         plot_manipulators(result, spec.scene, design, path, offsets=offsets, stages=stages,
                           title=title)

@@ -124,11 +124,11 @@ def allocation_rows(kind: str, entries) -> list[str]:
     """The allocated tolerance table in build units (mm, degrees, g, %), with what limits each
     (optimize's `tolerances`, docs/optimizer.md section 4a)."""
     from ..solve.binding import SHARED, in_words
-    from ..tolerances.model import QUANTITIES
+    from ..tolerances.model import quantities_of
 
     rows = []
     for e in entries:
-        q = QUANTITIES[kind][e["quantity"]]
+        q = quantities_of(kind)[e["quantity"]]
         value, unit = e["value"] * q.build_factor, q.build_unit
         if unit == "1":  # a ratio (friction): in per cent of itself is no build unit; plain
             shown = f"+-{value:.4g}"

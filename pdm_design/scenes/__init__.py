@@ -1,21 +1,6 @@
-"""Scenes: frozen, self-validating descriptions of what the designer does not choose,
-and design points (what the designer chooses)."""
+"""Scenes: one package per kind of scene (a device and the object it moves), each behind the
+scene interface (pdm_design.plugin.Scene) and registered as an entry point of the group
+`pdm_design.scenes`; `common` holds the typed building blocks every scene's dataclasses use.
 
-from .manipulators import (
-    Body,
-    Links,
-    ManipulatorsDesign,
-    ManipulatorsInitial,
-    ManipulatorsScene,
-    Palm,
-    Pivots,
-)
-from .stairs import Ball, StairsDesign, StairsInitial, StairsScene
-
-Scene = StairsScene | ManipulatorsScene
-Design = StairsDesign | ManipulatorsDesign
-
-__all__ = [
-    "Ball", "Body", "Design", "ManipulatorsDesign", "ManipulatorsInitial", "ManipulatorsScene",
-    "Links", "Palm", "Pivots", "Scene", "StairsDesign", "StairsInitial", "StairsScene",
-]
+Nothing here imports a scene package: a command imports the one its spec names.
+"""

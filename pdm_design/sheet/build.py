@@ -27,9 +27,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import PdmError, SpecError
-from ..physics import manipulators as phys
+from ..scenes.manipulators import physics as phys
 from ..spec import load_spec
-from ..spec.model import MAX_OPTIMISED_BOUNCES, Bounds, Spec
+from ..plugin import of
+from ..spec.model import Bounds, Spec
 from ..status import Status
 
 JSON_SCHEMA_PREFIX = "pdm-design/optimize/"
@@ -304,9 +305,10 @@ def _tolerance(spec: Spec, tol: dict | None, wanted: bool) -> tuple[dict | None,
         return {a: float(tol[a]) for a in axes}, "robust tolerance of the optimised design"
     if not wanted:
         return None, "tolerance not computed (--no-tolerance)"
-    if spec.kind == "stairs" and spec.verification.stages > MAX_OPTIMISED_BOUNCES:
-        return None, (f"tolerance not computed: its NLP has rows for every bounce, and "
-                      f"{spec.verification.stages} is more than {MAX_OPTIMISED_BOUNCES}")
+    most, why = of(spec).stage_limit(True)
+    if spec.verification.stages > most:
+        return None, (f"tolerance not computed: {spec.verification.stages} stages is more "
+                      f"than {most} {why}")
     asked, drift = _orbit_design(spec)
     asked = dataclasses.replace(asked, objective={"max_offset_tolerance": 1.0})
     try:
@@ -424,7 +426,7 @@ def _manipulators(spec, analysis, tol, count):
 
 
 def _stairs(spec, analysis, tol, count):
-    from ..sim.stairs import stairs_geometry
+    from ..scenes.stairs.sim import stairs_geometry
 
     geo = stairs_geometry(spec.scene, spec.design_at())
     tr, tt = (tol["rise"], tol["tread"]) if tol else (None, None)

@@ -60,11 +60,11 @@ def draw(sheet: BuildSheet, first: int = 1, last: int | None = None, *, notes: b
     labels = Labels()
     detail = len(items) <= PAGE_ITEMS  # a longer view: the PDF's pages carry the dimensions
     if sheet.kind == "manipulators":
-        from .draw_manipulators import draw_manipulators
+        from ..scenes.manipulators.drawing import draw_manipulators
 
         draw_manipulators(ax, labels, sheet, items, detail)
     else:
-        from .draw_stairs import draw_stairs
+        from ..scenes.stairs.drawing import draw_stairs
 
         draw_stairs(ax, labels, sheet, items, detail)
     notes_top = _layout(figure, ax, len(lines), bool(sheet.failures))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..spec.model import MAX_MANIPULATOR_STAGES, MAX_OPTIMISED_BOUNCES
+from ..plugin import of
 from .build import MARKDOWN_ROWS, BuildSheet
 
 def sheet_csv(sheet: BuildSheet) -> str:
@@ -99,7 +99,7 @@ def tolerance_limit(sheet: BuildSheet) -> str:
     unit_word = "manipulators" if sheet.kind == "manipulators" else "steps"
     # the most stages a tolerance is solved for: stairs' NLP has rows for every bounce; the
     # simulator keeps every manipulator's record
-    most = MAX_OPTIMISED_BOUNCES if sheet.kind == "stairs" else MAX_MANIPULATOR_STAGES
+    most = of(sheet.spec).stage_limit(True)[0]
     how = (f"For a tolerance on all {count}, set `verification.stages = {count}` in the spec "
            "and make the sheet again." if count <= most else
            f"A tolerance is solved for at most {most} {unit_word} (`verification.stages` = "

@@ -126,7 +126,7 @@ def _streamed_check(form, x, p, tau, samples: int, seed: int) -> dict:
 def _parked_reach(form, x) -> int:
     """The parked palms that can reach the object at design x (formulation.manipulators.
     parked_rows with the design's values for bounds): those further back never can."""
-    from ..formulation.manipulators import parked_rows
+    from ..scenes.manipulators.formulation import parked_rows
 
     stages = form.scenario_source
     values = form.design_values(x)

@@ -412,9 +412,9 @@ def _solve_starts(form, options, solver, x_starts, p, stack):
 def _check_requirements(spec, requirements: dict) -> None:
     """The checks a spec's [requirements] table gets (docs/spec.md, section 7): a misspelt name
     would otherwise hold nothing, silently."""
-    from ..spec.model import MANIPULATOR_MARGINS, STAIRS_MARGINS
+    from ..plugin import of
 
-    known = MANIPULATOR_MARGINS if spec.kind == "manipulators" else STAIRS_MARGINS
+    known = of(spec).margins
     for name, value in requirements.items():
         if name not in known:
             raise ValueError(f"requirements: {name!r} is not a margin of a {spec.kind} spec "

@@ -50,9 +50,9 @@ def linearised_yield_function(scene):
     """The scene's linearised yield of a fixed design, (scene, design, tolerances, stages) ->
     dict with "yield": the stairs' or the manipulators' statistical.linearised_yield."""
     if scene.kind == "stairs":
-        from ..formulation.stairs.statistical import linearised_yield
+        from ..scenes.stairs.formulation.statistical import linearised_yield
     else:
-        from ..formulation.manipulators.statistical import linearised_yield
+        from ..scenes.manipulators.formulation.statistical import linearised_yield
     return linearised_yield
 
 
@@ -127,14 +127,14 @@ def _rows_placed(scene, design, tolerances, stages):
     import numpy as np
 
     if scene.kind == "stairs":
-        from ..formulation.stairs import statistical as st
+        from ..scenes.stairs.formulation import statistical as st
 
         g, sd, names = st.row_reliability(scene, design, tolerances, stages)
         chain = st.StairsChain(scene)
         sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1)
         return (g, sd, names, np.ones(len(names)), np.repeat(np.arange(1, stages + 1), sizes),
                 ("bounce", "bounces", None))
-    from ..formulation.manipulators.statistical import Chain, counted, row_reliability
+    from ..scenes.manipulators.formulation.statistical import Chain, counted, row_reliability
 
     g, sd, names = row_reliability(scene, design, tolerances, stages)
     chain = Chain(scene)

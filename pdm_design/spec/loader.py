@@ -24,22 +24,16 @@ from pydantic import Field, Strict, TypeAdapter
 
 from ..accuracy import Accuracy, AccuracyError, accuracy
 from ..errors import SpecError, did_you_mean
-from ..scenes import ManipulatorsDesign, ManipulatorsScene, StairsDesign, StairsScene
+from .. import plugin
 from ..scenes.common import CONFIG, is_number
 from .model import (
-    MANIPULATOR_MARGINS,
-    MAX_MANIPULATOR_STAGES,
-    MAX_OPTIMISED_BOUNCES,
-    MAX_OPTIMISED_MANIPULATORS,
     OBJECTIVES,
-    STAIRS_MARGINS,
     Bounds,
     Expectations,
     Spec,
     Verification,
     Weight,
 )
-from .start import unreachable_start
 
 MAX_FILE_BYTES = 8 * 2**20
 """Larger files are refused unread: no spec needs megabytes."""
@@ -52,19 +46,19 @@ RequiredMargin = Annotated[float, Strict(), Field(ge=-1, le=1)]
 
 
 class _Kind(NamedTuple):
+    """What the loader asks of the spec's scene (pdm_design.plugin.Scene)."""
+
     scene: type
     design: type
     margins: tuple[str, ...]
     verification_hints: dict[str, str]  # verification keys this kind does not take, and why
+    plugin: plugin.Scene
 
+    @classmethod
+    def of(cls, found: plugin.Scene) -> _Kind:
+        return cls(found.scene_class(), found.design_class(), found.margins,
+                   found.verification_hints, found)
 
-KINDS = {
-    "stairs": _Kind(StairsScene, StairsDesign, STAIRS_MARGINS,
-                    {"offsets": "offsets are for manipulators scenes; stairs take step_errors"}),
-    "manipulators": _Kind(ManipulatorsScene, ManipulatorsDesign, MANIPULATOR_MARGINS,
-                          {"step_errors": "step_errors are for stairs scenes; "
-                                          "manipulators take offsets"}),
-}
 _SCENE_HINTS = {"initial": "initial conditions go in the top-level [initial] table"}
 _WEIGHT = TypeAdapter(Weight, config=CONFIG)
 _REQUIRED_MARGIN = TypeAdapter(RequiredMargin, config=CONFIG)
@@ -158,19 +152,18 @@ def _parse(data: Any, source: str) -> Spec:
     design = _design(_table(data, "design", required=True), kind.design)
     verification = _verification(_table(data, "verification"), kind)
     _check_stages(verification, kind, design)
-    if scene.kind == "manipulators":  # a start below palm 1 whatever the design (spec/start.py)
-        problem = unreachable_start(scene.initial.position[1], design)
-        if problem:
-            raise _Invalid(*problem)
+    problem = kind.plugin.check_spec(scene, design)
+    if problem:
+        raise _Invalid(*problem)
     expect_table = _table(data, "expect")
     _check_fields(expect_table, Expectations, "expect")
-    tolerances = _tolerances(_table(data, "tolerances"), kind.scene.kind)
+    tolerances = _tolerances(_table(data, "tolerances"), kind.plugin)
     if "min_yield" in expect_table and not tolerances:
         raise _Invalid("expect.min_yield", "a [tolerances] table to draw the builds from",
                        "no [tolerances]")
     objective = _named_numbers(data, "objective", OBJECTIVES, _WEIGHT)
-    _check_max_yield(objective, scene, tolerances)
-    _check_yield_target(kind.scene.kind, tolerances)
+    _check_max_yield(objective, kind.plugin, scene, tolerances)
+    _check_yield_target(tolerances)
     return Spec(
         source=source,
         scene=scene,
@@ -203,20 +196,10 @@ def _check_stages(verification: Verification, kind: _Kind, design: dict) -> None
     """What the number of stages allows: a run that fits in memory, an NLP IPOPT can solve,
     and offsets or step errors on stages that are run."""
     stages = verification.stages
-    if kind.scene is ManipulatorsScene and stages > MAX_MANIPULATOR_STAGES:
-        raise _Invalid("verification.stages", f"an integer <= {MAX_MANIPULATOR_STAGES} for a row "
-                       "of manipulators (the simulator keeps every stage's record)", str(stages))
-    if kind.scene is ManipulatorsScene and stages > MAX_OPTIMISED_MANIPULATORS and any(
-            isinstance(v, Bounds) for v in design.values()):
-        raise _Invalid("verification.stages", f"an integer <= {MAX_OPTIMISED_MANIPULATORS} "
-                       "when the design has free variables (the optimizer's verification "
-                       "simulates the row at every corner of the box; a fixed design may be "
-                       f"run for up to {MAX_MANIPULATOR_STAGES})", str(stages))
-    if kind.scene is StairsScene and stages > MAX_OPTIMISED_BOUNCES and any(
-            isinstance(v, Bounds) for v in design.values()):
-        raise _Invalid("verification.stages", f"an integer <= {MAX_OPTIMISED_BOUNCES} when the "
-                       "design has free variables (the NLP has rows for every bounce; a fixed "
-                       "design may be simulated for up to 10 000 000)", str(stages))
+    free = any(isinstance(v, Bounds) for v in design.values())
+    limit, why = kind.plugin.stage_limit(free)
+    if stages > limit:
+        raise _Invalid("verification.stages", f"an integer <= {limit} {why}", str(stages))
     for key, items, attribute in (("offsets", verification.offsets, "manipulator"),
                                   ("step_errors", verification.step_errors, "step")):
         for i, item in enumerate(items):
@@ -258,11 +241,16 @@ def _table(data: dict, key: str, *, required: bool = False) -> dict:
 def _kind(scene: dict) -> _Kind:
     kind = scene.get("kind", _MISSING)
     if kind is _MISSING:
-        raise _Invalid("scene.kind", f"one of: {', '.join(KINDS)}", "nothing")
-    if not isinstance(kind, str) or kind not in KINDS:
-        raise _Invalid("scene.kind", f"one of: {', '.join(KINDS)}",
-                       _show(kind) + did_you_mean(kind, KINDS))
-    return KINDS[kind]
+        raise _Invalid("scene.kind", f"one of the installed scenes: "
+                       f"{', '.join(plugin.kinds())}", "nothing")
+    installed = plugin.kinds()
+    if not isinstance(kind, str) or kind not in installed:
+        raise _Invalid("scene.kind", f"one of the installed scenes: {', '.join(installed)}",
+                       _show(kind) + did_you_mean(kind, installed))
+    try:
+        return _Kind.of(plugin.scene_kind(kind))
+    except plugin.SceneUnavailable as exc:
+        raise _Invalid("scene.kind", "an installed scene that loads", str(exc)) from None
 
 
 def _scene(data: dict, kind: _Kind):
@@ -312,22 +300,21 @@ _STRICT_BOOL = TypeAdapter(Annotated[bool, Strict()], config=CONFIG)
 _FRACTION = TypeAdapter(Annotated[float, Strict(), Field(gt=0, lt=1)], config=CONFIG)
 
 
-def _check_max_yield(objective: dict, scene, tolerances) -> None:
-    """objective.max_yield needs tolerances that all have values, and on manipulators the
-    paper's plain mechanism (its linearised yield does not model links or pivot friction)."""
+def _check_max_yield(objective: dict, found: plugin.Scene, scene, tolerances) -> None:
+    """objective.max_yield needs tolerances that all have values, and a scene whose linearised
+    yield models it (Scene.max_yield_refusal)."""
     if not objective.get("max_yield"):
         return
-    if scene.kind == "manipulators" and not scene.plain_mechanism:
-        raise _Invalid("objective.max_yield", "massless links and frictionless pivots (the "
-                       "linearised yield is the paper's device's; `pdm-design yield` judges "
-                       "a design on real links and pivots)", "[scene.links] or [scene.pivots]")
+    refusal = found.max_yield_refusal(scene)
+    if refusal:
+        raise _Invalid("objective.max_yield", *refusal)
     if not tolerances or any(t.value is None for t in tolerances):
         raise _Invalid("objective.max_yield", "a [tolerances] table whose every quantity has "
                        "a value (the yield is at given tolerances)",
                        "no [tolerances]" if not tolerances else "a tolerance to allocate")
 
 
-def _check_yield_target(kind: str, tolerances) -> None:
+def _check_yield_target(tolerances) -> None:
     """tolerances.yield_target sizes allocated tolerances by the scene's linearised yield: it
     needs a quantity with allocate = true."""
     if tolerances.yield_target is None:
@@ -337,16 +324,14 @@ def _check_yield_target(kind: str, tolerances) -> None:
                        "tolerances sized for the target)", "no tolerance to allocate")
 
 
-def _tolerances(table: dict, kind: str):
+def _tolerances(table: dict, scene: plugin.Scene):
     """[tolerances]: settings (distribution, builds, seed, confirm) and one table per quantity
-    of the scene kind (tolerances.model.QUANTITIES) with value = +-t (SI) or allocate = true
-    (and a weight), applies_to ("each" or "lot") and distribution ("normal" or "uniform")."""
-    from ..tolerances.model import DISTRIBUTIONS, QUANTITIES, Tolerance, Tolerances
+    of the scene (Scene.quantities) with value = +-t (SI) or allocate = true (and a weight),
+    applies_to ("each" or "lot") and distribution ("normal" or "uniform")."""
+    from ..tolerances.model import DISTRIBUTIONS, Tolerance, Tolerances
 
-    quantities = QUANTITIES[kind]
-    _check_keys(table, tuple(TOLERANCE_SETTINGS) + tuple(quantities), "tolerances",
-                {q: f"not a {kind} quantity" for q in
-                 set().union(*map(set, QUANTITIES.values())) - set(quantities)})
+    quantities = scene.quantities()
+    _check_keys(table, tuple(TOLERANCE_SETTINGS) + tuple(quantities), "tolerances")
     default = _choice(table, "distribution", DISTRIBUTIONS, "tolerances", "normal")
     settings = {key: _setting(table, key, adapter) for key, adapter in
                 (("builds", _COUNT), ("seed", _SEED), ("confirm", _CONFIRM),

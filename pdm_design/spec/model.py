@@ -3,26 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Annotated
+from typing import Annotated, Any
 
 from pydantic import Field, PlainValidator, Strict
 from pydantic.dataclasses import dataclass as checked
 
 from ..accuracy import ACCURACY_PRESETS, Accuracy, accuracy
-from ..scenes import ManipulatorsDesign, Scene, StairsDesign
 from ..scenes.common import CONFIG, LARGEST, Number
 from ..tolerances.model import Tolerances
 
 Count = Annotated[int, Strict(), Field(ge=1, le=10_000_000)]
-# A manipulator run keeps every stage's record and event (about 15 kB a stage); a stairs NLP has
-# rows for every bounce, and IPOPT needs ever more iterations for them (23 at 100 bounces, 327 at
-# 300, one start), so a stairs design with free variables is optimised over at most 200.
-MAX_MANIPULATOR_STAGES = 100_000
-MAX_OPTIMISED_BOUNCES = 200
-# An optimised row of manipulators is verified by the simulator at the nominal build and the
-# tolerance box's corners, and its box re-checked through every stage: 12 s at 10 000 stages
-# (results/bench_scale.md), so longer rows are evaluated as fixed designs only.
-MAX_OPTIMISED_MANIPULATORS = 10_000
 SampleCount = Annotated[int, Strict(), Field(ge=0, le=1_000_000)]
 # Weights beyond a million (or their ratios) only scale IPOPT's objective out of range.
 Weight = Annotated[float, Strict(), Field(ge=0, le=LARGEST)]
@@ -33,15 +23,6 @@ AccuracyField = Annotated[Accuracy, PlainValidator(accuracy)]
 
 OBJECTIVES = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence",
               "max_yield")
-
-MANIPULATOR_MARGINS = (
-    "landing", "over_the_top", "lift_off", "slip_carry", "tip_carry", "slip_impact", "tip_impact",
-    "first_over_the_top", "first_lift_off", "first_slip_impact", "first_tip_impact",
-    "parked_palms",
-)
-STAIRS_MARGINS = ("first_impact_friction", "nose_clearance", "first_nose_clearance",
-                  "riser_clearance")
-
 
 @checked(frozen=True, config=CONFIG)
 class Bounds:
@@ -131,7 +112,7 @@ class Spec:
     """
 
     source: str
-    scene: Scene
+    scene: Any  # the scene's own frozen dataclass (plugin.Scene.scene_class)
     design: dict[str, float | Bounds]
     objective: dict[str, float] = field(default_factory=dict)
     requirements: dict[str, float] = field(default_factory=dict)
@@ -153,7 +134,9 @@ class Spec:
 
     @property
     def design_class(self):
-        return StairsDesign if self.kind == "stairs" else ManipulatorsDesign
+        from ..plugin import of
+
+        return of(self).design_class()
 
     @property
     def free_variables(self) -> tuple[str, ...]:

@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SpecError
-from ..scenes import ManipulatorsDesign, ManipulatorsScene, StairsDesign, StairsScene
+from ..scenes.manipulators.model import ManipulatorsDesign, ManipulatorsScene
+from ..scenes.stairs.model import StairsDesign, StairsScene
 from ..scenes.common import is_number
 
 OPTION = "--sweep"

@@ -12,9 +12,10 @@ import csv
 import io
 import math
 
-from ..scenes import ManipulatorsDesign, StairsDesign
+from ..scenes.manipulators.model import ManipulatorsDesign
+from ..scenes.stairs.model import StairsDesign
 from ..scenes.common import is_number
-from ..spec.model import MANIPULATOR_MARGINS, STAIRS_MARGINS
+from ..plugin import scene_kind
 
 DESIGN = {"manipulators": ManipulatorsDesign.VARIABLES, "stairs": StairsDesign.VARIABLES}
 GEOMETRY = {"manipulators": ("pitch_x", "pitch_y", "palm_mass", "landing_offset"),
@@ -22,7 +23,6 @@ GEOMETRY = {"manipulators": ("pitch_x", "pitch_y", "palm_mass", "landing_offset"
 PERIODIC = {"manipulators": ("handover_speed", "landing_speed", "contraction", "drop_per_stage"),
             "stairs": ("impact_speed", "vertical_impact_speed", "horizontal_speed", "spin",
                        "flight_time", "drift_per_bounce")}
-MARGINS = {"manipulators": MANIPULATOR_MARGINS, "stairs": STAIRS_MARGINS}
 TOLERANCE_AXES = {"manipulators": ("dx", "dy"), "stairs": ("rise", "tread")}
 ERROR = "error"
 """Status of a grid point whose solve raised: retried by --resume."""
@@ -34,7 +34,7 @@ def columns(kind: str, sweep_columns: tuple[str, ...]) -> tuple[str, ...]:
         *sweep_columns, "status",
         *DESIGN[kind], *GEOMETRY[kind], *PERIODIC[kind],
         "objective", "tolerance", *(f"tolerance.{a}" for a in TOLERANCE_AXES[kind]),
-        "min_margin", "min_margin_name", *(f"margin.{m}" for m in MARGINS[kind]),
+        "min_margin", "min_margin_name", *(f"margin.{m}" for m in scene_kind(kind).margins),
         "verified", "verification", "solver_iterations", "reason",
     )
 
@@ -76,10 +76,10 @@ def outcome_cells(outcome, kind: str) -> dict[str, str]:
         # Ties within rounding (a frictionless launch is flight 1's own nose condition) go to the
         # first in the scene's list, so the column does not flicker from row to row.
         least = min(margins.values())
-        worst = next(n for n in (*MARGINS[kind], *margins)
+        worst = next(n for n in (*scene_kind(kind).margins, *margins)
                      if n in margins and margins[n] <= least + 1e-12)
         row["min_margin"], row["min_margin_name"] = margins[worst], worst
-    for name in MARGINS[kind]:
+    for name in scene_kind(kind).margins:
         row[f"margin.{name}"] = margins.get(name)
     verification = outcome.verification
     if verification is not None:
@@ -179,7 +179,7 @@ def markdown(kind: str, title: str, description: list[str], sweep_columns: tuple
             f"{c} = {_shown(rows[0].get(c, ''))}" for c in constant) + ".", ""]
     header = [*sweep_columns, "status", *varying]
     lines += _markdown_table(header, [[r.get(c, "") for c in header] for r in rows])
-    margin_columns = [f"margin.{m}" for m in MARGINS[kind]
+    margin_columns = [f"margin.{m}" for m in scene_kind(kind).margins
                       if any(r.get(f"margin.{m}", "") != "" for r in rows)]
     if margin_columns:
         lines += ["", "## Margins", "",

@@ -14,17 +14,17 @@ command   `pdm-design yield` (text, JSON, figures, `check`'s min_yield) and `sim
 
 from __future__ import annotations
 
-from .model import QUANTITIES, Tolerance, Tolerances
+from .model import Tolerance, Tolerances
 from .outcome import BuildOutcome
 
 
 def run_builds(scene, design, deviations: dict, stages: int) -> BuildOutcome:
     """The closed-form outcome of many builds of one design, for the scene's kind."""
     if scene.kind == "manipulators":
-        from .manipulators import run_builds as run
+        from ..scenes.manipulators.tolerances import run_builds as run
     else:
-        from .stairs import run_builds as run
+        from ..scenes.stairs.tolerances import run_builds as run
     return run(scene, design, deviations, stages)
 
 
-__all__ = ["QUANTITIES", "BuildOutcome", "Tolerance", "Tolerances", "run_builds"]
+__all__ = ["BuildOutcome", "Tolerance", "Tolerances", "run_builds"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 
 from ..errors import PdmError, SpecError
-from .model import QUANTITIES
+from .model import quantities_of
 from .yield_ import YieldResult, yield_of
 
 SHOWN_IN_TEXT = 5  # failing builds whose simulate command the text report prints
@@ -180,7 +180,7 @@ def yield_text(result: YieldResult, name: str) -> str:
         lines.append("failures: " + ", ".join(f"{k} {v}" for k, v in r.failures.items()))
     lines.append("tolerances (build units):")
     for t in r.tolerances:
-        q = QUANTITIES[r.kind][t["quantity"]]
+        q = quantities_of(r.kind)[t["quantity"]]
         size = f"+-{t['value'] * q.build_factor:.4g}" + (
             "" if q.build_unit == "1" else f" {q.build_unit}")  # dimensionless: no unit
         lines.append(f"  {t['quantity']:<14} {size:<16} {t['applies_to']:<5} {t['distribution']}")

@@ -11,7 +11,7 @@ Distributions, for the statistical analysis:
            of parts within +-t; not truncated;
   uniform  uniform in [-t, t].
 
-QUANTITIES lists, per scene kind, every quantity that may vary, with its SI unit, the unit a
+Each scene lists (Scene.quantities) every quantity that may vary, with its SI unit, the unit a
 build sheet shows it in (and the factor from SI to that unit), and how it may apply. A new
 quantity (the link and pivot parameters of the built device, say) is one more entry, added at
 the end of STREAM_ORDER so that earlier quantities keep their random streams.
@@ -45,41 +45,14 @@ class Quantity:
         return self.applies[0]
 
 
-def _q(name, unit, applies, what):
+def quantity(name, unit, applies, what) -> Quantity:
+    """A scene's toleranced quantity, with its workshop unit (units.py)."""
     build_unit, factor = WORKSHOP.get(unit, (unit, 1.0))  # units.py: one table for every layer
     return Quantity(name, unit, build_unit, factor, applies, what)
 
 
-_EACH_OR_LOT, _LOT = ("each", "lot"), ("lot",)
-QUANTITIES: dict[str, dict[str, Quantity]] = {
-    "manipulators": {q.name: q for q in (
-        _q("pivot_x", "m", _EACH_OR_LOT, "a pivot's place along the row"),
-        _q("pivot_y", "m", _EACH_OR_LOT, "a pivot's height (up)"),
-        _q("link_length", "m", _EACH_OR_LOT, "a manipulator's link length"),
-        _q("back_stop", "rad", _EACH_OR_LOT,
-           "a back stop's angle alpha (the palm rests at -alpha)"),
-        _q("palm_mass", "kg", _EACH_OR_LOT, "a palm's mass"),
-        _q("friction", "1", _LOT, "the object-palm friction coefficient"),
-        _q("object_mass", "kg", _LOT, "the object's mass"),
-        _q("object_width", "m", _LOT, "the object's width along the row"),
-        _q("feed_x", "m", _LOT, "where the object starts along the row"),
-        _q("feed_speed", "m/s", _LOT,
-           "the object's initial speed (along its initial velocity; +x if that is 0)"),
-        _q("link_mass", "kg", _EACH_OR_LOT,
-           "the mass of each of a manipulator's links (nominal: [scene.links] mass)"),
-        _q("pivot_friction", "N m", _EACH_OR_LOT,
-           "a manipulator's Coulomb pivot friction torque, its joints together (nominal: "
-           "[scene.pivots] friction_torque)"),
-    )},
-    "stairs": {q.name: q for q in (
-        _q("rise", "m", _EACH_OR_LOT, "a step's rise"),
-        _q("tread", "m", _EACH_OR_LOT, "a step's tread"),
-        _q("restitution", "1", _LOT, "the ball's coefficient of restitution"),
-        _q("friction", "1", _LOT, "the ball-step friction coefficient"),
-        _q("launch_speed", "m/s", _LOT, "the launch speed"),
-        _q("launch_x", "m", _LOT, "where the ball is launched along the stairs"),
-    )},
-}
+EACH_OR_LOT, LOT = ("each", "lot"), ("lot",)
+
 
 # One random stream per quantity name, in this fixed order (tolerances.draw): append only.
 STREAM_ORDER = ("pivot_x", "pivot_y", "link_length", "back_stop", "palm_mass", "friction",
@@ -127,7 +100,7 @@ class Tolerance:
                          self.distribution)
 
     def to_json(self, kind: str) -> dict:
-        q = QUANTITIES[kind][self.quantity]
+        q = quantities_of(kind)[self.quantity]
         return {"quantity": self.quantity, "applies_to": self.applies_to, "value": self.value,
                 "unit": q.unit, "distribution": self.distribution,
                 "allocate": self.allocate, "weight": self.weight}
@@ -169,3 +142,10 @@ def allocation_shares(tolerances) -> dict[str, float]:
     w_min = min(t.weight for t in allocated)
     return {t.quantity: w_min / t.weight for t in allocated}
 
+
+
+def quantities_of(kind: str) -> dict[str, Quantity]:
+    """The toleranced quantities of the scene `kind` (its Scene.quantities)."""
+    from ..plugin import scene_kind
+
+    return scene_kind(kind).quantities()

@@ -104,9 +104,9 @@ def simulate_one(scene, design, tolerances, seed, index, stages, *, accuracy="de
     """The event simulator on build `index` of a yield run with `seed` and `stages`."""
     deviations = one_build(tolerances, seed, index, stages)
     if scene.kind == "manipulators":  # takes 1-row arrays
-        from .manipulators import simulate_build
+        from ..scenes.manipulators.tolerances import simulate_build
     else:  # takes one build's values: a number for a lot, K for each step
-        from .stairs import simulate_build
+        from ..scenes.stairs.tolerances import simulate_build
 
         deviations = {q: d[0] for q, d in deviations.items()}
     return simulate_build(scene, design, deviations, stages, accuracy=accuracy,

@@ -11,8 +11,9 @@ import math
 
 from ..accuracy import accuracy as accuracy_preset
 from ..analysis import Analysis
-from ..physics import manipulators as phys
+from ..scenes.manipulators import physics as phys
 from ..sim.core import SimulationRefused
+from ..plugin import of
 from ..spec.model import Spec
 
 
@@ -22,17 +23,9 @@ def simulate_spec(spec: Spec, design, *, stages=None, offsets=None, step_errors=
     verification = spec.verification
     stages = verification.stages if stages is None else stages
     accuracy = accuracy_preset(accuracy or verification.accuracy)
-    if spec.kind == "stairs":
-        from ..sim.stairs import simulate_stairs
-
-        errors = verification.step_errors if step_errors is None else step_errors
-        return simulate_stairs(spec.scene, design, stages=stages, accuracy=accuracy,
-                               step_errors=errors, record_trajectory=record_trajectory)
-    from ..sim.manipulators import simulate_manipulators
-
-    offsets = verification.offsets if offsets is None else offsets
-    return simulate_manipulators(spec.scene, design, stages=stages, offsets=offsets,
-                                 accuracy=accuracy, record_trajectory=record_trajectory)
+    errors = offsets if offsets is not None else step_errors
+    return of(spec).simulate(spec, design, stages=stages, accuracy=accuracy, errors=errors,
+                             record_trajectory=record_trajectory)
 
 
 def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> dict:

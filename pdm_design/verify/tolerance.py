@@ -134,11 +134,11 @@ def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
     stages = spec.verification.stages
     accuracy = accuracy_preset(accuracy or spec.verification.accuracy)
     if spec.kind == "stairs":  # one build's values: K per step, a number for a lot
-        from ..tolerances.stairs import simulate_build as simulate_steps
+        from ..scenes.stairs.tolerances import simulate_build as simulate_steps
 
         built = {"rise": [e[0] for e in errors], "tread": [e[1] for e in errors], **deviations}
         return simulate_steps(spec.scene, design, built, stages, accuracy=accuracy)
-    from ..tolerances.manipulators import simulate_build
+    from ..scenes.manipulators.tolerances import simulate_build
 
     built = {"pivot_x": np.array([[e[0] for e in errors]]),
              "pivot_y": np.array([[e[1] for e in errors]])}

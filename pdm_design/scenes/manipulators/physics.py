@@ -1,0 +1,320 @@
+"""Closed forms of an object passed along a row of parallelogram manipulators (paper, 3.3).
+
+Frame: origin at the first pivot, x along the row, y up. A manipulator's angle theta is measured
+clockwise from the vertical; the palm stays horizontal and its top surface centre is at
+pivot + l (sin theta, cos theta). It rests on a back stop at theta = -alpha and hands the object
+over at theta = beta. Unit vectors: radial r = (sin th, cos th), tangent t = (cos th, -sin th).
+
+Derivations (docs/physics.md has them in full):
+* Plastic landing of the object (mass m) on the resting palm (mass M): the massless links carry
+  only radial impulse, so momentum along t at -alpha is kept by object + palm:
+      u = m / (m + M) * (V . t(-alpha)),   t(-alpha) = (cos a, sin a).
+* Carry with the object stuck: the palm translates on the circle like a point pendulum,
+      l theta'' = g sin theta,   v(theta)^2 = u^2 + 2 g l (cos a - cos theta).
+* Contact force on the stuck object: m (g cos th - v^2 / l) along r. Hence lift-off when
+  v^2 > g l cos th, friction/normal = tan th (slip when |tan th| > mu) and the force crosses the
+  object's base (h/2) tan th behind its centre (tipping when that leaves the support).
+* Handover at beta with speed s onto the next palm at -alpha: V . t(-alpha) = s cos(alpha + beta).
+  The paper's eq. 28 writes cos(beta - alpha): cos b cos a - sin b sin a is cos(a + b).
+  Fixed point of s'^2 = c s^2 + D with c = (m/(m+M))^2 cos^2(a+b), D = 2 g l (cos a - cos b):
+      s*^2 = D / (1 - c),   and ds'/ds = c at s*: the contraction factor.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ...physics.ops import asin, cos, fabs, fmax, fmin, sin, sqrt, tan
+
+
+def momentum_fraction(mass_ratio):
+    """m / (m + M) written with the mass ratio q = m / M: q / (1 + q)."""
+    return mass_ratio / (1.0 + mass_ratio)
+
+
+def landing_speed(vx, vy, alpha, mass_ratio):
+    """Speed u of object + palm just after a plastic landing at -alpha (paper eq. 21)."""
+    return momentum_fraction(mass_ratio) * (vx * cos(alpha) + vy * sin(alpha))
+
+
+def landing_impulse(vx, vy, alpha, mass_ratio):
+    """Impulse per object mass the palm gives the object at a plastic sticking landing: (px, py)."""
+    u = landing_speed(vx, vy, alpha, mass_ratio)
+    return u * cos(alpha) - vx, u * sin(alpha) - vy
+
+
+def cos_difference(a, b):
+    """cos a - cos b = 2 sin((a+b)/2) sin((b-a)/2), exact to rounding even for tiny angles."""
+    return 2.0 * sin(0.5 * (a + b)) * sin(0.5 * (b - a))
+
+
+def carry_speed_squared(u, alpha, theta, *, gravity, link_length, friction=0.0):
+    """v(theta)^2 on the carry arc after leaving -alpha at speed u (energy balance).
+
+    With links and pivot friction (carry_terms) gravity is the carry's effective gravity and
+    friction the Coulomb pivot torque per carried mass: its work over the swing from -alpha
+    takes 2 friction (theta + alpha) off v^2 (a monotone forward swing)."""
+    return (u**2 + 2.0 * gravity * link_length * cos_difference(alpha, theta)
+            - 2.0 * friction * (theta + alpha))
+
+
+def top_speed_squared_needed(alpha, *, gravity, link_length, friction=0.0):
+    """u^2 needed to carry the object from -alpha over the top: 2 g l (1 - cos a) without pivot
+    friction. With it the swing slows down until gravity's push beats the friction, at
+    sin th* = friction / (g l) past the top (friction_balance_angle), so the speed must stay
+    positive up to th*: u^2 > 2 g l (cos th* - cos a) + 2 friction (a + th*)."""
+    need = 4.0 * gravity * link_length * sin(0.5 * alpha) ** 2
+    if is_exact_zero(friction):
+        return need
+    star = friction_balance_angle(friction, gravity=gravity, link_length=link_length)
+    return (need - 4.0 * gravity * link_length * sin(0.5 * star) ** 2
+            + 2.0 * friction * (alpha + star))
+
+
+def friction_balance_angle(friction, *, gravity, link_length):
+    """th* past the top where the carry's gravity torque equals the pivot friction torque:
+    sin th* = friction / (g l) (clipped to pi/2: friction that gravity never beats)."""
+    return asin(fmin(friction / (gravity * link_length), 1.0))
+
+
+def contraction(alpha, beta, mass_ratio):
+    """Slope of the handover-speed map at its fixed point: (m/(m+M))^2 cos^2(alpha + beta)."""
+    return (momentum_fraction(mass_ratio) * cos(alpha + beta)) ** 2
+
+
+def energy_gain_squared(alpha, beta, *, gravity, link_length, friction=0.0):
+    """D = 2 g l (cos a - cos b) - 2 friction (a + b): what one carry adds to the squared
+    speed (carry_speed_squared)."""
+    return (2.0 * gravity * link_length * cos_difference(alpha, beta)
+            - 2.0 * friction * (alpha + beta))
+
+
+def contraction_complement(alpha, beta, mass_ratio):
+    """1 - c without cancellation: (1 - k cos x)(1 + k cos x), k = m/(m+M), x = a + b, using
+    1 - k cos x = 1/(1+q) + 2 k sin^2(x/2) (exact when k -> 1 and x -> 0)."""
+    k = momentum_fraction(mass_ratio)
+    x = alpha + beta
+    return (1.0 / (1.0 + mass_ratio) + 2.0 * k * sin(0.5 * x) ** 2) * (1.0 + k * cos(x))
+
+
+def handover_speed_squared(alpha, beta, mass_ratio, *, gravity, link_length, friction=0.0):
+    """Squared fixed-point handover speed s*^2 = D / (1 - c); not positive when beta <= alpha
+    (or when pivot friction takes more than gravity gives)."""
+    gain = energy_gain_squared(alpha, beta, gravity=gravity, link_length=link_length,
+                               friction=friction)
+    return gain / contraction_complement(alpha, beta, mass_ratio)
+
+
+def next_handover_speed(speed, alpha, beta, mass_ratio, *, gravity, link_length, friction=0.0):
+    """One step of the handover-speed map s -> sqrt(c s^2 + D) (nominal geometry, stuck carry)."""
+    c = contraction(alpha, beta, mass_ratio)
+    d = energy_gain_squared(alpha, beta, gravity=gravity, link_length=link_length,
+                            friction=friction)
+    return sqrt(c * speed**2 + d)
+
+
+def paper_handover_speed_squared(alpha, beta, mass_ratio, *, gravity, link_length):
+    """The paper's eq. 29/30 as printed, with cos(beta - alpha): kept only to show it is wrong."""
+    k = momentum_fraction(mass_ratio)
+    d = energy_gain_squared(alpha, beta, gravity=gravity, link_length=link_length)
+    return d / (1.0 - (k * cos(beta - alpha)) ** 2)
+
+
+def pitch(alpha, beta, link_length):
+    """(x, y) from one pivot to the next: l (sin a + sin b) along, l (cos a - cos b) down."""
+    return (
+        link_length * (sin(alpha) + sin(beta)),
+        link_length * cos_difference(alpha, beta),
+    )
+
+
+def palm_centre(pivot_x, pivot_y, theta, link_length):
+    """Centre of the palm's top surface at angle theta."""
+    return pivot_x + link_length * sin(theta), pivot_y + link_length * cos(theta)
+
+
+def lift_off_capacity(theta, *, gravity, link_length, along=None):
+    """g l cos theta: the squared speed below which the palm at theta still presses the stuck
+    object (the contact force m (g cos th - v^2 / l) r is a push only while v^2 < g l cos th).
+
+    along: A = l th'' - g sin th (carry_along), the object's tangential acceleration beyond
+    gravity's when links or pivot friction are modelled; the palm's force is then
+    m (A t + (g cos th - v^2 / l) r), whose normal part N / m = (g cos th - v^2/l) cos th -
+    A sin th is a push while v^2 < g l cos th - l A tan th. None: A = 0 (the paper's device)."""
+    held = gravity * link_length * cos(theta)
+    return held if along is None else held - link_length * along * tan(theta)
+
+
+def carry_force_point(theta, height, ratio=None):
+    """Where the contact force on the stuck object crosses its base, from the base's centre,
+    forward (+x) positive: friction / normal = tan th puts it (h / 2) tan th behind for th > 0
+    and ahead for th < 0 (ratio: friction / normal when it is not tan th, carry_force_ratio)."""
+    return -0.5 * height * (tan(theta) if ratio is None else ratio)
+
+
+def friction_demand(theta, ratio=None):
+    """Friction-to-normal force ratio needed to keep the object stuck at angle theta: |tan th|
+    (|ratio| when links or pivot friction make it speed-dependent: carry_force_ratio)."""
+    return fabs(tan(theta) if ratio is None else ratio)
+
+
+# ---------------------------------------------------------------- the mechanism as built
+# Palm (mass M) on a parallelogram of links whose inertia about their pivots is I (all links)
+# and whose weight acts at half their length (a link symmetric end to end), with a Coulomb
+# friction torque tau summed over the joints. Lagrange's equation of palm + links + stuck object
+# in theta (docs/physics.md, section 2.1):
+#     (m + M + J) l^2 th'' = (m + M + W) g l sin th - tau sgn(th'),  J = I / l^2, W = m_links / 2
+# so the carry is the paper's with an effective gravity g (m + M + W) / (m + M + J) and a friction
+# per carried mass tau / (m + M + J), and the landing's momentum fraction is m / (m + M + J).
+
+def links_inertia_mass(*, link_mass, link_length, link_inertia=None):
+    """J = I / l^2 (kg): the links' inertia about their pivots felt as a mass along the swing.
+    link_mass and link_inertia are of all links together; None: uniform rods, I = m l^2 / 3."""
+    return link_mass / 3.0 if link_inertia is None else link_inertia / link_length**2
+
+
+def carry_terms(mass_ratio, *, object_mass, gravity, link_length, link_mass=0.0,
+                link_inertia=None, friction_torque=0.0):
+    """(q_e, g_e, f) of the carry of the stuck object by palm + links:
+    q_e = m / (M + J) (the momentum fraction at a landing is q_e / (1 + q_e)),
+    g_e = g (m + M + W) / (m + M + J) (the carry's effective gravity, W = link_mass / 2) and
+    f = tau / (m + M + J) (the pivot friction torque per carried mass, m^2/s^2 per radian).
+    With no links and no friction these are q, g and 0 exactly (bit for bit)."""
+    q, m = mass_ratio, object_mass
+    j = links_inertia_mass(link_mass=link_mass, link_length=link_length,
+                           link_inertia=link_inertia)
+    if is_exact_zero(j) and is_exact_zero(link_mass):  # the same values, without 0 * symbol in an NLP
+        q_e, g_e = q, gravity
+    else:
+        q_e = q / (1.0 + q * (j / m))
+        g_e = gravity * (1.0 + q + q * (0.5 * link_mass / m)) / (1.0 + q + q * (j / m))
+    f = 0.0 if is_exact_zero(friction_torque) else (friction_torque / m) * momentum_fraction(q_e)
+    return q_e, g_e, f
+
+
+def palm_terms(mass_ratio, *, object_mass, gravity, link_length, link_mass=0.0,
+               link_inertia=None, friction_torque=0.0):
+    """(M_e, g_p, f_p) of the palm swinging alone: M_e = M + J (kg, the palm-plus-links mass felt
+    along the swing), g_p = g (M + W) / (M + J), f_p = tau / (M + J)."""
+    palm = object_mass / mass_ratio
+    j = links_inertia_mass(link_mass=link_mass, link_length=link_length,
+                           link_inertia=link_inertia)
+    felt = palm + j
+    return felt, gravity * (palm + 0.5 * link_mass) / felt, friction_torque / felt
+
+
+def carry_along(theta, *, gravity, carry_gravity, friction, link_length):
+    """A = l th'' - g sin th on a forward stuck carry: the object's tangential acceleration
+    beyond what gravity alone gives it, (g_e - g) sin th - f / l (zero on the paper's device;
+    f, carry_terms' friction, is a torque per carried mass: l^2 th'' = g_e l sin th - f)."""
+    return (carry_gravity - gravity) * sin(theta) - friction / link_length
+
+
+def carry_contact_force(theta, v2, *, gravity, link_length, along):
+    """(friction, normal) per object mass of the palm's force m (A t + (g cos th - v^2 / l) r)
+    on the stuck object moving at v (v2 = v^2): its parts along the palm (x) and across it,
+    A cos th + B sin th and B cos th - A sin th, B = g cos th - v^2 / l."""
+    radial = gravity * cos(theta) - v2 / link_length
+    return along * cos(theta) + radial * sin(theta), radial * cos(theta) - along * sin(theta)
+
+
+def carry_force_ratio(theta, v2, *, gravity, link_length, along):
+    """Friction / normal of the palm's force m (A t + (g cos th - v^2 / l) r) on the stuck object
+    moving at v (v2 = v^2): tan th + A / (cos th N / m), N / m = (g cos th - v^2 / l) cos th -
+    A sin th (the friction part A cos th + (g cos th - v^2 / l) sin th over N)."""
+    normal = (gravity * cos(theta) - v2 / link_length) * cos(theta) - along * sin(theta)
+    return tan(theta) + along / (cos(theta) * normal)
+
+
+def is_exact_zero(value) -> bool:
+    """A plain number that is exactly zero (a symbol never is)."""
+    return isinstance(value, (int, float)) and value == 0.0
+
+
+def parked_palm_clearance(n, *, alpha, theta_end, link_length, front_stop, pitch_x, pitch_y,
+                          offset_lo, offset_hi, reach, depth, shift=0.0):
+    """Clearance (m; >= 0: no contact) between the object carried on a palm from -alpha to
+    theta_end and the palm n places behind, parked at its front stop (docs/optimizer.md).
+
+    Relative to the carrying palm's pivot, the object's base centre is at (l sin th + o, l cos th)
+    (o: its offset on the palm, in [offset_lo, offset_hi]) and the parked palm's top centre at
+    (l sin f - n pitch_x, l cos f + n pitch_y) (f: the front stop), the relative move of the two
+    pivots at most `shift` on either axis. They touch inside the box |gap_x| < reach = (w + W)/2,
+    -depth < gap_y < 0 (depth = T + h). Along the carry l sin th increases, so the object
+    overlaps the parked palm along the row while lo < l sin th < hi (one interval). No contact
+    iff the parked palm stays ahead (lo >= l sin theta_end), or the object starts past it
+    (hi <= -l sin alpha), or the object is above the parked top wherever they overlap (on the
+    falling side, the overlap ends before |sin th| exceeds s_top, the sine where l cos th meets
+    the top; likewise on the rising side), or below its underside wherever they overlap (the
+    overlap stays outside |sin th| < s_low). Exact with shift = 0 and one offset; with ranges an
+    outer bound. Only sines, cosines and square roots under max and min: no asin, whose clipped
+    arguments had stalled IPOPT (4 of 8 starts at 500 iterations on a random spec).
+    """
+    l = link_length
+    base = l * sin(front_stop) - n * pitch_x
+    lo = base - reach - offset_hi - shift  # overlap along the row: lo < l sin th < hi
+    hi = base + reach - offset_lo + shift
+    top = l * cos(front_stop) + n * pitch_y + shift  # the object must stay at or above
+    low = top - 2.0 * shift - depth  # or at or below
+    s_top = _sine_of_height(top / l, lower=True)
+    s_low = _sine_of_height(low / l, lower=False)
+    ahead = lo - l * sin(theta_end)
+    behind = -l * sin(alpha) - hi
+    above = fmin(fmax(l * s_top - hi, l * (s_top - sin(theta_end))),
+                 fmax(lo + l * s_top, l * (s_top - sin(alpha))))
+    below = fmax(low - l, fmax(-l * s_low - hi, lo - l * s_low))
+    return fmax(fmax(ahead, behind), fmax(above, below))
+
+
+def _sine_of_height(ratio, *, lower):
+    """sin th >= 0 where cos th = ratio, ratio clipped to [0, 1] (cos th > 0 on a carry): a lower
+    (lower=True) or upper bound within 1e-6, with a finite slope at ratio 1 (no inf * 0 where
+    the clip's slope is 0 in an NLP's or a linearisation's derivatives)."""
+    c = fmin(fmax(ratio, 0.0), 1.0)
+    tiny = 1e-12
+    return sqrt(1.0 - c * c + tiny) - (sqrt(tiny) if lower else 0.0)
+
+
+# ---------------------------------------------------------------- viscous damping: integrated
+
+def damping_rate(effective_mass_ratio, *, object_mass, link_length, damping):
+    """delta = c / (l (m + M + J)) (m/s): viscous pivot damping c takes 2 delta v off v^2 per
+    radian of the carry (q_e: carry_terms' effective mass ratio)."""
+    if is_exact_zero(damping):
+        return 0.0
+    return (damping / (object_mass * link_length)) * momentum_fraction(effective_mass_ratio)
+
+
+def carry_steps(rtol, span=1.0):
+    """Fourth-order steps for an integrated carry over `span` rad whose relative error is at most
+    about rtol: the step h = 2 rtol^(1/4) (the error is C h^4 with C measured from 5e-5 to
+    0.03 on damped carries; results/bench_links.md; at least 4 steps)."""
+    return max(4, math.ceil(span / (2.0 * rtol**0.25)))
+
+
+def integrated_carry_speed_squared(u, alpha, theta, *, gravity, link_length, friction=0.0,
+                                   damping=0.0, steps=64, lowest=False):
+    """v(theta)^2 after leaving -alpha at speed u, by classical Runge-Kutta in the angle on
+    y = v^2:  dy/dth = 2 g l sin th - 2 friction - 2 damping sqrt(y)  (the energy balance of
+    carry_speed_squared with the viscous torque's work; damping = damping_rate). No closed form
+    exists with damping; with damping = 0 this is the closed form to the method's error. y is
+    clipped at 1e-200 inside the square root (a swing that stops has no further meaning; the
+    over-the-top condition looks at the smallest y). lowest=True: (y(theta), smallest y at the
+    steps). Works on floats, numpy arrays and CasADi symbols (a fixed number of steps)."""
+    gl2, f2 = 2.0 * gravity * link_length, 2.0 * friction
+    h = (theta + alpha) / steps
+
+    def slope(th, y):
+        # floored at 1e-200, not 0: a finite slope of the root where an NLP steps to y <= 0
+        return gl2 * sin(th) - f2 - 2.0 * damping * sqrt(fmax(y, 1e-200))
+
+    y, th, low = u * u, -alpha, u * u
+    for _ in range(steps):
+        k1 = slope(th, y)
+        k2 = slope(th + 0.5 * h, y + 0.5 * h * k1)
+        k3 = slope(th + 0.5 * h, y + 0.5 * h * k2)
+        k4 = slope(th + h, y + h * k3)
+        y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        th = th + h
+        low = fmin(low, y)
+    return (y, low) if lowest else y

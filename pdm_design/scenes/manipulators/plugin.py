@@ -1,0 +1,88 @@
+"""The manipulators scene behind the scene interface (pdm_design.plugin.Scene)."""
+
+from __future__ import annotations
+
+from ...plugin import Scene
+
+# A manipulator run keeps every stage's record and event (about 15 kB a stage).
+MAX_MANIPULATOR_STAGES = 100_000
+# An optimised row is verified by the simulator at the nominal build and the tolerance box's
+# corners, and its box re-checked through every stage: 12 s at 10 000 stages
+# (results/bench_scale.md), so longer rows are evaluated as fixed designs only.
+MAX_OPTIMISED_MANIPULATORS = 10_000
+MARGINS = (
+    "landing", "over_the_top", "lift_off", "slip_carry", "tip_carry", "slip_impact", "tip_impact",
+    "first_over_the_top", "first_lift_off", "first_slip_impact", "first_tip_impact",
+    "parked_palms",
+)
+
+
+class Manipulators(Scene):
+    kind = "manipulators"
+    title = "an object passed along a row of passive parallelogram manipulators"
+    stage_noun = ("manipulator", "manipulators")
+    margins = MARGINS
+    outside_min_margin = ("parked_palms",)  # formulation.OUTSIDE_MIN_MARGIN
+    verification_hints = {"step_errors": "step_errors are for stairs scenes; manipulators "
+                                         "take offsets"}
+
+    # ------------------------------------------------------------------ the spec
+    def scene_class(self):
+        from .model import ManipulatorsScene
+
+        return ManipulatorsScene
+
+    def design_class(self):
+        from .model import ManipulatorsDesign
+
+        return ManipulatorsDesign
+
+    def check_spec(self, scene, design):
+        """A start below palm 1 whatever the design (start.py)."""
+        from .start import unreachable_start
+
+        return unreachable_start(scene.initial.position[1], design)
+
+    def stage_limit(self, free):
+        if free:
+            return MAX_OPTIMISED_MANIPULATORS, (
+                "when the design has free variables (the optimizer's verification simulates "
+                "the row at every corner of the box; a fixed design may be run for up to "
+                f"{MAX_MANIPULATOR_STAGES})")
+        return MAX_MANIPULATOR_STAGES, "for a row of manipulators (the simulator keeps every " \
+                                       "stage's record)"
+
+    def quantities(self):
+        from .quantities import QUANTITIES
+
+        return QUANTITIES
+
+    def max_yield_refusal(self, scene):
+        if scene.plain_mechanism:
+            return None
+        return ("massless links and frictionless pivots (the linearised yield is the paper's "
+                "device's; `pdm-design yield` judges a design on real links and pivots)",
+                "[scene.links] or [scene.pivots]")
+
+    # ------------------------------------------------------------------ closed forms
+    def analyse(self, scene, design, stages=None):
+        from .analysis import analyse_manipulators
+
+        return analyse_manipulators(scene, design, stages)
+
+    # ------------------------------------------------------------------ the simulator
+    def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
+        from .sim import simulate_manipulators
+
+        offsets = spec.verification.offsets if errors is None else errors
+        return simulate_manipulators(spec.scene, design, stages=stages, offsets=offsets,
+                                     accuracy=accuracy, record_trajectory=record_trajectory)
+
+    # ------------------------------------------------------------------ the NLP
+    def formulate(self, spec, parameters=None):
+        from .formulation import build
+        from .formulation.offsets import Stages
+
+        model, bounds, closed_forms = build(spec, parameters=parameters)
+        # the stage maps also stream samples through the row: solve/check.py
+        return model, bounds, closed_forms, Stages(spec, model, closed_forms, parameters)
