@@ -105,6 +105,12 @@ class Scene:
         numbers a table sweeps (formulation/parametric.py), or None."""
         raise NotImplementedError
 
+    # ------------------------------------------------------------------ tolerances, yield, verification
+
+    # ------------------------------------------------------------------ sheets, drawings, reports
+
+    # ------------------------------------------------------------------ command line, tables, API
+
 
 # ---------------------------------------------------------------------- the registry
 

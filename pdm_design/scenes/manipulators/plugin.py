@@ -86,3 +86,9 @@ class Manipulators(Scene):
         model, bounds, closed_forms = build(spec, parameters=parameters)
         # the stage maps also stream samples through the row: solve/check.py
         return model, bounds, closed_forms, Stages(spec, model, closed_forms, parameters)
+
+    # ------------------------------------------------------------------ tolerances, yield, verification
+
+    # ------------------------------------------------------------------ sheets, drawings, reports
+
+    # ------------------------------------------------------------------ command line, tables, API

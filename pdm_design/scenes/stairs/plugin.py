@@ -70,3 +70,9 @@ class Stairs(Scene):
         # the explicit-offset scenario grows with the row: built when first asked for
         return model, bounds, closed_forms, functools.partial(scenario, spec, model,
                                                               closed_forms)
+
+    # ------------------------------------------------------------------ tolerances, yield, verification
+
+    # ------------------------------------------------------------------ sheets, drawings, reports
+
+    # ------------------------------------------------------------------ command line, tables, API
