@@ -38,11 +38,10 @@ class DesignOutcome:
         if self.status is Status.INFEASIBLE and not self.spec.free_variables:
             return ("The fixed design does not meet every requirement: relax the requirements "
                     "listed as violated, or change the design or the scene.")
-        if self.status is Status.INFEASIBLE and self.spec.kind == "manipulators":
-            from .scenes.manipulators.start import start_words
+        if self.status is Status.INFEASIBLE:
+            from .plugin import of
 
-            words = start_words(self.spec.scene.initial.position[1], self.spec.design,
-                                self.analysis.design)
+            words = of(self.spec).infeasible_words(self.spec, self.analysis.design)
             if words:
                 return words
         return self.status.message

@@ -135,17 +135,33 @@ ACCURACY = click.option(
     "default 'default'), e.g. rtol=1e-10,agreement=1e-8. Default: the spec's.")
 
 
+class _KindType(click.ParamType):
+    """An installed scene's kind, looked up when the command runs (entry-point metadata only:
+    no scene is imported to list them)."""
+
+    name = "kind"
+
+    def convert(self, value, param, ctx):
+        from .errors import did_you_mean
+        from .plugin import kinds
+
+        if value not in kinds():
+            self.fail(f"{value!r} is not an installed scene (installed: {', '.join(kinds())})"
+                      f"{did_you_mean(value, kinds())}", param, ctx)
+        return value
+
+
 @main.command()
-@click.argument("kind", type=click.Choice(["manipulators", "stairs"]))
+@click.argument("kind", type=_KindType())
 @click.option("--out", default=None, metavar="FILE",
               help="Write the spec to FILE (not over an existing file) instead of stdout.")
 @_guarded
 def init(kind, out):
-    """A commented spec to start from: KIND manipulators (the object's start lands on palm 1's
-    centre) or stairs (every landing mid-tread). It optimizes as written."""
-    from .templates import template
+    """A commented spec to start from for the installed scene KIND (manipulators: the object's
+    start lands on palm 1's centre; stairs: every landing mid-tread). It optimizes as written."""
+    from .plugin import scene_kind
 
-    text = template(kind)
+    text = scene_kind(kind).template()
     if out is None:
         click.echo(text, nl=False)
         return EXIT_OK
@@ -253,6 +269,24 @@ def _check_plot_path(plot: str) -> None:
         raise SpecError("command line", "--plot", "a file name", f"{plot!r}, a directory")
 
 
+def _refuse_other_stage_errors(scene, given: dict) -> None:
+    """Each per-stage error option is refused, not ignored, on a scene that takes another: a
+    run without the errors the user asked for would look like their answer."""
+    from .errors import SpecError
+    from .plugin import kinds, scene_kind
+
+    own = scene.stage_errors.option if scene.stage_errors else None
+    for option, values in given.items():
+        if not values or option == own:
+            continue
+        takers = [k for k in kinds()
+                  if getattr(scene_kind(k).stage_errors, "option", None) == option]
+        for_whom = " or ".join(takers) or "no installed"
+        rest = f"{scene.kind} take {own}" if own else f"{scene.kind} takes no per-stage errors"
+        raise SpecError("command line", option, f"a {for_whom} spec ({option} is for "
+                        f"{for_whom} scenes; {rest})", f"a {scene.kind} spec")
+
+
 @main.command()
 @SPEC
 @click.option("--stages", type=_Count(1, 10_000_000), default=None,
@@ -283,35 +317,27 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
     from .sim.core import SimulationRefused
     from .spec import load_spec
     from .plugin import of
-    from .spec.model import ManipulatorOffset, StepError
     from .verify import simulate_spec
 
     if plot is not None:
         _check_plot_path(plot)
     loaded = load_spec(spec)
-    # Each option is refused, not ignored, on the other scene kind: a run without the offsets
-    # the user asked for would look like their answer.
-    for option, given, kind, other in (("--offset", offsets, "manipulators", "--step-error"),
-                                       ("--step-error", step_errors, "stairs", "--offset")):
-        if given and loaded.kind != kind:
-            raise SpecError("command line", option, f"a {kind} spec ({option} is for {kind} "
-                            f"scenes; {loaded.kind} take {other})", f"a {loaded.kind} spec")
-    most, why = of(loaded).stage_limit(False)
+    scene = of(loaded)
+    _refuse_other_stage_errors(scene, {"--offset": offsets, "--step-error": step_errors})
+    most, why = scene.stage_limit(False)
     if stages is not None and stages > most:
         raise SpecError("command line", "--stages", f"at most {most} "
-                        f"{of(loaded).stage_noun[1]} ({why})", str(stages))
+                        f"{scene.stage_noun[1]} ({why})", str(stages))
     row = stages or loaded.verification.stages
     kwargs = {}
-    if loaded.kind == "manipulators":
-        given = {k: ManipulatorOffset(manipulator=k, dx=a, dy=b)
-                 for k, a, b in _parse_pairs(offsets, "--offset", "K:DX,DY", row)}
-        kwargs["offsets"] = _with_spec_items(loaded.verification.offsets, given, "manipulator",
-                                             "verification.offsets", row, spec)
-    else:
-        given = {k: StepError(step=k, rise=a, tread=b) for k, a, b in
-                 _parse_pairs(step_errors, "--step-error", "K:DRISE,DTREAD", row)}
-        kwargs["step_errors"] = _with_spec_items(loaded.verification.step_errors, given, "step",
-                                                 "verification.step_errors", row, spec)
+    errors = scene.stage_errors
+    if errors is not None:
+        typed = {"--offset": offsets, "--step-error": step_errors}[errors.option]
+        given = {k: errors.item(k, a, b) for k, a, b in
+                 _parse_pairs(typed, errors.option, errors.metavar, row)}
+        kwargs[errors.key] = _with_spec_items(getattr(loaded.verification, errors.key), given,
+                                              errors.index, f"verification.{errors.key}", row,
+                                              spec)
     point, found = loaded.design_at(), None
     if loaded.free_variables:
         found = design(loaded, verify=False)
@@ -321,8 +347,8 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
                        f"requirement (status {found.status.value}); simulating its "
                        "least-violation design", err=True)
     if build is not None and (offsets or step_errors):
-        raise SpecError("command line", "--build", "no --offset or --step-error with it (the "
-                        "build's parts are drawn)", "both")
+        raise SpecError("command line", "--build", f"no {errors.option} with it (the build's "
+                        "parts are drawn)", "both")
     try:
         if build is not None:
             from .tolerances.command import simulate_build_of_spec
@@ -431,12 +457,13 @@ def sheet(source, out, count, no_tolerance, no_drawing):
     drawing. Exit 1 (sheet still written) when the design does not work."""
     from pathlib import Path
 
+    from .plugin import of
     from .sheet import sheet_for, write_sheet
 
     folder = out or f"{Path(source).stem}-sheet"
     built = sheet_for(source, count=count, tolerance=not no_tolerance)
     files = write_sheet(built, folder, drawing=not no_drawing)
-    what = "manipulators" if built.kind == "manipulators" else "steps"
+    what = of(built.spec).stage_noun[1]
     click.echo(f"build sheet of {built.count} {what} (status {built.status}; tolerance: "
                f"{built.tolerance_note})")
     if built.tolerance and built.tolerance_covers < built.count:

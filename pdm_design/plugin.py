@@ -18,6 +18,7 @@ This module imports nothing heavy: the CLI's start-up path reaches it.
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 from importlib import metadata
 
 GROUP = "pdm_design.scenes"
@@ -25,6 +26,22 @@ GROUP = "pdm_design.scenes"
 
 class SceneUnavailable(LookupError):
     """No installed scene has the kind asked for, or its package failed to load."""
+
+
+@dataclass(frozen=True)
+class StageErrors:
+    """A scene's per-stage build errors as `simulate` takes them from the command line and the
+    spec: option "--offset", metavar "K:DX,DY", the spec's `[verification]` list they extend
+    ("offsets"), the stage field of its items ("manipulator"), and `make(k, a, b)` the item."""
+
+    option: str
+    metavar: str
+    key: str
+    index: str
+    make: object
+
+    def item(self, k: int, a: float, b: float):
+        return self.make(k, a, b)
 
 
 class Scene:
@@ -110,6 +127,23 @@ class Scene:
     # ------------------------------------------------------------------ sheets, drawings, reports
 
     # ------------------------------------------------------------------ command line, tables, API
+    def infeasible_words(self, spec, design: dict) -> str | None:
+        """Why an optimisation found no feasible design, in words, when the scene can tell
+        from the spec and the least-violation `design` (values by name); None to say only
+        what IPOPT's status says."""
+        return None
+
+    table_geometry: tuple[str, ...] = ()
+    """The analysis' geometry a design table shows, by name (Analysis.geometry keys)."""
+    table_periodic: tuple[str, ...] = ()
+    """The analysis' periodic orbit a design table shows, by name (Analysis.periodic keys)."""
+    tolerance_axes: tuple[str, ...] = ()
+    """The axes of the robust tolerance box of max_offset_tolerance (JSON `tolerance.<axis>`,
+    metres): a pivot's ("dx", "dy") or a step's ("rise", "tread")."""
+
+    stage_errors: StageErrors | None = None
+    """The per-stage build errors `simulate` takes (None: the scene takes none); they reach
+    `simulate` as its `errors`."""
 
 
 # ---------------------------------------------------------------------- the registry

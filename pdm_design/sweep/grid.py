@@ -25,16 +25,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SpecError
-from ..scenes.manipulators.model import ManipulatorsDesign, ManipulatorsScene
-from ..scenes.stairs.model import StairsDesign, StairsScene
+from ..plugin import kinds, scene_kind
 from ..scenes.common import is_number
 
 OPTION = "--sweep"
 SYNTAX = "NAME=START:STOP:COUNT, e.g. mass_ratio=5:20:4"
 MAX_POINTS = 1_000_000
 _SKIPPED_TABLES = ("verification", "expect")
-_KINDS = {"stairs": (StairsScene, StairsDesign), "manipulators": (ManipulatorsScene,
-                                                                   ManipulatorsDesign)}
 
 
 @dataclass(frozen=True)
@@ -115,8 +112,8 @@ def numeric_parameters(data: dict) -> list[tuple[str, ...]]:
             _numeric_leaves(value, (key,), paths)
     scene = data.get("scene")
     kind = scene.get("kind") if isinstance(scene, dict) else None
-    if kind in _KINDS:
-        scene_class, design_class = _KINDS[kind]
+    if isinstance(kind, str) and kind in kinds():
+        scene_class, design_class = scene_kind(kind).scene_class(), scene_kind(kind).design_class()
         for path in _schema_paths(scene_class, ("scene",)):
             paths.add(("initial", *path[2:]) if path[1:2] == ("initial",) else path)
         paths.update(("design", name) for name in design_class.VARIABLES)

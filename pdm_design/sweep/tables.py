@@ -12,18 +12,24 @@ import csv
 import io
 import math
 
-from ..scenes.manipulators.model import ManipulatorsDesign
-from ..scenes.stairs.model import StairsDesign
-from ..scenes.common import is_number
 from ..plugin import scene_kind
+from ..scenes.common import is_number
 
-DESIGN = {"manipulators": ManipulatorsDesign.VARIABLES, "stairs": StairsDesign.VARIABLES}
-GEOMETRY = {"manipulators": ("pitch_x", "pitch_y", "palm_mass", "landing_offset"),
-            "stairs": ("nose_clearance",)}
-PERIODIC = {"manipulators": ("handover_speed", "landing_speed", "contraction", "drop_per_stage"),
-            "stairs": ("impact_speed", "vertical_impact_speed", "horizontal_speed", "spin",
-                       "flight_time", "drift_per_bounce")}
-TOLERANCE_AXES = {"manipulators": ("dx", "dy"), "stairs": ("rise", "tread")}
+
+class _ByKind:
+    """A scene's names of one group of table columns, looked up by kind (Scene attributes)."""
+
+    def __init__(self, get):
+        self._get = get
+
+    def __getitem__(self, kind: str) -> tuple[str, ...]:
+        return tuple(self._get(scene_kind(kind)))
+
+
+DESIGN = _ByKind(lambda scene: scene.design_class().VARIABLES)
+GEOMETRY = _ByKind(lambda scene: scene.table_geometry)
+PERIODIC = _ByKind(lambda scene: scene.table_periodic)
+TOLERANCE_AXES = _ByKind(lambda scene: scene.tolerance_axes)
 ERROR = "error"
 """Status of a grid point whose solve raised: retried by --resume."""
 

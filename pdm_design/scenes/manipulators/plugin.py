@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ...plugin import Scene
+from ...plugin import Scene, StageErrors
 
 # A manipulator run keeps every stage's record and event (about 15 kB a stage).
 MAX_MANIPULATOR_STAGES = 100_000
@@ -64,6 +64,11 @@ class Manipulators(Scene):
                 "device's; `pdm-design yield` judges a design on real links and pivots)",
                 "[scene.links] or [scene.pivots]")
 
+    def template(self):
+        from .template import manipulators_template
+
+        return manipulators_template()
+
     # ------------------------------------------------------------------ closed forms
     def analyse(self, scene, design, stages=None):
         from .analysis import analyse_manipulators
@@ -92,3 +97,21 @@ class Manipulators(Scene):
     # ------------------------------------------------------------------ sheets, drawings, reports
 
     # ------------------------------------------------------------------ command line, tables, API
+    table_geometry = ("pitch_x", "pitch_y", "palm_mass", "landing_offset")
+    table_periodic = ("handover_speed", "landing_speed", "contraction",
+                      "drop_per_stage")
+    tolerance_axes = ("dx", "dy")
+    def infeasible_words(self, spec, design):
+        """Where the start and palm 1 are, when the least-violation design puts it below."""
+        from .start import start_words
+
+        return start_words(spec.scene.initial.position[1], spec.design, design)
+
+    stage_errors = StageErrors("--offset", "K:DX,DY", "offsets", "manipulator",
+                               lambda k, a, b: _offset(manipulator=k, dx=a, dy=b))
+
+
+def _offset(**fields):
+    from ...spec.model import ManipulatorOffset
+
+    return ManipulatorOffset(**fields)

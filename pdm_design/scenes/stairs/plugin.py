@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ...plugin import Scene
+from ...plugin import Scene, StageErrors
 
 # A stairs NLP has rows for every bounce, and IPOPT needs ever more iterations for them (23 at
 # 100 bounces, 327 at 300, one start), so a design with free variables is optimised over at
@@ -45,6 +45,11 @@ class Stairs(Scene):
     def max_yield_refusal(self, scene):
         return None
 
+    def template(self):
+        from .template import stairs_template
+
+        return stairs_template()
+
     # ------------------------------------------------------------------ closed forms
     def analyse(self, scene, design, stages=None):
         from .analysis import analyse_stairs
@@ -76,3 +81,15 @@ class Stairs(Scene):
     # ------------------------------------------------------------------ sheets, drawings, reports
 
     # ------------------------------------------------------------------ command line, tables, API
+    table_geometry = ("nose_clearance",)
+    table_periodic = ("impact_speed", "vertical_impact_speed", "horizontal_speed",
+                      "spin", "flight_time", "drift_per_bounce")
+    tolerance_axes = ("rise", "tread")
+    stage_errors = StageErrors("--step-error", "K:DRISE,DTREAD", "step_errors", "step",
+                               lambda k, a, b: _step_error(step=k, rise=a, tread=b))
+
+
+def _step_error(**fields):
+    from ...spec.model import StepError
+
+    return StepError(**fields)
