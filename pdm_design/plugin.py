@@ -117,9 +117,11 @@ class Scene:
     """Margins the max_min_margin objective does not cover."""
 
     def formulate(self, spec, parameters=None):
-        """The scene's NLP rows: (SceneModel, bounds, closed_forms, scenario) as
-        `formulation.common.assemble` takes them. parameters: the CasADi symbols of the scene
-        numbers a table sweeps (formulation/parametric.py), or None."""
+        """The scene's NLP: (SceneModel, bounds, scenario) — the model and the free variables'
+        bounds {name: (min, max, guess)} as `formulation.common.assemble` takes them, and the
+        source of its explicit-error scenarios (a `formulation.common.Scenario`, a function of
+        no arguments that builds one, or None). parameters: the CasADi symbols of the scene
+        numbers a table sweeps (Scene.parametric; formulation/parametric.py), or None."""
         raise NotImplementedError
 
     # ------------------------------------------------------------------ tolerances, yield, verification

@@ -80,7 +80,7 @@ def _formulated(spec, key: str, chosen: tuple[str, ...], cache: bool, full: bool
         symbols = ca.SX.sym("scene", len(chosen))
         spec, parameters = parametric.symbolic_spec(spec, chosen, symbols), (chosen, symbols)
     # the scene's rows, and the source of its explicit-offset scenarios (solve/check.py)
-    model, bounds, closed_forms, source = of(spec).formulate(
+    model, bounds, source = of(spec).formulate(
         spec, None if parameters is None else parameters[1])
     model = replace(model, scenario=source)
     form = assemble(spec, model, key=key, bounds=bounds, defer=not full, parameters=parameters)

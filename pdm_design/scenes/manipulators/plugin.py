@@ -90,7 +90,7 @@ class Manipulators(Scene):
 
         model, bounds, closed_forms = build(spec, parameters=parameters)
         # the stage maps also stream samples through the row: solve/check.py
-        return model, bounds, closed_forms, Stages(spec, model, closed_forms, parameters)
+        return model, bounds, Stages(spec, model, closed_forms, parameters)
 
     # ------------------------------------------------------------------ tolerances, yield, verification
 

@@ -73,8 +73,7 @@ class Stairs(Scene):
 
         model, bounds, closed_forms = build(spec)
         # the explicit-offset scenario grows with the row: built when first asked for
-        return model, bounds, closed_forms, functools.partial(scenario, spec, model,
-                                                              closed_forms)
+        return model, bounds, functools.partial(scenario, spec, model, closed_forms)
 
     # ------------------------------------------------------------------ tolerances, yield, verification
 
