@@ -113,6 +113,8 @@ class Scene:
         raise NotImplementedError
 
     # ------------------------------------------------------------------ the NLP
+    objectives: tuple[str, ...] = ("max_min_margin",)
+    """The `[objective]` terms the scene's NLP gives (SceneModel.objective_terms)."""
     outside_min_margin: tuple[str, ...] = ()
     """Margins the max_min_margin objective does not cover."""
 

@@ -347,7 +347,8 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
                            for i, (c, _, _) in enumerate(later))
 
     weights, f = _objective(spec, model)
-    terms = ca.vertcat(*[model.objective_terms[n] for n in OBJECTIVE_SENSE])
+    # an objective the scene does not give (Scene.objectives) is never asked for: 0 there
+    terms = ca.vertcat(*[model.objective_terms.get(n, ca.SX(0.0)) for n in OBJECTIVE_SENSE])
     derived_names = tuple(model.derived)
     evaluate = ca.Function(
         "evaluate", [x, p],

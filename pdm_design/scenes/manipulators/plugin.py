@@ -84,6 +84,8 @@ class Manipulators(Scene):
                                      accuracy=accuracy, record_trajectory=record_trajectory)
 
     # ------------------------------------------------------------------ the NLP
+    objectives = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence",
+                  "max_yield")
     def formulate(self, spec, parameters=None):
         from .formulation import build
         from .formulation.offsets import Stages

@@ -65,6 +65,8 @@ class Stairs(Scene):
                                step_errors=errors, record_trajectory=record_trajectory)
 
     # ------------------------------------------------------------------ the NLP
+    objectives = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence",
+                  "max_yield")
     def formulate(self, spec, parameters=None):
         import functools
 

@@ -1,0 +1,75 @@
+"""A pdm-design scene shipped as its own package: a puck slides down a chain of ramps, and at the
+foot of each a pendulum bob hanging at rest takes part of its speed (docs/scenes.md in
+pdm-design walks through it). Everything the scene knows is a method of `PendulumRow`; the
+entry point in pyproject.toml is how pdm-design finds it."""
+
+from __future__ import annotations
+
+from pdm_design.plugin import Scene
+
+TEMPLATE = '''# A puck passed down a row of hanging pendulums (pdm-design init pendulum_row).
+name = "my_pendulum_row"
+description = "The bob mass that keeps the puck going and every bob below its pivot."
+
+[scene]
+kind = "pendulum_row"
+ramp_angle = 0.3        # rad, every ramp's slope
+
+[scene.puck]
+mass = 1.0              # kg
+restitution = 0.5       # puck against a bob
+
+[initial]
+speed = 2.0             # m/s, at the first bob
+
+[design]
+bob_mass = { min = 0.1, max = 1.9, initial = 1.0 }   # kg (the puck goes on while e M < m)
+drop = 0.2              # m, every ramp's drop
+rod_length = 0.5        # m, every pendulum's rod
+
+[objective]
+max_min_margin = 1.0
+
+[verification]
+stages = 12
+
+[expect]
+feasible = true
+'''
+
+
+class PendulumRow(Scene):
+    kind = "pendulum_row"
+    title = "a puck sliding down a row of hanging pendulums"
+    stage_noun = ("bob", "bobs")
+    margins = ("forward", "first_no_loop", "no_loop")
+    objectives = ("max_min_margin", "fastest_convergence", "min_drop")
+    table_periodic = ("bob_speed", "contraction")
+
+    def scene_class(self):
+        from .model import PendulumRowScene
+
+        return PendulumRowScene
+
+    def design_class(self):
+        from .model import PendulumRowDesign
+
+        return PendulumRowDesign
+
+    def template(self):
+        return TEMPLATE
+
+    def analyse(self, scene, design, stages=None):
+        from .analysis import analyse
+
+        return analyse(scene, design, stages)
+
+    def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
+        from .sim import simulate
+
+        return simulate(spec.scene, design, stages=stages, accuracy=accuracy)
+
+    def formulate(self, spec, parameters=None):
+        from .formulation import build
+
+        return build(spec)

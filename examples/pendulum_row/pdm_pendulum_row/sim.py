@@ -1,0 +1,52 @@
+"""The event simulator: the puck integrated down each ramp (scipy, event-located at the ramp's
+foot), an impact at each bob; named failures. It does not use the periodic closed forms: the
+tests hold those against it."""
+
+from __future__ import annotations
+
+import math
+
+from pdm_design.sim.core import Event, Outcome, SimulationResult
+
+KIND = "pendulum_row"
+
+
+def _down_the_ramp(v0: float, length: float, g: float, angle: float, accuracy):
+    """(speed at the foot, time) of a slide from speed v0 down `length` metres of incline."""
+    from scipy.integrate import solve_ivp
+
+    def foot(t, y):
+        return y[0] - length
+
+    foot.terminal, foot.direction = True, 1
+    horizon = 10.0 * (length / max(v0, 1e-12) + math.sqrt(2.0 * length / (g * math.sin(angle))))
+    run = solve_ivp(lambda t, y: (y[1], g * math.sin(angle)), (0.0, horizon), (0.0, v0),
+                    events=foot, rtol=accuracy.rtol, atol=accuracy.atol * max(1.0, length))
+    return float(run.y_events[0][0][1]), float(run.t_events[0][0])
+
+
+def simulate(scene, design, *, stages: int, accuracy) -> SimulationResult:
+    m, e, g = scene.puck.mass, scene.puck.restitution, scene.gravity
+    M, l = design.bob_mass, design.rod_length
+    length = design.drop / math.sin(scene.ramp_angle)
+    v, t, events, records, failure = scene.initial.speed, 0.0, [], [], None
+    for k in range(1, stages + 1):
+        v_after = (m * v - e * M * v) / (m + M)  # momentum, and restitution's speed apart
+        bob = v_after + e * v
+        events.append(Event(t, "impact", k, {"speed": v}, {"speed": v_after, "bob_speed": bob}))
+        records.append({"bob": k, "time": t, "bob_speed_before": v, "puck_after": v_after,
+                        "bob_after": bob})
+        if bob * bob >= 4.0 * g * l:
+            failure = Event(t, "looped", k, {"bob_speed": bob}, {},
+                            f"bob {k} swings over its pivot ({bob:.4g} m/s)", failure=True)
+        elif v_after <= 0.0:
+            failure = Event(t, "stalled", k, {"speed": v_after}, {},
+                            f"the puck stops or bounces back at bob {k}", failure=True)
+        if failure is not None:
+            events.append(failure)
+            break
+        v, dt = _down_the_ramp(v_after, length, g, scene.ramp_angle, accuracy)
+        t += dt
+    passed = len(records) - (failure is not None)
+    return SimulationResult(KIND, Outcome(failure is None, passed, failure), records, events,
+                            accuracy)
