@@ -267,7 +267,7 @@ class _Run:
                              "ground before the stance spoke leaves it"), omega, beta, s_prev
         kind, dt, phi, w, sol = self.stance(phi0, phi1, omega)
         self.sample(sol, dt, phi0, phi1, k)
-        self.time += dt
+        self.time += float(dt)
         if kind != "impact":
             return self.fail(k, kind, phi, w, _stance_detail(kind, k, phi)), w, beta, s_prev
         if ground.stairs:
