@@ -1,0 +1,141 @@
+"""The rimless wheel's NLP rows: at a fixed design they are the analysis' margins; the robust
+box they find holds in the simulator at its corners and fails just beyond them."""
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from pdm_design.errors import SpecError
+from pdm_design.formulation.common import assemble
+from pdm_design.scenes.rimless_wheel import (
+    RimlessWheelDesign,
+    RimlessWheelInitial,
+    RimlessWheelScene,
+)
+from pdm_design.scenes.rimless_wheel import formulation
+from pdm_design.scenes.rimless_wheel.analysis import analyse_rimless_wheel, resolve
+from pdm_design.scenes.rimless_wheel.sim import simulate_rimless_wheel
+from pdm_design.scenes.rimless_wheel.steps import step_map
+from pdm_design.spec.model import Bounds, Spec, Verification
+
+STAGES = 20
+
+
+def spec_of(design, *, ground="ramp", speed=1.3, speed_tolerance=0.0, objective=None,
+            stages=STAGES):
+    scene = RimlessWheelScene(initial=RimlessWheelInitial(speed=speed,
+                                                          speed_tolerance=speed_tolerance),
+                              ground=ground)
+    return Spec(source="test", scene=scene, design=design, objective=objective or {},
+                verification=Verification(stages=stages))
+
+
+def formulated(spec):
+    model, bounds, _ = formulation.build(spec)
+    return assemble(spec, model, key=repr(spec), bounds=bounds), bounds
+
+
+def solve(spec):
+    form, bounds = formulated(spec)
+    solver = ca.nlpsol("wheel", "ipopt", form.nlp, {"ipopt.print_level": 0, "print_time": 0,
+                                                    "ipopt.sb": "yes"})
+    x0 = form.start_vector({n: bounds[n][2] for n in form.design_names})
+    sol = solver(x0=x0, lbx=form.lbx, ubx=form.ubx, lbg=form.lbg, ubg=form.ubg,
+                 p=form.parameters())
+    assert solver.stats()["success"]
+    x = np.asarray(sol["x"]).ravel()
+    return dict(zip(form.x_names, x))
+
+
+def row_margins(spec):
+    """The smallest slack / scale of each margin's rows at the spec's (fixed) design."""
+    form, bounds = formulated(spec)
+    x = form.start_vector({})
+    slack, scale, _, _ = form.evaluate(x, form.parameters())
+    ratio = np.asarray(slack).ravel() / np.asarray(scale).ravel()
+    out = {}
+    for info, value in zip(form.conditions, ratio):
+        if info.kind == "margin" and not info.equality:
+            out[info.name] = min(out.get(info.name, math.inf), float(value))
+    return out
+
+
+@pytest.mark.parametrize("ground,design", [
+    ("ramp", {"spokes": 8, "leg_length": 1.0, "slope": 0.08}),
+    ("ramp", {"spokes": 12, "leg_length": 0.5, "slope": 0.05}),
+    ("stairs", {"spokes": 8, "leg_length": 1.0, "rise": 0.1, "landing_offset": 0.45}),
+])
+def test_rows_at_a_fixed_design_are_the_analysis_margins(ground, design):
+    """The rows bound the whole approach by its start and its limit, the orbit: the analysis
+    followed until it converged; the footholds over the verification's steps."""
+    spec = spec_of(design, ground=ground)
+    analysis = analyse_rimless_wheel(spec.scene, RimlessWheelDesign(**design))
+    footholds = analyse_rimless_wheel(spec.scene, RimlessWheelDesign(**design), stages=STAGES)
+    rows = row_margins(spec)
+    for name in ("over_the_top", "impact_friction"):
+        assert rows[name] == pytest.approx(analysis.margins[name], rel=1e-9, abs=1e-12)
+    for name in ("landing", "nose_clearance"):
+        if name in footholds.margins:
+            assert rows[name] == pytest.approx(footholds.margins[name], rel=1e-9, abs=1e-12)
+    # the force rows judge the approach's two ends at 9 angles, the analysis every stance at 33
+    for name in ("no_flight", "no_slip"):
+        assert rows[name] == pytest.approx(analysis.margins[name], abs=2e-3)
+
+
+def corner(wh, spec, slope_error, speed, steps):
+    betas = np.full((1, steps), wh.beta + slope_error)
+    return step_map(wh, speed, betas, ground=wh.ground)
+
+
+def test_robust_ramp_box_holds_at_its_corners_and_fails_beyond():
+    design = {"spokes": 8, "leg_length": 1.0, "slope": Bounds(min=0.02, max=0.3, initial=0.1)}
+    spec = spec_of(design, speed_tolerance=0.05, objective={"max_offset_tolerance": 1.0})
+    x = solve(spec)
+    tau, slope = x["tolerance"], x["slope"]
+    assert tau > 0.01
+    fixed = RimlessWheelDesign(spokes=8, leg_length=1.0, slope=float(slope))
+    wh, _, _ = resolve(spec.scene, fixed)
+    for sign, speed in ((-1, 1.25), (1, 1.35)):
+        run = corner(wh, spec, sign * tau * (1 - 1e-4), speed, 100_000)
+        assert run.passed[0] == 100_000
+    # the lowest slopes' orbit stalls a little beyond the box (the over_the_top row binds)
+    assert corner(wh, spec, -tau * 1.02, 1.25, 100_000).passed[0] < 100_000
+    # random builds inside the box, in the event simulator
+    rng = np.random.default_rng(2)
+    for _ in range(4):
+        errors = rng.uniform(-tau, tau, STAGES)
+        scene = spec_of({}, speed=float(1.3 + rng.uniform(-0.05, 0.05))).scene
+        run = simulate_rimless_wheel(scene, fixed, stages=STAGES, step_errors=[
+            {"step": k + 1, "slope": float(e)} for k, e in enumerate(errors)])
+        assert run.outcome.completed
+
+
+def test_robust_stairs_box_in_the_simulator():
+    design = {"spokes": 8, "leg_length": 1.0, "rise": Bounds(min=0.01, max=0.3, initial=0.1)}
+    spec = spec_of(design, ground="stairs", speed_tolerance=0.05,
+                   objective={"max_offset_tolerance": 1.0})
+    x = solve(spec)
+    tau = x["tolerance"]
+    fixed = RimlessWheelDesign(spokes=8, leg_length=1.0, rise=float(x["rise"]))
+    scene = spec.scene
+
+    def worst(scale):  # every rise and tread short: the footholds run furthest forward
+        errors = [{"step": k, "rise": -scale * tau, "tread": -scale * tau}
+                  for k in range(1, STAGES + 1)]
+        return simulate_rimless_wheel(scene, fixed, stages=STAGES, step_errors=errors).outcome
+
+    assert worst(1 - 1e-4).completed
+    beyond = worst(1.05)
+    # two rows bind at the optimum: the furthest foothold and the lowest rises' orbit
+    assert not beyond.completed and beyond.failure.kind in ("missed_tread", "stalled")
+
+
+def test_spoke_counts():
+    spec = spec_of({"spokes": Bounds(min=5.5, max=9.0), "leg_length": 1.0, "slope": 0.1})
+    assert formulation.spoke_counts(spec) == [6, 7, 8, 9]
+    with pytest.raises(SpecError, match="spokes"):
+        formulation.build(spec)
+    fixed = formulation.with_spokes(spec, 7)
+    assert fixed.design["spokes"] == 7 and formulation.build(fixed)
