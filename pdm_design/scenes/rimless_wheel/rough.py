@@ -23,6 +23,9 @@ from . import physics as phys
 from .analysis import Wheel, resolve
 from .steps import OK, point_failures, step_map
 
+# Beyond this many steps the chain's failure probabilities (about 1 / mfpt a step) are below
+# what I - Q keeps against its unit diagonal in double precision: reported as a lower bound.
+MFPT_LIMIT = 1e12
 SIGMAS = 12.0  # slopes beyond this many standard deviations are not looked at (P < 4e-33)
 BISECTIONS = 60
 
@@ -209,9 +212,46 @@ def mfpt(scene, design, tolerance: float, *, bins: int = 400) -> dict:
         raise ValueError("a rough ramp needs a slope tolerance > 0")
     coarse = chain_mfpt(wh, start, sigma, bins)
     fine = chain_mfpt(wh, start, sigma, 2 * bins)
+    if not max(coarse, fine) < MFPT_LIMIT:  # (nan too)
+        return {"estimate": math.inf, "ci_low": MFPT_LIMIT, "ci_high": math.inf,
+                "method": f"markov chain: beyond {MFPT_LIMIT:g} steps, past the reach of "
+                          "double precision", "coarse": coarse, "fine": fine}
     estimate = (4.0 * fine - coarse) / 3.0
     spread = abs(fine - coarse)
     return {"estimate": estimate, "ci_low": min(coarse, fine, estimate) - spread,
             "ci_high": max(coarse, fine, estimate) + spread,
             "method": f"markov chain on stance-energy bins ({bins} and {2 * bins}), Richardson",
             "coarse": coarse, "fine": fine}
+
+
+def longest_lasting(scene, counts, slope_range, leg_length: float, tolerance: float, *,
+                    bins: int = 200) -> dict:
+    """The design that lasts longest on a rough ramp (slope errors sigma = tolerance / 3): for
+    each spoke count, the slope in slope_range (min, max) of the largest mean first-passage
+    time, by a bounded golden-section search on log(mfpt) (the chain at `bins`), then the
+    best count's mfpt at bins and 2 bins. {spokes, slope, mfpt (mfpt's dict), by_count:
+    {count: (slope, mfpt estimate)}}."""
+    from scipy.optimize import minimize_scalar
+
+    from .model import RimlessWheelDesign
+
+    def lasting(n, slope):
+        design = RimlessWheelDesign(spokes=n, leg_length=leg_length, slope=float(slope))
+        try:
+            wh = _ramp(scene, design)
+        except ValueError:
+            return 0.0
+        start = float(phys.stance_energy(scene.initial.speed, wh.beta - wh.alpha, wh.rate))
+        return min(chain_mfpt(wh, start, sigma_of(tolerance), bins), MFPT_LIMIT)
+
+    by_count = {}
+    for n in counts:
+        found = minimize_scalar(lambda s, n=n: -math.log(max(lasting(n, s), 1e-300)),
+                                bounds=slope_range, method="bounded",
+                                options={"xatol": 1e-5 * (slope_range[1] - slope_range[0])})
+        by_count[n] = (float(found.x), float(math.exp(-found.fun)))
+    best = max(by_count, key=lambda n: by_count[n][1])
+    slope = by_count[best][0]
+    design = RimlessWheelDesign(spokes=best, leg_length=leg_length, slope=slope)
+    return {"spokes": best, "slope": slope, "mfpt": mfpt(scene, design, tolerance, bins=bins),
+            "by_count": by_count}
