@@ -1,8 +1,8 @@
 """`pdm-design init rimless_wheel`: a commented spec to start from (as pdm_design/templates.py).
 
-The template's wheel starts on its own orbit's neighbourhood: eight spokes of 1 m, a point mass,
-on a ramp whose slope is free; the start speed 1.3 rad/s lies above the orbit's post-impact
-speed of every slope in the bounds that vaults its spokes, so the first stance vaults too.
+The template's wheel: eight spokes of 1 m, a point mass, on a ramp whose slope is free. Its start
+speed vaults the first spoke on every slope in the bounds: the slowest start 1.25 rad/s has
+1.5625 (rad/s)^2 against 2 g / l (1 - cos(0.02 - pi / 8)) = 1.347 at the shallowest.
 """
 
 from __future__ import annotations
