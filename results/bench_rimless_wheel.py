@@ -39,8 +39,12 @@ def best_of(fn):
 
 def main() -> None:
     from pdm_design.scenes.rimless_wheel import (
-        RimlessWheelDesign, RimlessWheelInitial, RimlessWheelScene, Wheel)
-    from pdm_design.scenes.rimless_wheel import rough
+        RimlessWheelDesign,
+        RimlessWheelInitial,
+        RimlessWheelScene,
+        Wheel,
+        rough,
+    )
     from pdm_design.scenes.rimless_wheel.analysis import resolve
     from pdm_design.scenes.rimless_wheel.sim import simulate_rimless_wheel
     from pdm_design.scenes.rimless_wheel.steps import step_map

@@ -13,8 +13,8 @@ from pdm_design.scenes.rimless_wheel import (
     RimlessWheelDesign,
     RimlessWheelInitial,
     RimlessWheelScene,
+    formulation,
 )
-from pdm_design.scenes.rimless_wheel import formulation
 from pdm_design.scenes.rimless_wheel.analysis import analyse_rimless_wheel, resolve
 from pdm_design.scenes.rimless_wheel.sim import simulate_rimless_wheel
 from pdm_design.scenes.rimless_wheel.steps import step_map

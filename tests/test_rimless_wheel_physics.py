@@ -18,7 +18,10 @@ from pdm_design.scenes.rimless_wheel.analysis import analyse_rimless_wheel
 G = 9.81
 
 
-def ramp(n, slope, *, leg=1.0, speed=1.5, wheel=Wheel(), friction=1.0, gravity=G):
+POINT = Wheel()
+
+
+def ramp(n, slope, *, leg=1.0, speed=1.5, wheel=POINT, friction=1.0, gravity=G):
     scene = RimlessWheelScene(initial=RimlessWheelInitial(speed=speed), wheel=wheel,
                               friction=friction, gravity=gravity)
     return scene, RimlessWheelDesign(spokes=n, leg_length=leg, slope=slope)

@@ -12,8 +12,8 @@ from pdm_design.scenes.rimless_wheel import (
     RimlessWheelDesign,
     RimlessWheelInitial,
     RimlessWheelScene,
+    rough,
 )
-from pdm_design.scenes.rimless_wheel import rough
 from pdm_design.scenes.rimless_wheel.analysis import analyse_rimless_wheel
 
 DESIGN = RimlessWheelDesign(spokes=8, leg_length=1.0, slope=0.08)
@@ -29,9 +29,10 @@ def orbit_speed():
 
 def test_one_step_survival_against_the_exact_probability():
     """A point mass of 8 spokes on a 0.08 rad ramp, on its orbit, one step with the slope
-    N(0.08, sigma): it stalls in the next stance (making 1 step, not 2) iff E_1 = eta^2 E* + b(beta) < 0, and with
-    eta^2 = cos^2(pi/4) = 1/2, rate = 2 g, b(beta) = 2 g (cos(beta - alpha) - 1 + (1 - cos(beta
-    + alpha)) / 2): the threshold found here by bisection on that written-out formula."""
+    N(0.08, sigma): it stalls in the next stance (making 1 step, not 2) iff
+    E_1 = eta^2 E* + b(beta) < 0, with eta^2 = cos^2(pi/4) = 1/2, rate = 2 g and
+    b(beta) = 2 g (cos(beta - alpha) - 1 + (1 - cos(beta + alpha)) / 2): the threshold found
+    here by bisection on that written-out formula."""
     g, alpha, gamma = 9.81, math.pi / 8, 0.08
     rate = 2 * g
     w2 = 0.5 * rate * 2 * math.sin(alpha) * math.sin(gamma) / 0.5  # omega*^2, eta^2 = 1/2

@@ -21,12 +21,15 @@ from pdm_design.sim.core import SimulationRefused
 WHEELS = [Wheel(), Wheel(mass=2.0, gyration=0.35), Wheel(mass=1.0, gyration=0.1, spoke_mass=0.2)]
 
 
-def scene_of(speed, *, wheel=Wheel(), ground="ramp", friction=1.0):
+POINT = Wheel()
+
+
+def scene_of(speed, *, wheel=POINT, ground="ramp", friction=1.0):
     return RimlessWheelScene(initial=RimlessWheelInitial(speed=speed), wheel=wheel,
                              ground=ground, friction=friction)
 
 
-def on_orbit(n=8, slope=0.08, leg=1.0, wheel=Wheel(), **kw):
+def on_orbit(n=8, slope=0.08, leg=1.0, wheel=POINT, **kw):
     design = RimlessWheelDesign(spokes=n, leg_length=leg, slope=slope)
     a = analyse_rimless_wheel(scene_of(1.0, wheel=wheel, **kw), design)
     assert a.periodic["energy"] > 0  # the orbit vaults its spokes
@@ -54,7 +57,7 @@ def test_contraction_against_a_finite_difference_of_the_simulated_return_map():
         scene, design, a = on_orbit(n=8, slope=0.1, wheel=wheel)
         w, h = scene.initial.speed, 1e-4
 
-        def next_speed(start):
+        def next_speed(start, wheel=wheel, design=design):
             run = simulate_rimless_wheel(scene_of(start, wheel=wheel), design, stages=1,
                                          accuracy="precise")
             return run.stages[0]["speed_after"]

@@ -14,8 +14,9 @@ from pdm_design.scenes.rimless_wheel import (
     RimlessWheelInitial,
     RimlessWheelScene,
     Wheel,
+    formulation,
+    rough,
 )
-from pdm_design.scenes.rimless_wheel import formulation, rough
 from pdm_design.scenes.rimless_wheel.analysis import analyse_rimless_wheel
 from pdm_design.scenes.rimless_wheel.sim import simulate_rimless_wheel
 from pdm_design.scenes.rimless_wheel.template import rimless_wheel_template

@@ -210,7 +210,7 @@ class _Model:
         phi0, phi1 = low_beta - self.alpha, high_beta + self.alpha
         g, mu = self.scene.gravity, self.scene.friction
         for energy, _ in energies:
-            for phi, (fc, fd), (sc, sd) in phys.stance_conditions(
+            for _, (fc, fd), (sc, sd) in phys.stance_conditions(
                     energy, phi0, phi1, self.ground, self.leg, g, self.k2, self.rate, mu,
                     ARC_ROWS):
                 add("no_flight", "stance, widest arc", fc - fd, fc)

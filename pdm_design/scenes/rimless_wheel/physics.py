@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ...physics.ops import acos, asin, cos, fabs, fmax, fmin, sin, sqrt, where
+from ...physics.ops import asin, cos, fabs, fmax, fmin, sin, sqrt
 
 
 def half_pitch(spokes):

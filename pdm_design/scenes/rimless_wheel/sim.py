@@ -283,8 +283,9 @@ class _Run:
             return self.fail(k, "slip", phi, w, f"impact {k} needs friction {abs(p_t) / p_n:.4g}"
                              f", the ground has {mu:g}: the new spoke slides"), w, beta, s_prev
         if w_after <= 0.0:
-            return self.fail(k, "stalled", phi, w, f"impact {k} stops the wheel "
-                             f"(speed after it {w_after:.4g} rad/s): it rolls back"), w, beta, s_prev
+            detail = (f"impact {k} stops the wheel (speed after it {w_after:.4g} rad/s): it "
+                      "rolls back")
+            return self.fail(k, "stalled", phi, w, detail), w, beta, s_prev
         s_new = tip[0] - (ground.tread_length(k - 1) - s_prev) if ground.stairs else 0.0
         self.passed = k
         self.record(k, phi, w, w_after, beta, tip, s_new, keep, p_t / p_n)
@@ -334,7 +335,8 @@ class _Run:
                "speed_after": w_after, "friction_demand": abs(ratio),
                "energy_after": float(phys.stance_energy(w_after, beta - self.wh.alpha,
                                                         self.wh.rate)),
-               "chord_angle": float(beta), "foot_x": float(self.foot[0] + tip[0]), "foot_y": float(self.foot[1] + tip[1])}
+               "chord_angle": float(beta), "foot_x": float(self.foot[0] + tip[0]),
+               "foot_y": float(self.foot[1] + tip[1])}
         if self.ground.stairs:
             rec["landing_x"] = float(s_new)
         self.records.append(rec)
