@@ -139,3 +139,27 @@ def test_spoke_counts():
         formulation.build(spec)
     fixed = formulation.with_spokes(spec, 7)
     assert fixed.design["spokes"] == 7 and formulation.build(fixed)
+
+
+def test_a_hundred_spokes_and_three():
+    """100 spokes: the box holds at its corners on the step map; 3 spokes of a point mass
+    (eta = -1/2): IPOPT finds no design, the impact row is the one broken."""
+    spec = spec_of({"spokes": 100, "leg_length": 1.0, "slope": Bounds(min=0.001, max=0.05)},
+                   speed=3.0, objective={"max_offset_tolerance": 1.0})
+    x = solve(spec)
+    fixed = RimlessWheelDesign(spokes=100, leg_length=1.0, slope=float(x["slope"]))
+    wh, _, _ = resolve(spec.scene, fixed)
+    for sign in (-1, 1):
+        assert corner(wh, spec, sign * x["tolerance"] * (1 - 1e-4), 3.0, 10_000).passed[0] \
+            == 10_000
+    three = spec_of({"spokes": 3, "leg_length": 1.0, "slope": Bounds(min=0.01, max=1.0)},
+                    speed=1.0)
+    form, bounds = formulated(three)
+    solver = ca.nlpsol("three", "ipopt", form.nlp, {"ipopt.print_level": 0, "print_time": 0,
+                                                    "ipopt.sb": "yes"})
+    sol = solver(x0=form.start_vector({"slope": 0.5}), lbx=form.lbx, ubx=form.ubx,
+                 lbg=form.lbg, ubg=form.ubg, p=form.parameters())
+    assert not solver.stats()["success"]
+    rows = np.asarray(form.evaluate(sol["x"], form.parameters())[0]).ravel()
+    broken = {form.conditions[i].name for i in np.flatnonzero(rows < -1e-6)}
+    assert "impact_ratio" in broken

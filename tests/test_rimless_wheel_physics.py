@@ -174,3 +174,17 @@ def test_nose_reach_by_geometry():
         u, w = tip - hub, np.array([a, 0.0]) - hub
         clear = u[0] * w[1] - u[1] * w[0] < 0  # the corner clockwise of the spoke, wheel side
         assert clear == (a < reach)
+
+
+def test_a_hundred_thousand_spokes_roll_into_flight():
+    """Tedrake's orbit still (1 - eta^2 without cancellation), and it is a rolling hoop's:
+    l omega*^2 ~ g gamma / alpha grows past g, so the wheel leaves the ground (no_flight < 0,
+    every margin in [-1, 1])."""
+    n, slope = 100_000, 0.01
+    alpha = math.pi / n
+    expected = math.sqrt(4 * G * math.sin(alpha) * math.sin(slope)) / math.tan(2 * alpha)
+    a = analyse_rimless_wheel(*ramp(n, slope, speed=50.0))
+    assert a.periodic["post_impact_speed"] == pytest.approx(expected, rel=1e-9)
+    assert expected**2 > G
+    assert a.margins["no_flight"] < 0
+    assert all(-1.0 <= value <= 1.0 for value in a.margins.values())

@@ -172,3 +172,19 @@ def test_a_million_steps_in_two_seconds():
     run = step_map(wh, scene.initial.speed, betas, ground=wh.ground)
     assert time.perf_counter() - start < 2.0
     assert run.passed[0] == 10**6
+
+
+@pytest.mark.parametrize("scale", [1e-5, 1e5])
+def test_any_size_simulates_the_same_wheel(scale):
+    """Lengths x k, speeds x 1/sqrt(k), times x sqrt(k): the same run in the same units."""
+    def run(k):
+        scene = RimlessWheelScene(initial=RimlessWheelInitial(speed=1.2 / math.sqrt(k)),
+                                  wheel=Wheel(gyration=0.2 * k))
+        design = RimlessWheelDesign(spokes=8, leg_length=k, slope=0.08)
+        return simulate_rimless_wheel(scene, design, stages=5).stages[-1]
+
+    base, scaled = run(1.0), run(scale)
+    assert scaled["speed_after"] * math.sqrt(scale) == pytest.approx(base["speed_after"],
+                                                                     rel=1e-9)
+    assert scaled["impact_time"] / math.sqrt(scale) == pytest.approx(base["impact_time"],
+                                                                     rel=1e-9)

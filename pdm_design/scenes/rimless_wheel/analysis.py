@@ -92,12 +92,14 @@ def stance_margins(wh: Wheel, energy, phi0, phi1):
 
 def _margins(capacity, demand):
     """analysis.result.margin, elementwise: (capacity - demand) / max(capacity, demand); where
-    both are <= 0, 0 if equal else -1."""
+    both are <= 0, 0 if equal else -1; at least -1 (a negative capacity, friction's on a
+    negative normal force, fails whole)."""
     capacity, demand = np.broadcast_arrays(np.asarray(capacity, float), np.asarray(demand, float))
     scale = np.maximum(capacity, demand)
     with np.errstate(divide="ignore", invalid="ignore"):
         out = np.where(scale > 0.0, (capacity - demand) / np.where(scale > 0.0, scale, 1.0),
                        np.where(capacity == demand, 0.0, -1.0))
+    out = np.maximum(out, -1.0)
     return out if out.shape else float(out)
 
 
