@@ -86,3 +86,11 @@ def test_rough_statistics_are_for_a_ramp():
     scene = RimlessWheelScene(initial=RimlessWheelInitial(speed=1.0), ground="stairs")
     with pytest.raises(ValueError, match="ramp"):
         rough.mfpt(scene, RimlessWheelDesign(spokes=8, leg_length=1.0, rise=0.1), 0.01)
+
+
+def test_a_start_too_slow_to_vault_lasts_no_step():
+    """E_0 = omega0^2 - 2 g (1 - cos(gamma - alpha)) < 0: the first stance stalls."""
+    slow = math.sqrt(2 * 9.81 * (1 - math.cos(0.08 - math.pi / 8))) * 0.99
+    assert rough.mfpt(scene_at(slow), DESIGN, 0.03)["estimate"] == 0.0
+    mc = rough.monte_carlo(scene_at(slow), DESIGN, 0.03, steps=5, samples=100)
+    assert mc["mean"] == 0.0 and mc["failures"] == {"stalled": 100}

@@ -168,14 +168,20 @@ def _pre(wh, e, beta):
 
 
 def _post(wh, e, beta):
-    """The next stance (energy E') starts: it vaults (E' > 0 when it starts behind the
-    vertical) and its forces hold at its start and its top."""
+    """The next stance (energy E' after a step on chord beta) starts: `starts`."""
     nxt = wh.eta**2 * e + phys.step_offset(beta, wh.alpha, wh.eta, wh.rate)
-    phi0 = beta - wh.alpha
-    ok = ~((phi0 < 0.0) & (nxt <= 0.0))
-    ok &= point_failures(wh, nxt, phi0, wh.ground) == OK
-    top = np.where(phi0 < 0.0, 0.0, phi0)  # the spoke's vertical, when the stance passes it
-    return ok & (point_failures(wh, nxt, top, wh.ground) == OK)
+    return starts(wh, nxt, beta)
+
+
+def starts(wh, energy, beta_prev):
+    """A stance of energy E starting on chord beta_prev: it vaults (E > 0 when it starts behind
+    the vertical) and its forces hold at its start and at its top (the spoke's vertical, when it
+    passes it)."""
+    phi0 = beta_prev - wh.alpha
+    ok = ~((phi0 < 0.0) & (energy <= 0.0))
+    ok &= point_failures(wh, energy, phi0, wh.ground) == OK
+    top = np.where(phi0 < 0.0, 0.0, phi0)
+    return ok & (point_failures(wh, energy, top, wh.ground) == OK)
 
 
 def chain_mfpt(wh: Wheel, start_energy: float, sigma: float, bins: int) -> float:
@@ -193,6 +199,8 @@ def chain_mfpt(wh: Wheel, start_energy: float, sigma: float, bins: int) -> float
     lhs = -off
     np.fill_diagonal(lhs, pre + post + off.sum(axis=1))
     m = np.linalg.solve(lhs, q.sum(axis=1) + post)
+    if not starts(wh, np.array([start_energy]), wh.beta)[0]:
+        return 0.0  # the first stance fails whatever the ground
     q0, _, post0 = _rows(wh, np.array([start_energy]), edges, sigma)
     return float(q0[0] @ (1.0 + m) + post0[0])
 
