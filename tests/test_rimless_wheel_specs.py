@@ -89,3 +89,22 @@ def test_template_reads_and_its_start_vaults_every_slope():
     need = 2 * 9.81 / 1.0 * (1 - math.cos(slope.min - math.pi / 8))
     assert slow**2 > need
     assert formulation.build(spec)
+
+
+def test_plugin_names_the_pieces_and_imports_nothing_heavy():
+    import subprocess
+    import sys
+
+    code = ("import sys; import pdm_design.scenes.rimless_wheel.plugin as p; "
+            "print(sorted(m for m in ('numpy', 'scipy', 'casadi') if m in sys.modules)); "
+            "print(p.KIND, p.MARGINS, p.FAILURE_KINDS)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=Path(__file__).resolve().parent.parent, check=True).stdout
+    assert out.splitlines()[0] == "[]"
+    from pdm_design.scenes.rimless_wheel import plugin
+    from pdm_design.scenes.rimless_wheel.sim import FAILURE_KINDS
+
+    assert plugin.FAILURE_KINDS == FAILURE_KINDS
+    data, spec = read(plugin.template())
+    assert plugin.analyse(spec.scene, RimlessWheelDesign(
+        spokes=8, leg_length=1.0, slope=0.1)).kind == plugin.KIND

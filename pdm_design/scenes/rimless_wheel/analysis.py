@@ -1,5 +1,5 @@
 """Closed-form analysis of a rimless wheel design: the period-one orbit, the approach to it from
-the start speed, the margins (docs/rimless_wheel.md, section 5)."""
+the start speed, the margins (docs/rimless_wheel.md, sections 5 and 6)."""
 
 from __future__ import annotations
 

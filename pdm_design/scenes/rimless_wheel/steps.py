@@ -9,7 +9,7 @@ vertical, where the normal force is least for a point mass) and its end, and its
 (friction, the impulse pushing); on stairs, the landing spoke's nose (nose_hit) and the foothold
 on its tread (missed_tread). A failure in stance k leaves k - 1 steps passed, as in the event
 simulator. Between the checked angles a stance is not checked (the event simulator is the judge
-there; docs/rimless_wheel.md, section 7).
+there; docs/rimless_wheel.md, sections 8 and 10).
 """
 
 from __future__ import annotations
