@@ -65,6 +65,7 @@ def row_margins(spec):
 @pytest.mark.parametrize("ground,design", [
     ("ramp", {"spokes": 8, "leg_length": 1.0, "slope": 0.08}),
     ("ramp", {"spokes": 12, "leg_length": 0.5, "slope": 0.05}),
+    ("ramp", {"spokes": 8, "leg_length": 1.0, "slope": 0.45}),  # starts past the vertical
     ("stairs", {"spokes": 8, "leg_length": 1.0, "rise": 0.1, "landing_offset": 0.45}),
 ])
 def test_rows_at_a_fixed_design_are_the_analysis_margins(ground, design):

@@ -84,7 +84,7 @@ def build(spec):
     tau = ca.SX.sym("tolerance") if robust else 0.0
     t = ca.SX.sym("min_margin") if epigraph else None
     aux = [("periodic_speed", m.W, 0.0, math.inf)]
-    start = [ca.sqrt(ca.fmax(m.orbit_speed2(m.beta), 1e-12 * m.speed_unit**2))]
+    start = [ca.sqrt(ca.fmax(m.orbit_speed2(m.beta), 0.0))]
     if robust:
         aux.append(("tolerance", tau, 0.0, top))
         start.append(0.01 * top)
@@ -124,8 +124,6 @@ class _Model:
         self.chord = phys.chord(self.leg, self.alpha)
         self.stairs = scene.ground == "stairs"
         self.values = values
-        self.speed_unit = math.sqrt(g / (values["leg_length"] if isinstance(
-            values["leg_length"], float) else 1.0))
         self.W = ca.SX.sym("periodic_speed")
         if self.stairs:
             self.rise = values["rise"]
@@ -158,10 +156,10 @@ class _Model:
         return float(rise)
 
     def derived(self):
-        out = {"periodic_speed": self.W, "contraction": self.eta**2 + 0 * self.W,
-               "chord_angle": self.beta + 0 * self.W}
+        out = {"periodic_speed": self.W, "contraction": _sx(self.eta**2),
+               "chord_angle": _sx(self.beta)}
         if self.stairs:
-            out.update(tread=self.tread + 0 * self.W, landing_offset=self.s0 + 0 * self.W)
+            out.update(tread=_sx(self.tread), landing_offset=_sx(self.s0))
         return out
 
     def energy_ends(self, tau):
@@ -194,8 +192,10 @@ class _Model:
             kind=VALIDITY)
         (low, high) = self.energy_ends(tau)
         for (energy, beta), what in zip(low, ("first stance", "orbit of the lowest slopes")):
-            demand = self.rate * phys.versine(ca.fmin(beta - self.alpha, 0.0))
-            add("over_the_top", f"{what}: vaults its spoke", energy, energy + demand)
+            # omega+^2 against rate (1 - cos(beta - alpha)) behind the vertical, 0 past it
+            start2 = phys.speed_squared(energy, beta - self.alpha, self.rate)
+            demand = phys.over_the_top_demand(beta, self.alpha, self.rate)
+            add("over_the_top", f"{what}: vaults its spoke", start2 - demand, start2)
         self._force_rows(add, low + high, low_beta, high_beta)
         for beta, what in ((low_beta, "lowest"), (high_beta, "highest")):
             normal, tangential = phys.impact_impulses(self.eta, self.alpha, beta, self.ground)
@@ -234,6 +234,11 @@ class _Model:
             add("landing", f"foothold {k}, furthest", tread - tau - longest, tread)
             nose = tread + (tau if k > 1 else 0.0) - shortest_before
             add("nose_clearance", f"step {k}, nearest foothold", reach - nose, reach)
+
+
+def _sx(value):
+    """value as a CasADi expression (a number or one already)."""
+    return value if isinstance(value, ca.SX) else ca.SX(value)
 
 
 def asin_sx(x, c):

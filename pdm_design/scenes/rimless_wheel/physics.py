@@ -210,8 +210,3 @@ def stance_conditions(energy, phi0, phi1, ground, leg, gravity, k2, rate, fricti
         out.append((phi, (normal + centripetal, centripetal), (friction * normal,
                                                                 fabs(tangential))))
     return out
-
-
-__all__ = [name for name in dir() if not name.startswith("_") and name not in (
-    "annotations", "math", "np", "acos", "asin", "cos", "fabs", "fmax", "fmin", "sin", "sqrt",
-    "where")]

@@ -16,7 +16,7 @@ casadi) are imported only when a function here is called.
 
 from __future__ import annotations
 
-from . import KIND, MARGINS
+from . import KIND, MARGINS  # noqa: F401  (re-exported)
 from .model import RimlessWheelDesign, RimlessWheelScene
 
 SCENE_CLASS = RimlessWheelScene

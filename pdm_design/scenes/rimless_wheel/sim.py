@@ -38,7 +38,7 @@ from ...accuracy import accuracy as accuracy_preset
 from ...sim.core import Event, Outcome, SimulationRefused, SimulationResult, check_scales
 from . import physics as phys
 from .analysis import resolve
-from .model import RimlessWheelDesign, RimlessWheelScene
+from .model import RimlessWheelDesign, RimlessWheelScene, check_ground
 
 FAILURE_KINDS = ("stalled", "flight", "slip", "nose_hit", "missed_tread")
 DEFAULT_RECORD_LIMIT = 10_000
@@ -127,9 +127,10 @@ def simulate_rimless_wheel(scene: RimlessWheelScene, design: RimlessWheelDesign,
     if stages < 0:
         raise SimulationRefused(f"stages must be >= 0, not {stages}")
     check_wheel_scales(scene, design)
-    wh, geo, problems = resolve(scene, design)
-    if problems and any("needs" in p or "need " in p or "is for" in p for p in problems):
-        raise SimulationRefused("; ".join(problems))
+    missing = check_ground(scene, design)
+    if missing:
+        raise SimulationRefused("; ".join(missing))
+    wh, geo, _ = resolve(scene, design)
     ground = _Ground(scene, design, wh, geo, _errors(step_errors, stages))
     run = _Run(scene, wh, ground, acc, record_trajectory, trajectory_samples, trajectory_limit)
     failure = None
