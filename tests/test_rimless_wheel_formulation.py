@@ -81,8 +81,13 @@ def test_rows_at_a_fixed_design_are_the_analysis_margins(ground, design):
         if name in footholds.margins:
             assert rows[name] == pytest.approx(footholds.margins[name], rel=1e-9, abs=1e-12)
     # the force rows judge the approach's two ends at 9 angles, the analysis every stance at 33
+    # (a row's slack / scale is 1 - demand / capacity on both sides of 0; a failed margin is
+    # -(1 - capacity / demand): there only the sign is the same)
     for name in ("no_flight", "no_slip"):
-        assert rows[name] == pytest.approx(analysis.margins[name], abs=2e-3)
+        if analysis.margins[name] >= 0:
+            assert rows[name] == pytest.approx(analysis.margins[name], abs=2e-3)
+        else:
+            assert rows[name] < 0
 
 
 def corner(wh, spec, slope_error, speed, steps):
