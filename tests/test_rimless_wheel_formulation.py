@@ -54,7 +54,8 @@ def row_margins(spec):
     form, bounds = formulated(spec)
     x = form.start_vector({})
     slack, scale, _, _ = form.evaluate(x, form.parameters())
-    ratio = np.asarray(slack).ravel() / np.asarray(scale).ravel()
+    with np.errstate(divide="ignore"):  # a slip row's scale mu N is 0 where N <= 0
+        ratio = np.asarray(slack).ravel() / np.asarray(scale).ravel()
     out = {}
     for info, value in zip(form.conditions, ratio):
         if info.kind == "margin" and not info.equality:

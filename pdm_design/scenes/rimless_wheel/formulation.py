@@ -214,7 +214,8 @@ class _Model:
                     energy, phi0, phi1, self.ground, self.leg, g, self.k2, self.rate, mu,
                     ARC_ROWS):
                 add("no_flight", "stance, widest arc", fc - fd, fc)
-                add("no_slip", "stance, widest arc", sc - sd, sc)
+                # mu N as the scale while N > 0; where N <= 0 the slack is negative already
+                add("no_slip", "stance, widest arc", sc - sd, ca.fmax(sc, 0.0))
 
     def _stairs_rows(self, add, tau, low_beta, high_beta):
         chord, tread, s0 = self.chord, self.tread, self.s0
