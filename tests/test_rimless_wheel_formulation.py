@@ -37,10 +37,10 @@ def formulated(spec):
     return assemble(spec, model, key=repr(spec), bounds=bounds), bounds
 
 
-def solve(spec):
+def solve(spec, **options):
     form, bounds = formulated(spec)
     solver = ca.nlpsol("wheel", "ipopt", form.nlp, {"ipopt.print_level": 0, "print_time": 0,
-                                                    "ipopt.sb": "yes"})
+                                                    "ipopt.sb": "yes", **options})
     x0 = form.start_vector({n: bounds[n][2] for n in form.design_names})
     sol = solver(x0=x0, lbx=form.lbx, ubx=form.ubx, lbg=form.lbg, ubg=form.ubg,
                  p=form.parameters())
@@ -170,3 +170,26 @@ def test_a_hundred_spokes_and_three():
     rows = np.asarray(form.evaluate(sol["x"], form.parameters())[0]).ravel()
     broken = {form.conditions[i].name for i in np.flatnonzero(rows < -1e-6)}
     assert "impact_ratio" in broken
+
+
+@pytest.mark.parametrize("ground", ["ramp", "stairs"])
+@pytest.mark.parametrize("size", [1e-5, 1e5])
+def test_the_same_design_at_any_size(ground, size):
+    """Lengths x k, speeds x 1/sqrt(k): the same slope (rise / k) and box. The rows are pure
+    numbers; IPOPT's own gradient-based scaling of the SI variables (not used here) moves the
+    answer at 1e-5 m by 3e-4 of itself."""
+    def answer(k):
+        design = ({"spokes": 8, "leg_length": k, "slope": Bounds(min=0.02, max=0.3,
+                                                                   initial=0.1)}
+                  if ground == "ramp" else
+                  {"spokes": 8, "leg_length": k, "rise": Bounds(min=0.01 * k, max=0.3 * k,
+                                                                 initial=0.1 * k)})
+        spec = spec_of(design, ground=ground, speed=1.3 / math.sqrt(k),
+                       speed_tolerance=0.05 / math.sqrt(k),
+                       objective={"max_offset_tolerance": 1.0})
+        x = solve(spec, **{"ipopt.nlp_scaling_method": "none"})
+        unit = 1.0 if ground == "ramp" else k
+        return x["slope" if ground == "ramp" else "rise"] / unit, x["tolerance"] / unit
+
+    base, scaled = answer(1.0), answer(size)
+    assert scaled == pytest.approx(base, rel=1e-7)

@@ -188,3 +188,25 @@ def test_a_hundred_thousand_spokes_roll_into_flight():
     assert expected**2 > G
     assert a.margins["no_flight"] < 0
     assert all(-1.0 <= value <= 1.0 for value in a.margins.values())
+
+
+def test_written_once_for_floats_arrays_and_casadi():
+    """The step map on a float, on a numpy array and on CasADi symbols gives the same numbers,
+    and CasADi's derivative through one step is the multiplier eta^2."""
+    import casadi as ca
+
+    k2, leg, alpha, g = 0.1, 1.0, math.pi / 9, G
+    eta = phys.impact_ratio(k2, leg, alpha)
+    rate = phys.stance_rate(g, k2, leg)
+    energies = np.array([0.3, 1.0, 2.5])
+    betas = np.array([0.05, 0.1, 0.2])
+    on_array = phys.step_energy(energies, betas, alpha, eta, rate)
+    e, b = ca.SX.sym("e"), ca.SX.sym("b")
+    step = ca.Function("step", [e, b], [phys.step_energy(e, b, alpha, eta, rate)])
+    slope = ca.Function("slope", [e, b], [ca.jacobian(phys.step_energy(e, b, alpha, eta, rate),
+                                                      e)])
+    for i in range(3):
+        on_float = phys.step_energy(float(energies[i]), float(betas[i]), alpha, eta, rate)
+        assert on_array[i] == pytest.approx(on_float, rel=1e-15)
+        assert float(step(energies[i], betas[i])) == pytest.approx(on_float, rel=1e-14)
+        assert float(slope(energies[i], betas[i])) == pytest.approx(eta**2, rel=1e-14)
