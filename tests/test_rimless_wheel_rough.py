@@ -59,11 +59,16 @@ def test_one_step_survival_against_the_exact_probability():
     assert abs(mc["survival"][2] - exact) < 4.5 * se
 
 
-@pytest.mark.parametrize("tolerance", [0.045, 0.03])
-def test_mfpt_agrees_with_monte_carlo(tolerance):
-    scene = scene_at(1.1)
-    chain = rough.mfpt(scene, DESIGN, tolerance, bins=200)
-    mc = rough.monte_carlo(scene, DESIGN, tolerance, steps=2000, samples=3000, seed=5)
+@pytest.mark.parametrize("slope,tolerance,speed,kind", [
+    (0.08, 0.045, 1.1, "stalled"), (0.08, 0.03, 1.1, "stalled"),
+    (0.22, 0.09, 1.5, "flight"),  # steep: the fast steps leave the ground
+])
+def test_mfpt_agrees_with_monte_carlo(slope, tolerance, speed, kind):
+    scene = scene_at(speed)
+    design = RimlessWheelDesign(spokes=8, leg_length=1.0, slope=slope)
+    chain = rough.mfpt(scene, design, tolerance, bins=200)
+    mc = rough.monte_carlo(scene, design, tolerance, steps=2000, samples=3000, seed=5)
+    assert set(mc["failures"]) == {kind}
     assert mc["censored"] == 0
     assert chain["ci_low"] <= chain["estimate"] <= chain["ci_high"]
     assert abs(chain["estimate"] - mc["mean"]) < 4.5 * mc["standard_error"] + (
