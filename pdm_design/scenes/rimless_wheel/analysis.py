@@ -20,7 +20,7 @@ APPROACH_LIMIT = 100_000
 
 
 @dataclass(frozen=True)
-class Wheel:
+class WheelNumbers:
     """One design's numbers: spokes n, half pitch alpha, leg l, k^2, eta, 1 - eta^2, stance
     rate, gravity, friction; the step's chord angle beta and the ground's normal angle."""
 
@@ -41,7 +41,8 @@ class Wheel:
         return float(phys.chord(self.leg, self.alpha))
 
 
-def resolve(scene: RimlessWheelScene, design: RimlessWheelDesign) -> tuple[Wheel, dict, list]:
+def resolve(scene: RimlessWheelScene,
+            design: RimlessWheelDesign) -> tuple[WheelNumbers, dict, list]:
     """The design's numbers, its stairs geometry (rise, tread, landing_offset, drift) and the
     problems found resolving them."""
     problems = check_ground(scene, design)
@@ -70,11 +71,12 @@ def resolve(scene: RimlessWheelScene, design: RimlessWheelDesign) -> tuple[Wheel
         landing = 0.5 * (low + tread) if design.landing_offset is None else design.landing_offset
         geometry.update(rise=rise, tread=tread, landing_offset=landing, nose_reach=reach,
                         drift_per_step=advance - tread)
-    wheel = Wheel(n, alpha, leg, k2, eta, loss, rate, scene.gravity, scene.friction, beta, ground)
+    wheel = WheelNumbers(n, alpha, leg, k2, eta, loss, rate, scene.gravity, scene.friction, beta,
+                         ground)
     return wheel, geometry, problems
 
 
-def stance_margins(wh: Wheel, energy, phi0, phi1):
+def stance_margins(wh: WheelNumbers, energy, phi0, phi1):
     """(over_the_top, no_flight, no_slip) of stances of energy `energy` (a number or an array)
     from phi0 to phi1: the smallest over ARC_POINTS angles (both ends in)."""
     energy = np.asarray(energy, dtype=float)
@@ -162,7 +164,7 @@ def _approach(start, orbit, multiplier, count):
     return orbit + gap[: last + 1]
 
 
-def _impact_friction(wh: Wheel, problems: list[str]) -> float:
+def _impact_friction(wh: WheelNumbers, problems: list[str]) -> float:
     normal, _ = phys.impact_impulses(wh.eta, wh.alpha, wh.beta, wh.ground)
     if normal <= 0.0:
         problems.append("the impact's impulse would pull the new spoke into the ground: the "
@@ -172,7 +174,8 @@ def _impact_friction(wh: Wheel, problems: list[str]) -> float:
     return margin(wh.friction, demand)
 
 
-def _stairs_margins(wh: Wheel, geo: dict, stages: int, margins: dict, problems: list) -> None:
+def _stairs_margins(wh: WheelNumbers, geo: dict, stages: int, margins: dict,
+                    problems: list) -> None:
     """landing (each foothold before its tread's nose: 1 - s / tread) and nose_clearance (the
     landing spoke passes over the nose: 1 - a / nose_reach, a the nose's distance ahead of the
     foothold) over `stages` steps, whose footholds drift by drift_per_step each."""

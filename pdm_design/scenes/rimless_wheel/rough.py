@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from . import physics as phys
-from .analysis import Wheel, resolve
+from .analysis import WheelNumbers, resolve
 from .steps import OK, point_failures, step_map
 
 # Beyond this many steps the chain's failure probabilities (about 1 / mfpt a step) are below
@@ -35,7 +35,7 @@ def sigma_of(tolerance: float) -> float:
     return tolerance / 3.0
 
 
-def _ramp(scene, design) -> Wheel:
+def _ramp(scene, design) -> WheelNumbers:
     if scene.ground != "ramp":
         raise ValueError("rough-ground statistics are for a ramp (ground = \"ramp\")")
     wh, _, problems = resolve(scene, design)
@@ -86,7 +86,7 @@ def survival_one_step_exact(scene, design, tolerance: float) -> float:
     return float(ndtr((wh.beta - root) / sigma_of(tolerance)))
 
 
-def _inverse_offset(wh: Wheel, value):
+def _inverse_offset(wh: WheelNumbers, value):
     """The chord angle beta (below psi0, where step_offset increases) with step_offset(beta) =
     value: step_offset = rate (eta^2 - 1 + R cos(beta - psi0)), R cos psi0 = cos alpha
     (1 - eta^2), R sin psi0 = sin alpha (1 + eta^2)."""
@@ -128,7 +128,7 @@ def _prob(a, b, mean, sigma):
     return np.maximum(np.where(za > 0.0, upper, ndtr(zb) - ndtr(za)), 0.0)
 
 
-def _rows(wh: Wheel, states, edges, sigma):
+def _rows(wh: WheelNumbers, states, edges, sigma):
     """Transitions of states E (n,) to bins (edges, n+1: the first and last open-ended),
     and their failure probabilities (pre: the stance ends or the impact fails, no new step;
     post: the next stance fails at its start, after the step)."""
@@ -184,7 +184,7 @@ def starts(wh, energy, beta_prev):
     return ok & (point_failures(wh, energy, top, wh.ground) == OK)
 
 
-def chain_mfpt(wh: Wheel, start_energy: float, sigma: float, bins: int) -> float:
+def chain_mfpt(wh: WheelNumbers, start_energy: float, sigma: float, bins: int) -> float:
     """Mean steps before failure from start_energy by the chain of `bins` energy bins."""
     orbit_low = _orbit(wh, wh.beta - 8 * sigma)
     orbit_high = _orbit(wh, wh.beta + 8 * sigma)

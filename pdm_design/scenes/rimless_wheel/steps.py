@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import physics as phys
-from .analysis import Wheel
+from .analysis import WheelNumbers
 
 CODES = ("", "stalled", "flight", "slip", "nose_hit", "missed_tread")
 OK, STALLED, FLIGHT, SLIP, NOSE, MISSED = range(6)
@@ -38,7 +38,7 @@ class StepRun:
         return [CODES[c] for c in self.failure]
 
 
-def energies(wh: Wheel, start_energy, betas):
+def energies(wh: WheelNumbers, start_energy, betas):
     """E_0..E_K of each wheel (rows) over chords betas (N, K): a linear filter."""
     from scipy.signal import lfilter
 
@@ -50,7 +50,7 @@ def energies(wh: Wheel, start_energy, betas):
     return np.concatenate([e0[:, None], out], axis=1)
 
 
-def point_failures(wh: Wheel, energy, phi, ground):
+def point_failures(wh: WheelNumbers, energy, phi, ground):
     """Codes (FLIGHT, SLIP or OK) of the stance force conditions at angle phi."""
     w2 = phys.speed_squared(energy, phi, wh.rate)
     normal, tangential = phys.stance_forces(phi, w2, ground, wh.leg, wh.gravity, wh.k2)
@@ -58,7 +58,7 @@ def point_failures(wh: Wheel, energy, phi, ground):
                     np.where(np.abs(tangential) > wh.friction * normal, SLIP, OK))
 
 
-def stance_failures(wh: Wheel, energy, beta_prev, beta, ground):
+def stance_failures(wh: WheelNumbers, energy, beta_prev, beta, ground):
     """Code of stance k's first failure (its start, top, end, then its impact) from E_{k-1},
     beta_{k-1} and beta_k (arrays of one shape)."""
     phi0, phi1 = beta_prev - wh.alpha, beta + wh.alpha
@@ -73,7 +73,7 @@ def stance_failures(wh: Wheel, energy, beta_prev, beta, ground):
     return np.where(code == OK, impact, code)
 
 
-def step_map(wh: Wheel, start_speed, betas, *, ground: float, keep: bool = False,
+def step_map(wh: WheelNumbers, start_speed, betas, *, ground: float, keep: bool = False,
              stairs: dict | None = None) -> StepRun:
     """Run wheels (rows of betas, (N, K): chord angles of steps 1..K; beta_0 = wh.beta, the
     ground as designed) from post-impact speed start_speed (a number or (N,)). stairs: the
@@ -92,7 +92,7 @@ def step_map(wh: Wheel, start_speed, betas, *, ground: float, keep: bool = False
     return StepRun(first, failure, e if keep else None)
 
 
-def _landing_failures(wh: Wheel, betas, stairs):
+def _landing_failures(wh: WheelNumbers, betas, stairs):
     """NOSE where step k's landing spoke meets the nose of tread k - 1, MISSED where its
     foothold is beyond tread k's nose: footholds s_k = s_{k-1} + chord cos beta_k - tread_{k-1}."""
     treads = np.broadcast_to(stairs["tread"], (betas.shape[0], betas.shape[1] + 1))
