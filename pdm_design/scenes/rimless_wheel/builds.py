@@ -1,0 +1,87 @@
+"""Many builds of one rimless wheel design at once (the yield): each step's slope (a ramp) or
+rise and tread (stairs) off by its own error, drawn normal with sigma = t / 3 (or uniform in
++-t), and the start speed by one; every build run on the vectorised step map
+(`steps.step_map`) for `stages` steps. As pdm_design/tolerances/stairs.py does for the ball:
+the yield is the fraction of builds that make every step, and each failure is named.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import physics as phys
+from .analysis import resolve
+from .steps import CODES, step_map
+
+QUANTITIES = {"ramp": ("slope", "speed"), "stairs": ("rise", "tread", "speed")}
+
+
+@dataclass(frozen=True)
+class WheelBuilds:
+    """passed: steps each build made; failure: each build's failure kind ("" for none)."""
+
+    stages: int
+    passed: np.ndarray
+    failure: list[str]
+
+    @property
+    def yield_(self) -> float:
+        return float(np.mean(self.passed >= self.stages))
+
+    def survival(self) -> np.ndarray:
+        """survival[s]: the fraction of builds that made at least s steps (s = 0..stages)."""
+        counts = np.bincount(np.minimum(self.passed, self.stages), minlength=self.stages + 1)
+        return 1.0 - np.concatenate([[0], np.cumsum(counts)[:-1]]) / len(self.passed)
+
+
+def _draw(rng, t, shape, distribution):
+    if distribution == "uniform":
+        return rng.uniform(-t, t, shape)
+    return rng.normal(0.0, t / 3.0, shape)
+
+
+def run_builds(scene, design, tolerances: dict[str, float], *, stages: int, builds: int,
+               seed: int = 0, distribution: str = "normal") -> WheelBuilds:
+    """`builds` builds of the design with every quantity of `tolerances` ({quantity: t}:
+    slope (rad) on a ramp, rise and tread (m) on stairs, each step its own; speed (rad/s), the
+    start's) drawn independently."""
+    unknown = set(tolerances) - set(QUANTITIES[scene.ground])
+    if unknown:
+        raise ValueError(f"not a quantity of a rimless wheel on a {scene.ground}: "
+                         f"{', '.join(sorted(unknown))} (expected "
+                         f"{', '.join(QUANTITIES[scene.ground])})")
+    wh, geo, problems = resolve(scene, design)
+    if problems:
+        raise ValueError("; ".join(problems))
+    rng = np.random.default_rng(seed)
+    shape = (builds, stages)
+    speed = scene.initial.speed + _draw(rng, tolerances.get("speed", 0.0), builds, distribution)
+    stairs = None
+    if scene.ground == "ramp":
+        betas = wh.beta + _draw(rng, tolerances.get("slope", 0.0), shape, distribution)
+    else:
+        rises = geo["rise"] + _draw(rng, tolerances.get("rise", 0.0), shape, distribution)
+        ratio = rises / wh.chord
+        unbuildable = ~((ratio >= 0.0) & (ratio < 1.0))
+        betas = np.arcsin(np.clip(ratio, 0.0, 1.0 - 1e-15))
+        # a rise beyond the chord: no spoke reaches the tread; one below 0: the step goes up
+        betas = np.where(unbuildable, wh.beta - 4.0 * wh.alpha, betas)
+        treads = geo["tread"] + _draw(rng, tolerances.get("tread", 0.0), shape, distribution)
+        treads = np.concatenate([np.full((builds, 1), geo["tread"]), treads], axis=1)
+        stairs = {"tread": treads, "landing_offset": geo["landing_offset"]}
+    run = step_map(wh, speed, betas, ground=wh.ground, stairs=stairs)
+    return WheelBuilds(stages, run.passed, [CODES[c] for c in run.failure])
+
+
+def landing_threshold(scene, design) -> float:
+    """The rise error of step 1 beyond which (below it) the first foothold lands past tread 1's
+    nose, tread 0 and tread 1 as designed: s_1 = s_0 + sqrt(c^2 - (rise + e)^2) - tread >= tread
+    iff rise + e <= sqrt(c^2 - (2 tread - s_0)^2)."""
+    wh, geo, _ = resolve(scene, design)
+    far = 2.0 * geo["tread"] - geo["landing_offset"]
+    return float(np.sqrt(wh.chord**2 - far**2) - geo["rise"]) if far < wh.chord else -np.inf
+
+
+__all__ = ["QUANTITIES", "WheelBuilds", "landing_threshold", "run_builds", "phys"]

@@ -1,0 +1,246 @@
+"""The rimless wheel NLP rows (docs/rimless_wheel.md, section 9): periodicity, the margins and
+the robust worst case over every step's own slope (or rise and tread) and the start speed.
+
+Decision vector x = [free design variables (leg_length, slope on a ramp; rise, tread,
+landing_offset on stairs: whichever the spec leaves free), W (the orbit's post-impact speed),
+tau (the error box's half-width, when robust), t (the margin epigraph, when max_min_margin)].
+The number of spokes is an integer: a spec with it free is solved once per count in its bounds
+(`spoke_counts`, `with_spokes`); `build` takes a spec whose count is fixed.
+
+Robust box: every step k's chord slope is the design's +- tau (a ramp: the slope error; stairs:
+the rise error moves the chord angle asin((rise + e) / chord), the tread error moves the
+footholds), and the start speed is speed +- speed_tolerance. The stance energy map
+E_k = eta^2 E_{k-1} + b(beta_k) is increasing in E_{k-1} and in beta_k (b' > 0 below psi0 >
+alpha), so every E_k lies between E_0 and the orbit of the slope's end, E*(beta -+ tau), on the
+trajectory of all slopes low (high) and the slowest (fastest) start: those two ends bound every
+stance energy of every build, for any number of steps. over_the_top (E > 0 where the stance
+starts behind the vertical) grows with E: its rows are exact worst cases at the low ends. The
+force conditions (no_flight, no_slip) are judged at both energy ends over the widest arc
+[beta - tau - alpha, beta + tau + alpha] at ARC_ROWS angles; impact_friction at the two chord
+ends. On stairs the footholds drift linearly: s_k = s_0 + sum_j (chord cos beta_j - tread_{j-1}),
+largest on (rise - tau, tread - tau), smallest on (rise + tau, tread + tau); the landing and
+nose rows take those at the first and the last step (a straight run's ends), with the nose's
+reach at the low chord (it grows with the chord angle).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import casadi as ca
+
+from ...errors import SpecError
+from ...formulation.common import (
+    MARGIN,
+    MODEL,
+    VALIDITY,
+    Condition,
+    SceneModel,
+    design_inputs,
+    objective_scale,
+)
+from ...spec.model import Bounds
+from . import physics as phys
+from .model import RimlessWheelDesign
+
+DEFAULTS = {"slope": None, "rise": None, "tread": None, "landing_offset": None}
+ARC_ROWS = 9  # angles of the widest stance arc at which the force rows are written
+MIN_SLOPE = 1e-6  # the chord slope's least value (rad): the ground goes down
+
+
+def spoke_counts(spec) -> list[int]:
+    """The spoke counts a spec asks for: its fixed count, or every integer in its bounds."""
+    entry = spec.design["spokes"]
+    if isinstance(entry, Bounds):
+        low, high = math.ceil(entry.min - 1e-9), math.floor(entry.max + 1e-9)
+        counts = [n for n in range(max(low, 3), high + 1)]
+        if not counts:
+            raise SpecError(spec.source or "<spec>", "design.spokes",
+                            "an integer range holding a count >= 3",
+                            found=f"[{entry.min:g}, {entry.max:g}]")
+        return counts
+    return [int(entry)]
+
+
+def with_spokes(spec, count: int):
+    """The spec with its spoke count fixed to `count`."""
+    return dataclasses.replace(spec, design={**spec.design, "spokes": int(count)})
+
+
+def build(spec):
+    """(SceneModel, bounds, closed forms) of a spec whose spoke count is fixed."""
+    if isinstance(spec.design.get("spokes"), Bounds):
+        raise SpecError(spec.source or "<spec>", "design.spokes",
+                        "a fixed count here (solve each of spoke_counts(spec))",
+                        found="a free count")
+    scene = spec.scene
+    names = tuple(n for n in RimlessWheelDesign.VARIABLES if n != "spokes")
+    values, symbols, bounds = design_inputs(spec, names, DEFAULTS)
+    robust = float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0
+    epigraph = float(spec.objective.get("max_min_margin", 0.0)) > 0.0
+    m = _Model(scene, int(spec.design["spokes"]), values, spec.verification.stages)
+    top = m.tolerance_bound(bounds)
+    tau = ca.SX.sym("tolerance") if robust else 0.0
+    t = ca.SX.sym("min_margin") if epigraph else None
+    aux = [("periodic_speed", m.W, 0.0, math.inf)]
+    start = [ca.sqrt(ca.fmax(m.orbit_speed2(m.beta), 0.0))]
+    if robust:
+        aux.append(("tolerance", tau, 0.0, top))
+        start.append(0.01 * top)
+    if epigraph:
+        aux.append(("min_margin", t, 0.0, 1.0))
+        start.append(0.0)
+    xd = ca.vertcat(*symbols.values()) if symbols else ca.SX(0, 1)
+    aux_init = ca.Function("aux_init", [xd], [ca.vertcat(*start)])
+    model = SceneModel(
+        kind="rimless_wheel", design_symbols=symbols, aux=tuple(aux),
+        conditions=tuple(m.conditions(tau)), margin_symbol=t, aux_init=aux_init,
+        objective_terms={
+            "max_offset_tolerance": tau if robust else ca.SX(0.0),
+            "max_min_margin": t if epigraph else ca.SX(0.0),
+            "min_drop": ca.SX(0.0) + m.chord * ca.sin(m.beta),
+            "fastest_convergence": ca.SX(0.0) + m.eta**2,
+            "max_yield": ca.SX(0.0),
+        },
+        derived=m.derived(), tolerance_axes=m.axes,
+        objective_scale=objective_scale(spec.objective, top), stack_starts=False,
+    )
+    return model, bounds, m
+
+
+class _Model:
+    """Closed forms of one wheel (a fixed spoke count) on possibly symbolic design values."""
+
+    def __init__(self, scene, spokes, values, stages):
+        self.scene, self.stages, self.n = scene, stages, spokes
+        w, g = scene.wheel, scene.gravity
+        self.alpha = phys.half_pitch(spokes)
+        self.leg = values["leg_length"]
+        self.k2 = phys.gyration_squared(w.mass, w.gyration, w.spoke_mass, spokes, self.leg)
+        self.eta = phys.impact_ratio(self.k2, self.leg, self.alpha)
+        self.loss = phys.energy_loss(self.k2, self.leg, self.alpha)
+        self.rate = phys.stance_rate(g, self.k2, self.leg)
+        self.chord = phys.chord(self.leg, self.alpha)
+        self.stairs = scene.ground == "stairs"
+        self.values = values
+        self.W = ca.SX.sym("periodic_speed")
+        if self.stairs:
+            self.rise = values["rise"]
+            self.beta = self.chord_angle(0.0)
+            advance = phys.stairs_advance(self.rise, self.leg, self.alpha)
+            self.tread_derived = values["tread"] is None
+            self.tread = advance if self.tread_derived else values["tread"]
+            reach = phys.nose_reach(self.leg, self.alpha, self.beta)
+            self.s0 = (self.tread - ca.fmin(reach, self.tread) / 2
+                       if values["landing_offset"] is None
+                       else values["landing_offset"])
+            self.ground, self.axes = 0.0, ("rise", "tread")
+        else:
+            self.beta = self.ground = values["slope"]
+            self.axes = ("slope",)
+
+    def chord_angle(self, error):
+        return (asin_sx(self.rise + error, self.chord) if self.stairs
+                else self.beta + error)
+
+    def orbit_speed2(self, beta):
+        return phys.periodic_speed_squared(beta, self.alpha, self.eta, self.rate, self.loss)
+
+    def tolerance_bound(self, bounds):
+        """The box's largest half-width: the largest half pitch (a ramp: a slope error beyond it
+        turns a step's chord past a spoke), or the largest rise (stairs)."""
+        if not self.stairs:
+            return self.alpha
+        rise = bounds["rise"][1] if "rise" in bounds else float(self.values["rise"])
+        return float(rise)
+
+    def derived(self):
+        out = {"periodic_speed": self.W, "contraction": _sx(self.eta**2),
+               "chord_angle": _sx(self.beta)}
+        if self.stairs:
+            out.update(tread=_sx(self.tread), landing_offset=_sx(self.s0))
+        return out
+
+    def energy_ends(self, tau):
+        """(low, high): each a list of (energy, chord angle its stances start on) bounding every
+        stance of every build (module docstring)."""
+        speed, dw = self.scene.initial.speed, self.scene.initial.speed_tolerance
+        start_angle = self.beta - self.alpha
+        ends = []
+        for sign in (-1.0, 1.0):
+            beta = self.chord_angle(sign * tau)
+            orbit = self.orbit_speed2(beta) - self.rate * phys.versine(beta - self.alpha)
+            first = phys.stance_energy(speed + sign * dw, start_angle, self.rate)
+            ends.append([(first, self.beta), (orbit, beta)])
+        return ends
+
+    def conditions(self, tau):
+        out: list[Condition] = []
+
+        def add(key, where, slack, scale=1.0, kind=MARGIN, **kw):
+            out.append(Condition((key,) if key else (), where, slack, scale, kind, **kw))
+
+        lhs = self.W**2 * self.loss
+        rhs = self.eta**2 * self.rate * 2.0 * ca.sin(self.alpha) * ca.sin(self.beta)
+        add(None, "periodic speed: W^2 (1 - eta^2) = eta^2 rate 2 sin(alpha) sin(beta)",
+            lhs - rhs, lhs + rhs, kind=MODEL, equality=True)
+        low_beta, high_beta = self.chord_angle(-tau), self.chord_angle(tau)
+        add("descends", "every step's chord goes down", low_beta - MIN_SLOPE, self.alpha,
+            kind=VALIDITY)
+        add("impact_ratio", "an impact keeps the wheel rolling forward", self.eta, 1.0,
+            kind=VALIDITY)
+        (low, high) = self.energy_ends(tau)
+        for (energy, beta), what in zip(low, ("first stance", "orbit of the lowest slopes")):
+            # omega+^2 against rate (1 - cos(beta - alpha)) behind the vertical, 0 past it
+            start2 = phys.speed_squared(energy, beta - self.alpha, self.rate)
+            demand = phys.over_the_top_demand(beta, self.alpha, self.rate)
+            add("over_the_top", f"{what}: vaults its spoke", start2 - demand, start2)
+        self._force_rows(add, low + high, low_beta, high_beta)
+        for beta, what in ((low_beta, "lowest"), (high_beta, "highest")):
+            normal, tangential = phys.impact_impulses(self.eta, self.alpha, beta, self.ground)
+            mu = self.scene.friction
+            add("impact_friction", f"impact on the {what} chord", mu * normal - ca.fabs(tangential),
+                mu * normal)
+        if self.stairs:
+            self._stairs_rows(add, tau, low_beta, high_beta)
+        return out
+
+    def _force_rows(self, add, energies, low_beta, high_beta):
+        phi0, phi1 = low_beta - self.alpha, high_beta + self.alpha
+        g, mu = self.scene.gravity, self.scene.friction
+        for energy, _ in energies:
+            for _, (fc, fd), (sc, sd) in phys.stance_conditions(
+                    energy, phi0, phi1, self.ground, self.leg, g, self.k2, self.rate, mu,
+                    ARC_ROWS):
+                add("no_flight", "stance, widest arc", fc - fd, fc)
+                # mu N as the scale while N > 0; where N <= 0 the slack is negative already
+                add("no_slip", "stance, widest arc", sc - sd, ca.fmax(sc, 0.0))
+
+    def _stairs_rows(self, add, tau, low_beta, high_beta):
+        chord, tread, s0 = self.chord, self.tread, self.s0
+        add("spoke_reach", "every rise is below the spokes' chord", chord * (1 - 1e-6) - self.rise
+            - tau, chord, kind=VALIDITY)
+        add("step_down", "every step goes down", self.rise - tau, chord, kind=VALIDITY)
+        if not self.tread_derived:
+            advance = phys.stairs_advance(self.rise, self.leg, self.alpha)
+            add("periodic_tread", "tread = the chord's horizontal span", tread - advance, tread,
+                equality=True)
+        long_step = chord * ca.cos(low_beta) - tread + tau
+        short_step = chord * ca.cos(high_beta) - tread - tau
+        reach = phys.nose_reach(self.leg, self.alpha, low_beta)
+        for k in sorted({1, max(self.stages, 1)}):
+            longest = s0 + k * long_step - tau  # tread 0 is as designed
+            shortest_before = s0 + (k - 1) * short_step + (tau if k > 1 else 0.0)
+            add("landing", f"foothold {k}, furthest", tread - tau - longest, tread)
+            nose = tread + (tau if k > 1 else 0.0) - shortest_before
+            add("nose_clearance", f"step {k}, nearest foothold", reach - nose, reach)
+
+
+def _sx(value):
+    """value as a CasADi expression (a number or one already)."""
+    return value if isinstance(value, ca.SX) else ca.SX(value)
+
+
+def asin_sx(x, c):
+    return ca.asin(ca.fmin(ca.fmax(x / c, -1.0 + 1e-12), 1.0 - 1e-12))

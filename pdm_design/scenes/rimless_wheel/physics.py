@@ -1,0 +1,212 @@
+"""Closed forms of the rimless wheel (docs/rimless_wheel.md), for floats, numpy arrays and CasADi
+symbols alike (physics/ops.py).
+
+Frame: x downhill, y up. The stance spoke's angle phi is measured from the vertical, positive
+forward (phi > 0: the hub is ahead of the foothold). Spokes are 2 alpha apart, alpha = pi / n.
+A step's chord angle beta is the slope (below the horizontal) of the line from one foothold to
+the next: the slope on a ramp, asin(rise / chord) on stairs (chord = 2 l sin alpha). An impact
+happens when the leading spoke's tip reaches the next foothold, at phi = beta + alpha; the new
+stance spoke then stands at phi = beta - alpha.
+
+With m the whole mass, I_c the inertia about the hub (the centre of mass), k^2 = I_c / m and
+I_p = m (k^2 + l^2) about the tip:
+    stance      I_p phi'' = m g l sin phi,  so  omega^2 - rate (1 - cos phi) = E is constant,
+                rate = 2 g l / (k^2 + l^2)
+    impact      angular momentum about the new foothold: (k^2 + l^2 cos 2 alpha) omega- =
+                (k^2 + l^2) omega+,  omega+ = eta omega-,  eta = 1 - 2 l^2 sin^2 alpha / (k^2 + l^2)
+    step map    E' = eta^2 (E + rate (1 - cos(beta + alpha))) - rate (1 - cos(beta - alpha)),
+                affine in E with slope eta^2 (the return map's multiplier)
+    orbit       omega*^2 = eta^2 rate 2 sin(alpha) sin(beta) / (1 - eta^2)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...physics.ops import asin, cos, fabs, fmax, fmin, sin, sqrt
+
+
+def half_pitch(spokes):
+    """alpha = pi / n: half the angle between two spokes."""
+    return math.pi / spokes
+
+
+def total_mass(mass, spoke_mass, spokes):
+    return mass + spokes * spoke_mass
+
+
+def gyration_squared(mass, gyration, spoke_mass, spokes, leg):
+    """k^2 = I_c / m: the hub's m_h k_h^2 and n uniform rods' n m_s l^2 / 3 about the hub."""
+    inertia = mass * gyration**2 + spokes * spoke_mass * leg**2 / 3.0
+    return inertia / total_mass(mass, spoke_mass, spokes)
+
+
+def chord(leg, alpha):
+    """Distance between two successive footholds: 2 l sin alpha."""
+    return 2.0 * leg * sin(alpha)
+
+
+def impact_ratio(k2, leg, alpha):
+    """eta = omega+ / omega- = (k^2 + l^2 cos 2 alpha) / (k^2 + l^2), written as
+    1 - 2 l^2 sin^2 alpha / (k^2 + l^2) (no cancellation for many spokes)."""
+    return 1.0 - 2.0 * leg**2 * sin(alpha) ** 2 / (k2 + leg**2)
+
+
+def energy_loss(k2, leg, alpha):
+    """1 - eta^2 = (1 - eta)(1 + eta), without cancellation."""
+    loss = 2.0 * leg**2 * sin(alpha) ** 2 / (k2 + leg**2)
+    return loss * (2.0 - loss)
+
+
+def stance_rate(gravity, k2, leg):
+    """rate = 2 m g l / I_p = 2 g l / (k^2 + l^2) (1/s^2): omega^2 gains rate (cos phi0 -
+    cos phi) from phi0 to phi."""
+    return 2.0 * gravity * leg / (k2 + leg**2)
+
+
+def versine(angle):
+    """1 - cos(angle), as 2 sin^2(angle / 2) (no cancellation at small angles)."""
+    return 2.0 * sin(0.5 * angle) ** 2
+
+
+def stance_energy(omega, phi, rate):
+    """E = omega^2 - rate (1 - cos phi): constant over a stance; the squared speed where the
+    stance spoke is vertical."""
+    return omega**2 - rate * versine(phi)
+
+
+def speed_squared(energy, phi, rate):
+    """omega^2 at angle phi of a stance of energy E."""
+    return energy + rate * versine(phi)
+
+
+def step_energy(energy, beta, alpha, eta, rate):
+    """E of the next stance from a stance of energy E that ends on a chord of angle beta
+    (the return map; affine in E, slope eta^2)."""
+    before = energy + rate * versine(beta + alpha)
+    return eta**2 * before - rate * versine(beta - alpha)
+
+
+def step_offset(beta, alpha, eta, rate):
+    """The step map's constant term: E' = eta^2 E + step_offset(beta)."""
+    return rate * (eta**2 * versine(beta + alpha) - versine(beta - alpha))
+
+
+def periodic_speed_squared(beta, alpha, eta, rate, loss=None):
+    """omega*^2 just after each impact of the period-one orbit on chords of angle beta:
+    eta^2 rate (cos(beta - alpha) - cos(beta + alpha)) / (1 - eta^2). loss: 1 - eta^2 (from
+    `energy_loss`, exact for many spokes); from eta when left out."""
+    loss = (1.0 - eta) * (1.0 + eta) if loss is None else loss
+    return eta**2 * rate * 2.0 * sin(alpha) * sin(beta) / loss
+
+
+def periodic_energy(beta, alpha, eta, rate, loss=None):
+    """E* of the orbit: omega*^2 less rate (1 - cos(beta - alpha))."""
+    return periodic_speed_squared(beta, alpha, eta, rate, loss) - rate * versine(beta - alpha)
+
+
+def contraction(eta):
+    """The return map's multiplier d omega+' / d omega+ at the orbit (and dE'/dE anywhere):
+    eta^2."""
+    return eta**2
+
+
+def over_the_top_demand(beta, alpha, rate):
+    """omega+^2 the stance needs to vault its spoke: rate (1 - cos(beta - alpha)) when it starts
+    behind the vertical (beta < alpha), else 0 (it starts past the top)."""
+    return rate * versine(fmin(beta - alpha, 0.0))
+
+
+def stance_forces(phi, omega2, ground, leg, gravity, k2):
+    """(normal, tangential) ground force on the stance tip per unit mass (m/s^2) at angle phi,
+    speed^2 omega2, on ground whose normal is `ground` rad forward of the vertical (the slope on
+    a ramp, 0 on a tread). Newton on the centre of mass, which moves on a circle of radius l
+    about the tip: radial R_r = g cos phi - l omega^2, tangential R_t = -g sin phi k^2 /
+    (k^2 + l^2); projected on the ground with psi = phi - ground. tangential > 0 pushes
+    downhill."""
+    radial = gravity * cos(phi) - leg * omega2
+    across = -gravity * sin(phi) * k2 / (k2 + leg**2)
+    psi = phi - ground
+    normal = radial * cos(psi) - across * sin(psi)
+    tangential = radial * sin(psi) + across * cos(psi)
+    return normal, tangential
+
+
+def impact_impulses(eta, alpha, beta, ground):
+    """(normal, tangential) impulse at the new foothold per unit m l omega-: the centre of mass's
+    velocity change l (omega+ e_t(phi - 2 alpha) - omega- e_t(phi)), phi = beta + alpha, on the
+    ground's normal and tangent (delta = beta - ground)."""
+    delta = beta - ground
+    normal = sin(alpha + delta) + eta * sin(alpha - delta)
+    tangential = eta * cos(alpha - delta) - cos(alpha + delta)
+    return normal, tangential
+
+
+def impact_friction_demand(eta, alpha, beta, ground):
+    """|tangential| / normal impulse the impact needs (Coulomb: at most the friction). On a
+    ramp (beta = ground) (1 - eta) / (1 + eta) cot alpha; tan alpha for a point mass."""
+    normal, tangential = impact_impulses(eta, alpha, beta, ground)
+    return fabs(tangential) / normal
+
+
+def nose_reach(leg, alpha, beta):
+    """The farthest the nose of a tread may be ahead of its foothold for the landing spoke to
+    pass over it: l sin 2 alpha / cos(alpha - beta) (the corner stays on the wheel's side of the
+    leading spoke, worst at the impact; for beta >= alpha the spoke swings through the vertical
+    of the corner's direction and the bound is l sin 2 alpha)."""
+    return leg * sin(2.0 * alpha) / cos(fmax(alpha - beta, 0.0))
+
+
+def stairs_chord_angle(rise, leg, alpha):
+    """beta of a step of `rise`: asin(rise / chord)."""
+    return asin(rise / chord(leg, alpha))
+
+
+def stairs_advance(rise, leg, alpha):
+    """Horizontal distance between footholds on treads `rise` apart: sqrt(chord^2 - rise^2)."""
+    c = chord(leg, alpha)
+    return sqrt(fmax(c**2 - rise**2, 0.0))
+
+
+# Gauss-Legendre nodes and weights on [-1, 1], computed once per order
+_GAUSS: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _gauss(order):
+    if order not in _GAUSS:
+        _GAUSS[order] = np.polynomial.legendre.leggauss(order)
+    return _GAUSS[order]
+
+
+def step_time(energy, phi0, phi1, rate, order=32):
+    """Time of a stance from phi0 to phi1: int dphi / sqrt(E + rate (1 - cos phi)), by
+    Gauss-Legendre quadrature of `order` nodes (the integrand is smooth while the wheel keeps
+    moving; its peak where the speed is least needs more nodes as that speed nears 0)."""
+    nodes, weights = _gauss(order)
+    half, mid = 0.5 * (phi1 - phi0), 0.5 * (phi1 + phi0)
+    total = 0.0
+    for x, w in zip(nodes, weights):
+        total = total + float(w) / sqrt(speed_squared(energy, mid + half * float(x), rate))
+    return half * total
+
+
+def arc_points(phi0, phi1, count):
+    """`count` angles spread over [phi0, phi1], both ends included (count >= 2)."""
+    return [phi0 + (phi1 - phi0) * i / (count - 1) for i in range(count)]
+
+
+def stance_conditions(energy, phi0, phi1, ground, leg, gravity, k2, rate, friction, count=9):
+    """[(angle, (flight capacity, flight demand), (slip capacity, slip demand))] at `count`
+    angles of the stance [phi0, phi1]. No flight: the normal force N = capacity - demand > 0,
+    capacity = g (cos phi cos psi + kappa sin phi sin psi) (gravity's part), demand = l omega^2
+    cos psi (the centripetal part), kappa = k^2 / (k^2 + l^2). No slip: |F| <= mu N."""
+    out = []
+    for phi in arc_points(phi0, phi1, count):
+        w2 = speed_squared(energy, phi, rate)
+        normal, tangential = stance_forces(phi, w2, ground, leg, gravity, k2)
+        centripetal = leg * w2 * cos(phi - ground)
+        out.append((phi, (normal + centripetal, centripetal), (friction * normal,
+                                                                fabs(tangential))))
+    return out
