@@ -1,87 +1,77 @@
-"""Everything the shared layers need of the rimless wheel scene, by the names the stairs scene's
-pieces have, so wiring it into the scene interface is mechanical. Heavy modules (numpy, scipy,
-casadi) are imported only when a function here is called.
-
-    KIND, SCENE_CLASS, DESIGN_CLASS, MARGINS, QUANTITIES, FAILURE_KINDS, VERIFICATION_HINTS
-    analyse(scene, design, stages=None)            -> analysis.result.Analysis
-    simulate(scene, design, *, stages, accuracy, step_errors, record_trajectory, ...)
-                                                   -> sim.core.SimulationResult (subclass)
-    build(spec)                                    -> (SceneModel, bounds, closed forms)
-    spoke_counts(spec), with_spokes(spec, n)       -> the integer spoke count, one NLP each
-    run_builds(scene, design, tolerances, *, stages, builds, seed, distribution)
-                                                   -> yield after `stages` steps
-    mfpt(scene, design, tolerance), monte_carlo(...), longest_lasting(...): rough ground
-    template()                                     -> the spec template's TOML text
-"""
+"""The rimless wheel behind the scene interface (pdm_design.plugin.Scene). Heavy modules
+(numpy, scipy, casadi) are imported only when a method is called."""
 
 from __future__ import annotations
 
-from . import KIND, MARGINS  # noqa: F401  (re-exported)
-from .model import RimlessWheelDesign, RimlessWheelScene
+from ...plugin import Scene
 
-SCENE_CLASS = RimlessWheelScene
-DESIGN_CLASS = RimlessWheelDesign
-QUANTITIES = ("slope", "rise", "tread", "speed")
+MARGINS = ("over_the_top", "no_flight", "no_slip", "impact_friction", "landing",
+           "nose_clearance")
 FAILURE_KINDS = ("stalled", "flight", "slip", "nose_hit", "missed_tread")
-VERIFICATION_HINTS = {"offsets": "offsets are for manipulators scenes; a rimless wheel takes "
-                                 "step_errors (slope on a ramp, rise and tread on stairs)"}
 
 
-def analyse(scene, design, stages=None):
-    from .analysis import analyse_rimless_wheel
+class RimlessWheel(Scene):
+    kind = "rimless_wheel"
+    title = "a rimless wheel rolling down a ramp or stairs"
+    stage_noun = ("step", "steps")
+    margins = MARGINS
+    verification_hints = {"offsets": "offsets are for manipulators scenes; a rimless wheel "
+                                     "takes step_errors (slope on a ramp, rise and tread on "
+                                     "stairs)"}
 
-    return analyse_rimless_wheel(scene, design, stages)
+    # ------------------------------------------------------------------ the spec
+    def scene_class(self):
+        from .model import RimlessWheelScene
 
+        return RimlessWheelScene
 
-def simulate(scene, design, **kwargs):
-    from .sim import simulate_rimless_wheel
+    def design_class(self):
+        from .model import RimlessWheelDesign
 
-    return simulate_rimless_wheel(scene, design, **kwargs)
+        return RimlessWheelDesign
 
+    def template(self):
+        from .template import rimless_wheel_template
 
-def build(spec):
-    from .formulation import build as build_rows
+        return rimless_wheel_template()
 
-    return build_rows(spec)
+    def variants(self, spec):
+        """One spec per spoke count in the design's bounds (the count is an integer)."""
+        from .formulation import spoke_counts, with_spokes
 
+        return tuple(with_spokes(spec, n) for n in spoke_counts(spec))
 
-def spoke_counts(spec):
-    from .formulation import spoke_counts as counts
+    def quantities(self):
+        from .quantities import QUANTITIES
 
-    return counts(spec)
+        return QUANTITIES
 
+    # ------------------------------------------------------------------ closed forms
+    def analyse(self, scene, design, stages=None):
+        from .analysis import analyse_rimless_wheel
 
-def with_spokes(spec, count):
-    from .formulation import with_spokes as fixed
+        return analyse_rimless_wheel(scene, design, stages)
 
-    return fixed(spec, count)
+    # ------------------------------------------------------------------ the simulator
+    def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
+        from .sim import simulate_rimless_wheel
 
+        errors = spec.verification.step_errors if errors is None else errors
+        return simulate_rimless_wheel(spec.scene, design, stages=stages, accuracy=accuracy,
+                                      step_errors=errors, record_trajectory=record_trajectory)
 
-def run_builds(scene, design, tolerances, **kwargs):
-    from .builds import run_builds as run
+    # ------------------------------------------------------------------ the NLP
+    objectives = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence")
 
-    return run(scene, design, tolerances, **kwargs)
+    def formulate(self, spec, parameters=None):
+        from .formulation import build
 
+        model, bounds, _ = build(spec)
+        return model, bounds, None
 
-def mfpt(scene, design, tolerance, **kwargs):
-    from .rough import mfpt as chain
+    # ------------------------------------------------------------------ tolerances, yield, verification
 
-    return chain(scene, design, tolerance, **kwargs)
+    # ------------------------------------------------------------------ sheets, drawings, reports
 
-
-def monte_carlo(scene, design, tolerance, **kwargs):
-    from .rough import monte_carlo as mc
-
-    return mc(scene, design, tolerance, **kwargs)
-
-
-def longest_lasting(scene, counts, slope_range, leg_length, tolerance, **kwargs):
-    from .rough import longest_lasting as search
-
-    return search(scene, counts, slope_range, leg_length, tolerance, **kwargs)
-
-
-def template():
-    from .template import rimless_wheel_template
-
-    return rimless_wheel_template()
+    # ------------------------------------------------------------------ command line, tables, API
+    tolerance_axes = ("slope",)

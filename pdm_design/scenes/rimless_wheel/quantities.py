@@ -1,0 +1,14 @@
+"""The quantities of a rimless wheel and its ground that a `[tolerances]` table may tolerance."""
+
+from __future__ import annotations
+
+from ...tolerances.model import EACH_OR_LOT, LOT, Quantity, quantity
+
+QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
+    quantity("slope", "rad", ("each", "lot"), "every step's own slope (a ramp that is not flat)"),
+    quantity("rise", "m", EACH_OR_LOT, "a stair's rise"),
+    quantity("tread", "m", EACH_OR_LOT, "a stair's tread"),
+    quantity("leg_length", "m", EACH_OR_LOT, "a spoke's length"),
+    quantity("start_speed", "rad/s", LOT, "the angular speed just after the first impact"),
+    quantity("mass", "kg", LOT, "the hub's mass"),
+)}
