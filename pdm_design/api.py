@@ -84,11 +84,31 @@ def evaluate(spec: Spec, *, verify: bool = True,
 def design(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | None = None,
            linearise: bool = False, start_from: dict | None = None,
            continued: tuple = ()) -> DesignOutcome:
-    """Solve the spec: evaluate a fixed design, or optimise the free variables; verify."""
+    """Solve the spec: evaluate a fixed design, or optimise the free variables; verify. A spec
+    with a discrete design variable (Scene.variants: a rimless wheel's spoke count) is solved
+    at each of its values, and the best answer kept (the highest objective among the
+    successes; the first variant's outcome when none succeeds)."""
+    from .plugin import of
+
+    variants = of(spec).variants(spec)
+    if len(variants) > 1:
+        outcomes = [design(v, verify=verify, accuracy=accuracy, linearise=linearise)
+                    for v in variants]
+        return max(outcomes, key=_rank)
+    spec = variants[0]
     if not spec.free_variables:
         return evaluate(spec, verify=verify, accuracy=accuracy)
     return optimize(spec, verify=verify, accuracy=accuracy, linearise=linearise,
                     start_from=start_from, continued=continued)
+
+
+def _rank(outcome: DesignOutcome) -> tuple:
+    """Order of the answers of a spec's variants: successes first, then the higher objective
+    (a fixed variant's: its smallest margin)."""
+    value = (outcome.objective or {}).get("value")
+    if value is None:
+        value = min(outcome.analysis.margins.values(), default=0.0)
+    return (outcome.status.is_success and outcome.exit_code == 0, float(value))
 
 
 # What each accuracy preset asks of the optimizer and of the verification depth: IPOPT's

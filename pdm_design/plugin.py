@@ -96,6 +96,11 @@ class Scene:
         linearised yield is not derived for it); None when it can."""
         return ("a scene whose linearised yield is derived", f"a {self.kind} scene")
 
+    def variants(self, spec) -> tuple:
+        """The specs to solve for `spec`, one per value of a discrete design variable the NLP
+        cannot take (the best answer is kept); (spec,) by default."""
+        return (spec,)
+
     def template(self) -> str:
         """The commented spec `pdm-design init KIND` prints, which optimizes as written."""
         raise NotImplementedError
