@@ -162,9 +162,9 @@ def _parse(data: Any, source: str) -> Spec:
         raise _Invalid("expect.min_yield", "a [tolerances] table to draw the builds from",
                        "no [tolerances]")
     objective = _named_numbers(data, "objective", OBJECTIVES, _WEIGHT)
-    for name in objective:
-        if name not in kind.plugin.objectives:
-            raise _Invalid(f"objective.{name}", f"an objective of a {kind.plugin.kind} scene "
+    for term in objective:
+        if term not in kind.plugin.objectives:
+            raise _Invalid(f"objective.{term}", f"an objective of a {kind.plugin.kind} scene "
                            f"({', '.join(kind.plugin.objectives)})", "one it does not give")
     _check_max_yield(objective, kind.plugin, scene, tolerances)
     _check_yield_target(tolerances)
