@@ -167,7 +167,8 @@ class Scene:
     def draw_sheet(self, ax, labels, sheet, items, detail: bool) -> None:
         """Draw `items` (a slice of sheet.items) on the matplotlib axes, mm; labels: the
         sheet.labels.Labels that keep words apart; detail: dimension them (few enough to read).
-        Default: the simulated path, each stage's start marked and numbered."""
+        Default: the simulated path, and the place each stage record gives (its x, y) marked
+        and numbered."""
         from .sheet.generic import draw_path
 
         draw_path(ax, labels, sheet, items)
@@ -178,7 +179,7 @@ class Scene:
     def draw_dxf(self, msp, sheet) -> float:
         """Draw every item on the ezdxf modelspace (mm, full precision) on dxf_layers and
         DIMENSIONS; returns the text height (mm) the notes are written at. Default: the
-        simulated path as a polyline on DIMENSIONS, a POINT at each stage's start."""
+        simulated path as a polyline on DIMENSIONS, a POINT at each stage record's x, y."""
         from .sheet.generic import draw_dxf
 
         return draw_dxf(msp, sheet)
@@ -220,7 +221,6 @@ class Scene:
         from .report.animation import generic_animation
 
         return generic_animation(result)
-
 
     # ------------------------------------------------------------------ command line, tables, API
 

@@ -74,7 +74,7 @@ def _path(sheet) -> list[tuple[float, float]]:
 
 
 def _starts(sheet) -> dict[int, tuple[float, float]]:
-    """{stage: where the object was at its start, mm} from the nominal run's stage records."""
+    """{stage: the place its stage record gives (x, y), mm} from the nominal run."""
     run = nominal_run(sheet)
     out = {}
     for k, record in enumerate(() if run is None else run.stages, 1):
@@ -85,7 +85,7 @@ def _starts(sheet) -> dict[int, tuple[float, float]]:
 
 
 def draw_path(ax, labels, sheet, items) -> None:
-    """The simulated path (dotted) and each drawn stage's recorded place, numbered."""
+    """The simulated path (dotted) and each drawn stage's recorded place (x, y), numbered."""
     path = _path(sheet)
     if path:
         ax.plot(*zip(*path), color="tab:green", lw=0.9, ls=":")
@@ -96,8 +96,6 @@ def draw_path(ax, labels, sheet, items) -> None:
         if k in starts:
             ax.plot([starts[k][0]], [starts[k][1]], marker="o", color="black", markersize=3)
             labels.add(ax, str(k), starts[k], (8, 7), optional=True)
-    if not path and not starts:
-        ax.plot([0.0], [0.0], marker="", ls="")
 
 
 def draw_dxf(msp, sheet) -> float:
