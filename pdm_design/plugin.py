@@ -131,7 +131,8 @@ class Scene:
         from .sheet.generic import SheetWords
 
         return SheetWords(item=self.stage_noun[0],
-                          legend="dotted: the path as simulated", units="millimetres")
+                          legend="dotted: the object's path (simulated); dots: the place each "
+                                 "stage record gives, numbered", units="millimetres")
 
     def box_shift(self, spec):
         """A sheet.generic.BoxShift when the robust box of a fixed design is solved for

@@ -79,10 +79,10 @@ def animation(spec, result) -> Animation:
     span = float(t[-1] - t[0])
     count = int(min(MAX_FRAMES, max(2, math.ceil(span * FRAME_RATE) + 1)))
     timeline = Timeline(t, order, np.linspace(t[0], t[-1], count))
-    data = {"kind": spec.kind, "t": _round(timeline.frames, 4),
+    data = {"kind": spec.kind, "t": rounded(timeline.frames, 4),
             "dt": float(span / max(count - 1, 1)),
-            "x": _round(timeline.at(traj["x"]) * MM, 2),
-            "y": _round(timeline.at(traj["y"]) * MM, 2), "outcome": _outcome_words(result)}
+            "x": rounded(timeline.at(traj["x"]) * MM, 2),
+            "y": rounded(timeline.at(traj["y"]) * MM, 2), "outcome": _outcome_words(result)}
     scene = of(spec).animation(spec, result, timeline)
     return Animation(data | scene.data, scene.script)
 
@@ -119,7 +119,8 @@ GENERIC_SCRIPT = r"""{
 }"""
 
 
-def _round(values, digits) -> list[float]:
+def rounded(values, digits) -> list[float]:
+    """Plain floats rounded to `digits` decimals (the page's JSON)."""
     return [round(float(v), digits) for v in values]
 
 

@@ -15,6 +15,7 @@ from ...report.animation import MM, Animation
 
 
 def animation(spec, result) -> Animation:
+    """Every palm's pivot and key frames, [time (s), angle (rad)], and the row's sizes (mm)."""
     return Animation(_manipulators(spec, result), SCRIPT)
 
 

@@ -8,17 +8,19 @@ import math
 
 import numpy as np
 
-from ...report.animation import MM, Animation
+from ...report.animation import MM, Animation, rounded
 
 
 def animation(spec, result, timeline) -> Animation:
-    return Animation(_stairs(spec, result, timeline.times, timeline.order, timeline.frames),
-                     SCRIPT)
+    """The ball's radius, its spin angle at each frame (rad) and the steps drawn, [back, nose,
+    level] (mm)."""
+    return Animation(_stairs(spec, result, timeline), SCRIPT)
 
 
-def _stairs(spec, result, t, order, frames) -> dict:
+def _stairs(spec, result, timeline) -> dict:
     r = spec.scene.ball.radius
-    omega = np.asarray(result.trajectory["omega"], dtype=float)[order]
+    t = timeline.times
+    omega = timeline.sorted(result.trajectory["omega"])
     spin = np.concatenate([[0.0], np.cumsum(0.5 * (omega[1:] + omega[:-1]) * np.diff(t))])
     steps = []
     xs = result.trajectory["x"]
@@ -30,7 +32,8 @@ def _stairs(spec, result, t, order, frames) -> dict:
             continue
         steps.append([round(back * MM, 3), round(nose * MM, 3), round(s["level"] * MM, 3)])
     tread, rise = _stairs_pitch(steps)
-    return {"radius": r * MM, "spin": _round(np.interp(frames, t, spin), 4), "steps": steps,
+    return {"radius": r * MM, "spin": rounded(np.interp(timeline.frames, t, spin), 4),
+            "steps": steps,
             "window": max(4.0 * tread, 8.0 * rise, 40 * r * MM, 1.0), "below": 0.0}
 
 
@@ -39,10 +42,6 @@ def _stairs_pitch(steps):
     if len(steps) >= 3:
         return steps[1][1] - steps[1][0], steps[1][2] - steps[2][2]
     return (steps[0][1] - steps[0][0], 0.0) if steps else (1.0, 0.0)
-
-
-def _round(values, digits) -> list[float]:
-    return [round(float(v), digits) for v in values]
 
 
 # the staircase as a polygon, the ball as a circle with a radius that shows its spin
