@@ -134,6 +134,120 @@ class Scene:
     # ------------------------------------------------------------------ tolerances, yield, verification
 
     # ------------------------------------------------------------------ sheets, drawings, reports
+    # A build sheet lists one item (a CSV row) per stage: whatever a workshop places for that
+    # stage (a manipulator's pivot, a step). The defaults give a scene that implements only the
+    # core above a usable sheet and report: its design values, one row per stage, the simulated
+    # path drawn, no parts.
+    tolerance_axes: tuple[str, ...] = ()
+    """The axes of the optimizer's robust placement box (the keys of its `tolerance`, each a
+    half-width in m): ("dx", "dy"); () (default): the scene has no box."""
+
+    def sheet_rows(self, spec, analysis, tolerance: dict | None, count: int):
+        """(summary, items) of the build sheet of a fixed-design spec: summary rows (quantity,
+        value, unit SI or "", box half-width or None), items one dict per stage 1..count (CSV
+        columns, SI units in the names: "_m", "_rad"). Default: the design values, and items
+        numbered by the stage noun."""
+        from .sheet.generic import sheet_rows
+
+        return sheet_rows(self, spec, analysis, tolerance, count)
+
+    def sheet_words(self):
+        """The sheet's words (sheet.generic.SheetWords): what an item's coordinates are of
+        ("pivot"), the drawing's legend and its units ("millimetres, degrees")."""
+        from .sheet.generic import SheetWords
+
+        return SheetWords(item=self.stage_noun[0],
+                          legend="dotted: the object's path (simulated); dots: the place each "
+                                 "stage record gives, numbered", units="millimetres")
+
+    def box_shift(self, spec):
+        """A sheet.generic.BoxShift when the robust box of a fixed design is solved for
+        another spec (a design value the NLP holds to its periodic orbit left free) and one
+        axis's half-width shrinks by the design's offset from it; None (default): solved
+        for the spec as it is."""
+        return None
+
+    def box_tolerances(self, sheet, why: str) -> tuple:
+        """The sheet's own tolerances (sheet.parts.ToleranceEntry) from its box
+        `sheet.tolerance`, `why` their limited_by. Default: one "AXIS (box)" entry an axis
+        (m), on the stages it covers."""
+        from .sheet.generic import box_tolerances
+
+        return box_tolerances(self, sheet, why)
+
+    part_words: dict[str, tuple[str, ...]] = {}
+    """{part name: words of a ToleranceEntry.applies_to that put it on that part}, first
+    match wins; a tolerance matching none is listed under "other tolerances"."""
+
+    def parts(self, sheet) -> list:
+        """The parts list (sheet.parts.Part, dimensions in words in mm and degrees) without
+        their tolerances (sheet/parts.py adds them by part_words). Default: none."""
+        return []
+
+    def table_rows(self, sheet) -> list[str]:
+        """The PDF's table of every item: a heading and one fixed-width row an item, mm.
+        Default: the items' columns, lengths in mm."""
+        from .sheet.generic import table_rows
+
+        return table_rows(sheet)
+
+    def draw_sheet(self, ax, labels, sheet, items, detail: bool) -> None:
+        """Draw `items` (a slice of sheet.items) on the matplotlib axes, mm; labels: the
+        sheet.labels.Labels that keep words apart; detail: dimension them (few enough to read).
+        Default: the simulated path, and the place each stage record gives (its x, y) marked
+        and numbered."""
+        from .sheet.generic import draw_path
+
+        draw_path(ax, labels, sheet, items)
+
+    dxf_layers: dict[str, int] = {}
+    """The DXF layers the scene draws on besides DIMENSIONS and NOTES: {name: AutoCAD colour}."""
+
+    def draw_dxf(self, msp, sheet) -> float:
+        """Draw every item on the ezdxf modelspace (mm, full precision) on dxf_layers and
+        DIMENSIONS; returns the text height (mm) the notes are written at. Default: the
+        simulated path as a polyline on DIMENSIONS, a POINT at each stage record's x, y."""
+        from .sheet.generic import draw_dxf
+
+        return draw_dxf(msp, sheet)
+
+    def document_keys(self) -> dict[str, tuple[str, ...]]:
+        """The keys the optimize JSON document (report/document.py) carries in "design",
+        "geometry", "periodic" and "approach", null where the analysis has none (then any
+        other the analysis gives). Default: the design class's VARIABLES, and the analysis'
+        own keys for the rest."""
+        return {"design": tuple(self.design_class().VARIABLES), "geometry": (),
+                "periodic": (), "approach": ()}
+
+    def scene_parameters(self, scene) -> dict:
+        """The device-as-built keys of a scene for the JSON document's `scene_parameters`
+        (docs/json-schema.md), every key even when the spec leaves it out; {} (default) when
+        the scene has none."""
+        return {}
+
+    stage_columns: tuple[str, ...] = ()
+    """The stage record keys `pdm-design simulate` prints a column each of; () (default): the
+    first stage record's keys."""
+
+    def plot_run(self, spec, design, result, path, *, offsets=(), stages=None,
+                 title: str = "") -> None:
+        """Draw a run recorded with its trajectory into an image file at `path`, whole or not
+        at all (offsets, stages: those the run used). Default: the path and y(t)."""
+        from .report.plots import plot_path
+
+        plot_path(result, path, title=title)
+
+    def animation(self, spec, result, timeline):
+        """The report page's animation of a run (report.animation.Animation): `data`, the
+        scene's part of the page's JSON (mm, y up; at least "window", the view's width when
+        the run is longer, and "below", how far the view's centre is under the object), and
+        `script`, a JavaScript object expression {extent, lift, build} the page's one player
+        calls (report/animation.py documents them). timeline (report.animation.Timeline):
+        the run's sample times, sorted, and the frame times. Default: the object as a dot on
+        its path."""
+        from .report.animation import generic_animation
+
+        return generic_animation(result)
 
     # ------------------------------------------------------------------ command line, tables, API
     def infeasible_words(self, spec, design: dict) -> str | None:

@@ -8,25 +8,14 @@ in it is []. The analysis leaves such quantities out; this layer puts them back 
 from __future__ import annotations
 
 from ..api import DesignOutcome
-from ..scenes.manipulators.model import ManipulatorsDesign
-from ..scenes.stairs.model import StairsDesign
+from ..plugin import of
 from ..spec.model import OBJECTIVES
 from .jsonable import jsonable
 
 SCHEMA = "pdm-design/optimize/1"
 
-# The keys of each object, by scene where they differ (docs/json-schema.md).
-DESIGN = {"manipulators": ManipulatorsDesign.VARIABLES, "stairs": StairsDesign.VARIABLES}
-GEOMETRY = {"manipulators": ("pitch_x", "pitch_y", "palm_mass", "link_mass", "link_inertia",
-                             "link_count", "pivot_friction_torque", "pivot_damping",
-                             "landing_offset"),
-            "stairs": ("rise", "tread", "landing_offset", "nose_clearance")}
-PERIODIC = {"manipulators": ("handover_speed", "landing_speed", "contraction", "drop_per_stage",
-                             "effective_mass"),
-            "stairs": ("impact_speed", "vertical_impact_speed", "horizontal_speed", "spin",
-                       "flight_time", "drift_per_bounce")}
-APPROACH = {"manipulators": ("landing_point", "landing_velocity", "handover_speeds"),
-            "stairs": ("first_vertical_impact_speed",)}
+# The keys of the design, geometry, periodic and approach objects are the scene's
+# (Scene.document_keys; docs/json-schema.md).
 OBJECTIVE = ("weights", "value", "terms")
 VERIFICATION = ("passed", "summary", "failures", "samples", "outcome", "agreement",
                 "tolerance_failures", "accuracy", "accuracy_settings")
@@ -36,7 +25,7 @@ OUTCOME = ("completed", "stages_passed", "failure")
 
 def optimize_document(outcome: DesignOutcome) -> dict:
     spec, analysis = outcome.spec, outcome.analysis
-    kind = spec.kind
+    kind, keys = spec.kind, of(spec).document_keys()
     return jsonable({
         "schema": SCHEMA,
         "spec": spec.source,
@@ -46,15 +35,15 @@ def optimize_document(outcome: DesignOutcome) -> dict:
         "status_message": outcome.status_message,
         "scene": kind,
         "scene_parameters": scene_parameters(spec.scene),
-        "design": _complete(analysis.design, DESIGN[kind]),
+        "design": _complete(analysis.design, keys["design"]),
         "free_variables": list(spec.free_variables),
         "at_bounds": outcome.at_bounds,
-        "geometry": _complete(analysis.geometry, GEOMETRY[kind]),
-        "periodic": _complete(analysis.periodic, PERIODIC[kind]),
+        "geometry": _complete(analysis.geometry, keys["geometry"]),
+        "periodic": _complete(analysis.periodic, keys["periodic"]),
         "margins": analysis.margins,
         "requirements": spec.requirements,
         "violations": list(outcome.violations),
-        "approach": _complete(analysis.approach, APPROACH[kind]),
+        "approach": _complete(analysis.approach, keys["approach"]),
         "objective": _objective(outcome),
         "tolerance": outcome.tolerance,
         "tolerances": _tolerances(outcome.tolerances),
@@ -64,15 +53,10 @@ def optimize_document(outcome: DesignOutcome) -> dict:
 
 
 def scene_parameters(scene) -> dict:
-    """The device-as-built keys of the spec's scene, as given (docs/json-schema.md): for
-    manipulators `links` (mass of each link, inertia about its pivot or null for a uniform rod,
-    count) and `pivots` (friction_torque, damping), every key even when the spec leaves them
-    out (then the paper's zeros); {} for stairs, which have none."""
-    if getattr(scene, "kind", None) != "manipulators":
-        return {}
-    links, pivots = scene.links, scene.pivots
-    return {"links": {"mass": links.mass, "inertia": links.inertia, "count": links.count},
-            "pivots": {"friction_torque": pivots.friction_torque, "damping": pivots.damping}}
+    """The device-as-built keys of the spec's scene, as given (docs/json-schema.md;
+    Scene.scene_parameters): every key even when the spec leaves them out; {} for a scene
+    that has none."""
+    return of(scene).scene_parameters(scene)
 
 
 def _complete(values: dict | None, keys: tuple[str, ...], lists: tuple[str, ...] = ()) -> dict:

@@ -19,7 +19,7 @@ import base64
 import html
 import math
 
-from .animation import animation_data, animation_html
+from .animation import animation, animation_html
 from .units import UNITS, built_parts
 
 _STYLE = """
@@ -83,7 +83,7 @@ def _verdict(sheet) -> str:
 def _animation(spec, run, refused) -> str:
     if run is None:
         return f'<p class="bad">No run to animate: {html.escape(refused)}</p>'
-    return animation_html(animation_data(spec, run))
+    return animation_html(animation(spec, run))
 
 
 def _cell(value) -> str:

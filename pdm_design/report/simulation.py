@@ -2,11 +2,8 @@
 
 from __future__ import annotations
 
-_STAGE_COLUMNS = {
-    "manipulators": ("manipulator", "landing_time", "landing_offset", "landing_speed",
-                     "handover_speed", "handover_angle"),
-    "stairs": ("step", "impact_time", "landing_x", "impact_speed", "vx", "spin_after"),
-}
+from ..plugin import of
+
 _SHOWN_STAGES = 20
 
 
@@ -28,7 +25,7 @@ def simulation_text(spec, result) -> str:
     if outcome.failure is not None:
         f = outcome.failure
         lines.append(f"failure: {f.kind} at stage {f.stage}, t = {f.time:.6g} s: {f.detail}")
-    columns = _STAGE_COLUMNS[spec.kind]
+    columns = of(spec).stage_columns or tuple(result.stages[0] if result.stages else ())
     rows = [[_cell(stage.get(c)) for c in columns] for stage in result.stages[:_SHOWN_STAGES]]
     widths = [max(len(c), *(len(r[i]) for r in rows)) if rows else len(c)
               for i, c in enumerate(columns)]

@@ -1,17 +1,14 @@
 """Build sheets: the numbers a workshop builds a device from, with the tolerance of each.
 
-Manipulators: the coordinates of every pivot (frame of the spec: origin at the first
-manipulator's nominal pivot when first_pivot_x = first_pivot_y = 0, x along the row, y up), the
-back-stop, handover and front-stop angles, link length, palm mass and size, and the box
-(+-dx, +-dy) each pivot may be placed within. Stairs: every step's rise and tread with their
-tolerance, and where each step's back, nose and tread surface are (frame: the ball is launched
-at x = 0; nominal tread 1 is at y = 0).
+What a scene's sheet lists, one item a stage (a manipulator's pivot, a step), is the scene's:
+Scene.sheet_rows (scenes/<kind>/sheet.py).
 
 The design comes from solving the spec (`pdm_design.api.design`) or from a saved design JSON
 (`pdm-design optimize --format json`). The tolerance is the optimizer's robust box
-(`max_offset_tolerance`): the design's own when its spec asks for it, otherwise solved for the
-finished design with that objective alone (which does not move a fixed design). It was solved
-for the spec's `verification.stages` manipulators or steps, so only those rows carry it.
+(`max_offset_tolerance`, half-widths on the axes Scene.tolerance_axes): the design's own when its
+spec asks for it, otherwise solved for the finished design with that objective alone (which does
+not move a fixed design). It was solved for the spec's `verification.stages` stages, so only
+those rows carry it.
 
 The simulator's verdict travels with the sheet: the design's verification (a saved JSON's, or
 the nominal run simulated now when it carries none). A design whose status is not a success or
@@ -27,7 +24,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import PdmError, SpecError
-from ..scenes.manipulators import physics as phys
 from ..spec import load_spec
 from ..plugin import of
 from ..spec.model import Bounds, Spec
@@ -35,7 +31,6 @@ from ..status import Status
 
 JSON_SCHEMA_PREFIX = "pdm-design/optimize/"
 MARKDOWN_ROWS = 100
-TOLERANCE_AXES = {"manipulators": ("dx", "dy"), "stairs": ("rise", "tread")}
 
 
 @dataclass(frozen=True)
@@ -280,7 +275,7 @@ def _from_json(path: Path):
         raise SpecError(source, "design", "a table of design values", repr(values))
     tol = doc.get("tolerance")
     for axis, value in (tol.items() if isinstance(tol, dict) else ()):
-        if axis in TOLERANCE_AXES[spec.kind] and not (_finite(value) and value >= 0):
+        if axis in of(spec).tolerance_axes and not (_finite(value) and value >= 0):
             raise SpecError(source, f"tolerance.{axis}", "a number >= 0 (m)", repr(value))
     verification = doc.get("verification")
     if verification is not None and not (isinstance(verification, dict)
@@ -300,7 +295,9 @@ def _get(doc, key):
 
 def _tolerance(spec: Spec, tol: dict | None, wanted: bool) -> tuple[dict | None, str]:
     """The placement tolerance (half-widths by axis) and a note on where it comes from."""
-    axes = TOLERANCE_AXES[spec.kind]
+    axes = of(spec).tolerance_axes
+    if not axes:
+        return None, f"tolerance not computed: a {spec.kind} scene has no placement box"
     if tol and all(_finite(tol.get(a)) for a in axes):
         return {a: float(tol[a]) for a in axes}, "robust tolerance of the optimised design"
     if not wanted:
@@ -309,7 +306,8 @@ def _tolerance(spec: Spec, tol: dict | None, wanted: bool) -> tuple[dict | None,
     if spec.verification.stages > most:
         return None, (f"tolerance not computed: {spec.verification.stages} stages is more "
                       f"than {most} {why}")
-    asked, drift = _orbit_design(spec)
+    shift = of(spec).box_shift(spec)
+    asked = spec if shift is None else shift.spec
     asked = dataclasses.replace(asked, objective={"max_offset_tolerance": 1.0})
     try:
         from ..api import design
@@ -325,36 +323,18 @@ def _tolerance(spec: Spec, tol: dict | None, wanted: bool) -> tuple[dict | None,
         return None, f"tolerance not found ({type(exc).__name__}: {exc})"
     if not (found and all(_finite(found.get(a)) for a in axes)):
         return None, "tolerance not found: the design has no robust margin to spare"
-    box = {a: float(found[a]) - (drift if a == "tread" else 0.0) for a in axes}
+    drift = 0.0 if shift is None else shift.offset
+    box = {a: float(found[a]) - (drift if shift and a == shift.axis else 0.0) for a in axes}
     if drift == 0.0:
         return box, "largest robust box for this design (objective max_offset_tolerance)"
-    if box["tread"] <= 0.0:
-        return None, (f"tolerance not found: the tread is {drift:.3g} m off the periodic "
-                      f"flight's, more than the {found['tread']:.3g} m the periodic design "
-                      "allows a step")
+    axis, noun = shift.axis, of(spec).stage_noun[0]
+    if box[axis] <= 0.0:
+        return None, (f"tolerance not found: the {axis} is {drift:.3g} m off "
+                      f"{shift.reference}, more than the {found[axis]:.3g} m the periodic "
+                      f"design allows a {noun}")
     return box, (f"largest robust box of the periodic design (objective max_offset_tolerance), "
-                 f"its tread half-width less this tread's {drift:.3g} m offset from the periodic "
-                 "flight's")
-
-
-def _orbit_design(spec: Spec) -> tuple[Spec, float]:
-    """(the spec with a given stairs tread left to the periodic flight, |tread - that tread|).
-
-    The NLP holds a given tread to the periodic flight's (optimizer.md, section 9), which an
-    optimizer's answer meets only to its tolerance (6e-8 m off found no box). Built with tread
-    T + d, every step is the periodic design's with a tread error d, so the periodic design's
-    box, its tread half-width less |d|, holds for it."""
-    tread = spec.design.get("tread") if spec.kind == "stairs" else None
-    if tread is None:
-        return spec, 0.0
-    from ..analysis import analyse
-
-    periodic = analyse(spec.scene, spec.design_at(), spec.verification.stages).periodic
-    drift = periodic.get("drift_per_bounce")
-    if drift is None:
-        return spec, 0.0
-    design = {name: value for name, value in spec.design.items() if name != "tread"}
-    return dataclasses.replace(spec, design=design), abs(float(drift))
+                 f"its {axis} half-width less this {axis}'s {drift:.3g} m offset from "
+                 f"{shift.reference}")
 
 
 def _finite(value) -> bool:
@@ -374,83 +354,9 @@ def make_sheet(spec: Spec, status: str, tol: dict | None, note: str, count: int,
     if count < 1:
         raise SpecError("command line", "--count", "an integer >= 1", str(count))
     analysis = analyse(spec.scene, spec.design_at(), spec.verification.stages)
-    maker = _manipulators if spec.kind == "manipulators" else _stairs
-    summary, items = maker(spec, analysis, tol, count)
+    summary, items = of(spec).sheet_rows(spec, analysis, tol, count)
     return BuildSheet(spec=spec, status=status, design=dict(analysis.design),
                       geometry=dict(analysis.geometry), periodic=dict(analysis.periodic),
                       tolerance=tol, tolerance_note=note, summary=summary, items=items,
                       source=source, notes=tuple(analysis.problems),
                       violations=tuple(violations), verification=verification)
-
-
-def _manipulators(spec, analysis, tol, count):
-    d, scene = analysis.design, spec.scene
-    a, b, l = d["alpha"], d["beta"], d["link_length"]
-    px, py = analysis.geometry["pitch_x"], analysis.geometry["pitch_y"]  # py: downward
-    x0, y0 = d["first_pivot_x"], d["first_pivot_y"]
-    palm_mass = scene.body.mass / d["mass_ratio"]
-    tx, ty = (tol["dx"], tol["dy"]) if tol else (None, None)
-    covered = spec.verification.stages
-    items = []
-    for k in range(1, count + 1):
-        x, y = x0 + (k - 1) * px, y0 - (k - 1) * py
-        back_x, back_y = (float(v) for v in phys.palm_centre(x, y, -a, l))
-        hand_x, hand_y = (float(v) for v in phys.palm_centre(x, y, b, l))
-        items.append({
-            "manipulator": k, "pivot_x_m": x, "pivot_y_m": y,
-            "pivot_x_tolerance_m": tx if k <= covered else None,
-            "pivot_y_tolerance_m": ty if k <= covered else None,
-            "back_stop_rad": -a, "handover_rad": b, "front_stop_rad": scene.palm.front_stop,
-            "link_length_m": l, "palm_mass_kg": palm_mass,
-            "palm_at_back_stop_x_m": back_x, "palm_at_back_stop_y_m": back_y,
-            "handover_x_m": hand_x, "handover_y_m": hand_y,
-        })
-    summary = [
-        ("manipulators", count, "", None),
-        ("pitch x (pivot to pivot, along the row)", px, "m", None),
-        ("pitch y (pivot to pivot, downward)", py, "m", None),
-        ("pivot k x = first pivot x + (k - 1) pitch x", x0, "m", tx),
-        ("pivot k y = first pivot y - (k - 1) pitch y", y0, "m", ty),
-        ("link length l", l, "m", None),
-        ("back stop -alpha (clockwise from vertical)", -a, "rad", None),
-        ("handover angle beta", b, "rad", None),
-        ("front stop", scene.palm.front_stop, "rad", None),
-        ("palm mass M = m / mass_ratio", palm_mass, "kg", None),
-        ("palm width x thickness", f"{scene.palm.width * 1e3:g} x "
-         f"{scene.palm.thickness * 1e3:g}", "mm", None),
-        ("object mass, width x height", f"{scene.body.mass:g} kg, {scene.body.width * 1e3:g} x "
-         f"{scene.body.height * 1e3:g}", "mm", None),
-        ("handover speed (periodic)", analysis.periodic.get("handover_speed"), "m/s", None),
-    ]
-    return summary, items
-
-
-def _stairs(spec, analysis, tol, count):
-    from ..scenes.stairs.sim import stairs_geometry
-
-    geo = stairs_geometry(spec.scene, spec.design_at())
-    tr, tt = (tol["rise"], tol["tread"]) if tol else (None, None)
-    covered = spec.verification.stages
-    items = []
-    for k in range(1, count + 1):
-        items.append({
-            "step": k, "rise_m": geo.rise_height(k), "tread_m": geo.tread_length(k),
-            "rise_tolerance_m": tr if k <= covered else None,
-            "tread_tolerance_m": tt if k <= covered else None,
-            "back_x_m": geo.back_x(k), "nose_x_m": geo.nose_x(k), "level_m": geo.level(k),
-            "landing_from_back_m": geo.landing_offset,
-        })
-    d = analysis.design
-    summary = [
-        ("steps", count, "", None),
-        ("rise (every step)", geo.rise, "m", tr),
-        ("tread (every step)", geo.tread, "m", tt),
-        ("landing point from the back of each tread", geo.landing_offset, "m", None),
-        ("launch height above tread 1", geo.launch_height, "m", None),
-        ("launch speed (horizontal)", d["launch_speed"], "m/s", None),
-        ("back of tread 1 (launch at x = 0)", geo.x_back_1, "m", None),
-        ("restitution", d["restitution"], "", None),
-        ("ball radius", spec.scene.ball.radius, "m", None),
-        ("impact speed (periodic)", analysis.periodic.get("impact_speed"), "m/s", None),
-    ]
-    return summary, items

@@ -4,13 +4,9 @@ canvas; no pyplot state).
 `draw(sheet)` draws the whole device, every manipulator or step, scaled to fit one page, with the
 parts list and the tolerances below it; `drawing_files` writes it as PNG and SVG, and as a PDF
 whose first page is that drawing, followed by pages of PAGE_ITEMS manipulators or steps each at a
-larger scale and the table of every pivot or step. Manipulators: each pivot with its tolerance
-box (to scale), the links (two per manipulator, each l long between its holes) and palm at the
-back stop (solid) and at the handover angle (dashed), the stop directions, the object's path as
-simulated, and dimensions: the link length along a link, the angles in degrees, the pitch, the
-feed (start position from pivot 1 and speed). Stairs: the staircase with rise and tread, the
-launch (height above tread 1 and speed) and the ball's path as simulated. Labels never overlap
-(sheet/labels.py).
+larger scale and the table of every pivot or step. The device itself is drawn by its scene
+(Scene.draw_sheet: scenes/<kind>/drawing.py), with its words (Scene.sheet_words). Labels never
+overlap (sheet/labels.py).
 """
 
 from __future__ import annotations
@@ -19,10 +15,11 @@ import io
 import math
 import textwrap
 
+from ..plugin import of
 from ..report.render import render_figure
 from .build import BuildSheet
 from .labels import FONT, Labels
-from .parts import MM, parts_list, tolerance_entries
+from .parts import parts_list, tolerance_entries
 
 DRAWING_FORMATS = ("png", "svg", "pdf")
 PAGE_ITEMS = 6          # manipulators or steps on each detail page of the PDF
@@ -59,14 +56,7 @@ def draw(sheet: BuildSheet, first: int = 1, last: int | None = None, *, notes: b
     ax.set_ylabel("y (mm)")
     labels = Labels()
     detail = len(items) <= PAGE_ITEMS  # a longer view: the PDF's pages carry the dimensions
-    if sheet.kind == "manipulators":
-        from ..scenes.manipulators.drawing import draw_manipulators
-
-        draw_manipulators(ax, labels, sheet, items, detail)
-    else:
-        from ..scenes.stairs.drawing import draw_stairs
-
-        draw_stairs(ax, labels, sheet, items, detail)
+    of(sheet.spec).draw_sheet(ax, labels, sheet, items, detail)
     notes_top = _layout(figure, ax, len(lines), bool(sheet.failures))
     _title(figure, sheet, first, last)
     if lines:
@@ -79,10 +69,11 @@ def draw(sheet: BuildSheet, first: int = 1, last: int | None = None, *, notes: b
 
 def _title(figure, sheet, first, last):
     name = sheet.spec.name or sheet.spec.source
-    what = "manipulators" if sheet.kind == "manipulators" else "steps"
+    scene = of(sheet.spec)
+    what = scene.stage_noun[1]
     shown = (f"{sheet.count} {what}" if (first, last) == (1, sheet.count) else
              f"{what} {first} to {last} of {sheet.count}")
-    units = "millimetres, degrees" if sheet.kind == "manipulators" else "millimetres"
+    units = scene.sheet_words().units
     title = f"{name}: {shown} ({units})"
     if sheet.failures:  # the workshop sees it on the drawing too, not only in sheet.md
         warning = textwrap.wrap(f"DOES NOT WORK - DO NOT BUILD: {sheet.failures[0]}",
@@ -112,15 +103,12 @@ def _layout(figure, ax, note_lines: int, warning: bool) -> float:
 
 def _notes(sheet) -> list[str]:
     """The lines below the drawing: the legend, the parts list and every tolerance."""
-    kind = sheet.kind
-    legend = ("solid: links and palms at the back stop; dashed: at the handover angle; red "
-              "boxes: pivot tolerance (to scale); stars: handover points; dotted: the object's "
-              "path (simulated)" if kind == "manipulators" else
-              "dashed: the ball's centre (simulated); circles: the ball at each impact")
+    scene = of(sheet.spec)
+    words = scene.sheet_words()
+    legend = words.legend
     if sheet.count > PAGE_ITEMS:
         pages = math.ceil(sheet.count / PAGE_ITEMS)
-        what = "manipulator" if kind == "manipulators" else "step"
-        where = "pivot's" if kind == "manipulators" else "step's"
+        what, where = scene.stage_noun[0], f"{words.item}'s"
         legend += (f". Each {what} dimensioned: sheet.pdf, pages 2 to {pages + 1} "
                    f"({PAGE_ITEMS} a page); every {where} coordinates: the pages after them "
                    "and sheet.csv")
@@ -168,42 +156,14 @@ def _table_pages(sheet):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    rows = _table_rows(sheet)
+    rows = of(sheet.spec).table_rows(sheet)
     header, body = rows[0], rows[1:]
     for start in range(0, len(body), TABLE_ROWS):
         figure = Figure(figsize=(8.27, 11.69))
         FigureCanvasAgg(figure)
-        what = "pivots" if sheet.kind == "manipulators" else "steps"
-        figure.text(0.05, 0.97, f"{sheet.spec.name or sheet.spec.source}: every {what[:-1]} "
+        what = of(sheet.spec).sheet_words().item
+        figure.text(0.05, 0.97, f"{sheet.spec.name or sheet.spec.source}: every {what} "
                     f"(mm)", fontsize=10, va="top")
         chunk = [header, *body[start:start + TABLE_ROWS]]
         figure.text(0.05, 0.94, "\n".join(chunk), fontsize=7, family="monospace", va="top")
         yield figure
-
-
-def _table_rows(sheet) -> list[str]:
-    """Fixed-width rows of the pivot (bracket holes) or step table, mm."""
-    if sheet.kind == "manipulators":
-        from .parts import hole_spacing
-
-        s, t = hole_spacing(sheet) * MM, sheet.spec.scene.palm.thickness * MM
-        rows = [f"{'k':>4} {'pivot x':>12} {'pivot y':>12} {'hole 1 x':>12} {'hole 2 x':>12} "
-                f"{'holes y':>12} {'tol x':>8} {'tol y':>8}"]
-        for item in sheet.items:
-            x, y = item["pivot_x_m"] * MM, item["pivot_y_m"] * MM
-            tx, ty = item["pivot_x_tolerance_m"], item["pivot_y_tolerance_m"]
-            rows.append(f"{item['manipulator']:>4} {x:>12.3f} {y:>12.3f} {x - s / 2:>12.3f} "
-                        f"{x + s / 2:>12.3f} {y - t:>12.3f} {_tol(tx):>8} {_tol(ty):>8}")
-        return rows
-    rows = [f"{'k':>4} {'rise':>10} {'tread':>10} {'back x':>12} {'nose x':>12} {'level':>12} "
-            f"{'tol rise':>9} {'tol tread':>9}"]
-    for item in sheet.items:
-        rows.append(f"{item['step']:>4} {item['rise_m'] * MM:>10.3f} "
-                    f"{item['tread_m'] * MM:>10.3f} {item['back_x_m'] * MM:>12.3f} "
-                    f"{item['nose_x_m'] * MM:>12.3f} {item['level_m'] * MM:>12.3f} "
-                    f"{_tol(item['rise_tolerance_m']):>9} {_tol(item['tread_tolerance_m']):>9}")
-    return rows
-
-
-def _tol(value) -> str:
-    return "-" if value is None or not math.isfinite(value) else f"+-{value * MM:.3g}"

@@ -20,7 +20,7 @@ def sheet_csv(sheet: BuildSheet) -> str:
 
 def sheet_markdown(sheet: BuildSheet, drawing: str | None = None) -> str:
     spec = sheet.spec
-    unit_word = "manipulator" if sheet.kind == "manipulators" else "step"
+    unit_word = of(spec).stage_noun[0]
     lines = [f"# Build sheet: {spec.name or Path(spec.source).stem}", ""]
     if sheet.failures:
         lines += ["## WARNING: this design does not work. Do not build it.", "",
@@ -96,7 +96,7 @@ def tolerance_limit(sheet: BuildSheet) -> str:
     covers, count = sheet.tolerance_covers, sheet.count
     if not sheet.tolerance or covers >= count:
         return ""
-    unit_word = "manipulators" if sheet.kind == "manipulators" else "steps"
+    unit_word = of(sheet.spec).stage_noun[1]
     # the most stages a tolerance is solved for: stairs' NLP has rows for every bounce; the
     # simulator keeps every manipulator's record
     most = of(sheet.spec).stage_limit(True)[0]

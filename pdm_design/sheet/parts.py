@@ -1,22 +1,14 @@
-"""The device as a workshop builds it, in millimetres and degrees: every pivot and hole, the parts
+"""The device as a workshop builds it, in millimetres and degrees: every item it places, the parts
 list, and the tolerances by part. The drawing, the DXF and the report page all take their
 numbers from here (the sheet's CSV and the JSON stay SI).
 
-Manipulators. A parallelogram of two links of length l (hole centre to hole centre). The
-design's pivot (x_k, y_k) is the centre of the circle the palm's top-surface centre moves on:
-palm top centre = pivot + l (sin theta, cos theta), theta the links' angle from vertical,
-positive towards +x (the back stop at -alpha, the handover at beta). The links' holes lie
-HOLE_SPACING_FRACTION of the palm's width apart, symmetric about the centre line: on the
-bracket at (x_k -+ s/2, y_k - T), on the palm's underside at (palm top centre -+ s/2, - T), T the
-palm's thickness; so each link is exactly l long and parallel to the other.
-
-Stairs. Step k's tread is the level y_k from its back (the riser) x to its nose x; the ball is
-launched at x = 0 (sheet/build.py).
+What a scene places and builds, and its parts, are the scene's (Scene.sheet_rows,
+Scene.parts: scenes/<kind>/sheet.py).
 
 Tolerances are a list of ToleranceEntry (quantity, applies_to, value, unit, limited_by): the
-sheet's own (the pivot placement box, or the steps' rise and tread) and any a tolerance analysis
-adds (link length, back stop, palm mass, friction, ...); each is shown on the part whose name its
-applies_to mentions, or under "other tolerances".
+sheet's own (its placement box, Scene.box_tolerances) and any a tolerance analysis adds; each is
+shown on the part whose words (Scene.part_words) its applies_to mentions, or under "other
+tolerances".
 """
 
 from __future__ import annotations
@@ -27,7 +19,6 @@ from dataclasses import dataclass
 from ..units import workshop
 
 MM = 1e3
-HOLE_SPACING_FRACTION = 0.5   # link holes on the palm: half the palm's width apart
 BOX_WORDS = ("worst-case box the optimizer computed (every build with all its errors inside it "
              "works)")
 _RUNS: dict[int, tuple] = {}  # id(sheet) -> (sheet, its nominal run or None)
@@ -59,14 +50,6 @@ class Part:
     quantity: int
     dimensions: str
     tolerances: tuple[ToleranceEntry, ...] = ()
-
-
-# part names, and the words of a ToleranceEntry.applies_to that put it on that part
-PART_WORDS = {
-    "pivot bracket": ("pivot", "bracket"), "link": ("link",), "palm": ("palm",),
-    "back stop": ("back stop", "back_stop", "alpha"), "front stop": ("front stop", "front_stop"),
-    "step": ("step", "rise", "tread"), "feed": ("feed", "launch", "start"),
-}
 
 
 def workshop_value(value: float, unit: str) -> tuple[float, str]:
@@ -104,53 +87,27 @@ def deg(value: float) -> str:
 # --------------------------------------------------------------------------- tolerances
 
 def tolerance_entries(sheet) -> tuple[ToleranceEntry, ...]:
-    """The sheet's tolerances: its own (pivot box or step rise and tread), then the extra ones
-    it was given (BuildSheet.tolerances)."""
-    own = []
-    tol = sheet.tolerance
-    if tol:
-        covers = sheet.tolerance_covers
-        why = f"{BOX_WORDS}: {sheet.tolerance_note}"
-        if sheet.kind == "manipulators":
-            where = f"pivot bracket of manipulators 1 to {covers}"
-            own = [ToleranceEntry("pivot x (box)", where, tol["dx"], "m", why),
-                   ToleranceEntry("pivot y (box)", where, tol["dy"], "m", why)]
-        else:
-            where = f"step 1 to {covers}"
-            own = [ToleranceEntry("rise (box)", where, tol["rise"], "m", why),
-                   ToleranceEntry("tread (box)", where, tol["tread"], "m", why)]
+    """The sheet's tolerances: its own (its placement box, Scene.box_tolerances), then the
+    extra ones it was given (BuildSheet.tolerances)."""
+    from ..plugin import of
+
+    own = ()
+    if sheet.tolerance:
+        own = of(sheet.spec).box_tolerances(sheet, f"{BOX_WORDS}: {sheet.tolerance_note}")
     return (*own, *getattr(sheet, "tolerances", ()))
 
 
-def part_of(entry: ToleranceEntry) -> str | None:
-    """The parts-list name an entry belongs to (by the words of its applies_to), or None."""
-    words = entry.applies_to.lower()
-    for part, keys in PART_WORDS.items():
-        if any(k in words for k in keys):
+def part_of(entry: ToleranceEntry, words: dict[str, tuple[str, ...]]) -> str | None:
+    """The parts-list name an entry belongs to (by the words of its applies_to, Scene.
+    part_words), or None."""
+    applies = entry.applies_to.lower()
+    for part, keys in words.items():
+        if any(k in applies for k in keys):
             return part
     return None
 
 
 # --------------------------------------------------------------------------- geometry
-
-def hole_spacing(sheet) -> float:
-    """Distance between a palm's two link holes (m)."""
-    return HOLE_SPACING_FRACTION * sheet.spec.scene.palm.width
-
-
-def link_holes(pivot: tuple[float, float], theta: float, link: float, spacing: float,
-               thickness: float) -> list[tuple[tuple[float, float], tuple[float, float]]]:
-    """[(bracket hole, palm hole)] of the two links at angle theta (m)."""
-    x, y = pivot
-    cx, cy = x + link * math.sin(theta), y + link * math.cos(theta)
-    return [((x + side * spacing / 2, y - thickness), (cx + side * spacing / 2, cy - thickness))
-            for side in (-1.0, 1.0)]
-
-
-def pivots(sheet) -> list[tuple[int, float, float]]:
-    """[(k, x, y)] of every manipulator's pivot (m)."""
-    return [(item["manipulator"], item["pivot_x_m"], item["pivot_y_m"]) for item in sheet.items]
-
 
 def nominal_run(sheet):
     """The simulator's run of the sheet's design over its items, with the trajectory (None
@@ -175,51 +132,16 @@ def nominal_run(sheet):
 
 def parts_list(sheet) -> tuple[tuple[Part, ...], tuple[ToleranceEntry, ...]]:
     """(the parts, the tolerances that name none of them)."""
+    from ..plugin import of
+
+    scene = of(sheet.spec)
     entries = tolerance_entries(sheet)
     by_part: dict[str | None, list[ToleranceEntry]] = {}
     for entry in entries:
-        by_part.setdefault(part_of(entry), []).append(entry)
-    maker = _manipulator_parts if sheet.kind == "manipulators" else _stairs_parts
-    parts = maker(sheet)
+        by_part.setdefault(part_of(entry, scene.part_words), []).append(entry)
+    parts = scene.parts(sheet)
     named = {p.name for p in parts}
     out = tuple(Part(p.name, p.quantity, p.dimensions, tuple(by_part.get(p.name, ())))
                 for p in parts)
     other = tuple(e for key, group in by_part.items() if key not in named for e in group)
     return out, other
-
-
-def _manipulator_parts(sheet) -> list[Part]:
-    d, scene, n = sheet.design, sheet.spec.scene, sheet.count
-    a, l = d["alpha"], d["link_length"]
-    palm, fs = scene.palm, scene.palm.front_stop
-    px, py = sheet.geometry["pitch_x"], sheet.geometry["pitch_y"]
-    x0, y0 = d["first_pivot_x"], d["first_pivot_y"]
-    s, t = hole_spacing(sheet), palm.thickness
-    palm_mass = scene.body.mass / d["mass_ratio"]
-    rest_x, rest_y = l * math.sin(-a), l * math.cos(-a)
-    front_x, front_y = l * math.sin(fs), l * math.cos(fs)
-    return [
-        Part("pivot bracket", n, f"pivot k at x = {mm(x0)} + (k - 1) x {mm(px)} mm, y = "
-             f"{mm(y0)} - (k - 1) x {mm(py)} mm; two holes at x -+ {mm(s / 2)}, y - {mm(t)} mm"),
-        Part("link", 2 * n, f"hole spacing {mm(l)} mm (centre to centre)"),
-        Part("palm", n, f"{mm(palm.width)} x {mm(palm.thickness)} mm, mass "
-             f"{palm_mass:.4g} kg; two holes {mm(s)} mm apart on its underside, centred"),
-        Part("back stop", n, f"links at {deg(-a)} deg from vertical; palm top centre at "
-             f"({mm(rest_x)}, {mm(rest_y)}) mm from the pivot"),
-        Part("front stop", n, f"links at {deg(fs)} deg from vertical; palm top centre at "
-             f"({mm(front_x)}, {mm(front_y)}) mm from the pivot"),
-    ]
-
-
-def _stairs_parts(sheet) -> list[Part]:
-    first = sheet.items[0]
-    same = all(abs(i["rise_m"] - first["rise_m"]) < 1e-12 and
-               abs(i["tread_m"] - first["tread_m"]) < 1e-12 for i in sheet.items)
-    size = (f"rise {mm(first['rise_m'])} mm, tread {mm(first['tread_m'])} mm" if same else
-            "rise and tread of each step in the CSV")
-    launch = sheet.design["launch_speed"]
-    return [
-        Part("step", sheet.count, size + f"; tread 1 back at x = {mm(first['back_x_m'])} mm"),
-        Part("feed", 1, f"ball launched horizontally at {mm(launch)} mm/s from x = 0, "
-             f"{mm(sheet.spec.scene.initial.drop_height)} mm above tread 1"),
-    ]

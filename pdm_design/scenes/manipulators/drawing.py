@@ -5,7 +5,8 @@ from __future__ import annotations
 import math
 
 from ...sheet.labels import dimension
-from ...sheet.parts import MM, hole_spacing, link_holes, nominal_run, part_of, tolerance_entries
+from ...sheet.parts import MM, nominal_run, part_of, tolerance_entries
+from .sheet import PART_WORDS, hole_spacing, link_holes
 
 
 def draw_manipulators(ax, labels, sheet, items, detail=True):
@@ -56,7 +57,8 @@ def _by_part(sheet) -> dict[str, str]:
     """{part name: its tolerances in words} (sheet/parts.py)."""
     out: dict[str, list[str]] = {}
     for entry in tolerance_entries(sheet):
-        out.setdefault(part_of(entry) or "", []).append(f"{entry.quantity} {entry.shown()}")
+        out.setdefault(part_of(entry, PART_WORDS) or "", []).append(
+            f"{entry.quantity} {entry.shown()}")
     return {part: "; ".join(words) for part, words in out.items()}
 
 

@@ -97,6 +97,82 @@ class Manipulators(Scene):
     # ------------------------------------------------------------------ tolerances, yield, verification
 
     # ------------------------------------------------------------------ sheets, drawings, reports
+    tolerance_axes = ("dx", "dy")
+    dxf_layers = {"PIVOTS": 7, "LINKS": 5, "PALMS": 8, "STOPS": 1}  # scenes/manipulators/dxf.py
+    stage_columns = ("manipulator", "landing_time", "landing_offset", "landing_speed",
+                     "handover_speed", "handover_angle")
+
+    @property
+    def part_words(self):
+        from .sheet import PART_WORDS
+
+        return PART_WORDS
+
+    def sheet_rows(self, spec, analysis, tolerance, count):
+        from .sheet import sheet_rows
+
+        return sheet_rows(spec, analysis, tolerance, count)
+
+    def sheet_words(self):
+        from .sheet import WORDS
+
+        return WORDS
+
+    def box_tolerances(self, sheet, why):
+        from .sheet import box_tolerances
+
+        return box_tolerances(sheet, why)
+
+    def parts(self, sheet):
+        from .sheet import parts
+
+        return parts(sheet)
+
+    def table_rows(self, sheet):
+        from .sheet import table_rows
+
+        return table_rows(sheet)
+
+    def draw_sheet(self, ax, labels, sheet, items, detail):
+        from .drawing import draw_manipulators
+
+        draw_manipulators(ax, labels, sheet, items, detail)
+
+    def draw_dxf(self, msp, sheet):
+        from .dxf import draw_dxf
+
+        return draw_dxf(msp, sheet)
+
+    def document_keys(self):
+        from .model import ManipulatorsDesign
+
+        return {"design": ManipulatorsDesign.VARIABLES,
+                "geometry": ("pitch_x", "pitch_y", "palm_mass", "link_mass", "link_inertia",
+                             "link_count", "pivot_friction_torque", "pivot_damping",
+                             "landing_offset"),
+                "periodic": ("handover_speed", "landing_speed", "contraction", "drop_per_stage",
+                             "effective_mass"),
+                "approach": ("landing_point", "landing_velocity", "handover_speeds")}
+
+    def scene_parameters(self, scene):
+        """`links` (mass of each link, inertia about its pivot or null for a uniform rod,
+        count) and `pivots` (friction_torque, damping): the paper's zeros when left out."""
+        links, pivots = scene.links, scene.pivots
+        return {"links": {"mass": links.mass, "inertia": links.inertia, "count": links.count},
+                "pivots": {"friction_torque": pivots.friction_torque,
+                           "damping": pivots.damping}}
+
+    def plot_run(self, spec, design, result, path, *, offsets=(), stages=None, title=""):
+        from .sim.plot import plot_manipulators
+
+        plot_manipulators(result, spec.scene, design, path, offsets=offsets, stages=stages,
+                          title=title)
+
+    def animation(self, spec, result, timeline):
+        from .animation import animation
+
+        return animation(spec, result)
+
 
     # ------------------------------------------------------------------ command line, tables, API
     table_geometry = ("pitch_x", "pitch_y", "palm_mass", "landing_offset")

@@ -80,6 +80,70 @@ class Stairs(Scene):
     # ------------------------------------------------------------------ tolerances, yield, verification
 
     # ------------------------------------------------------------------ sheets, drawings, reports
+    tolerance_axes = ("rise", "tread")
+    dxf_layers = {"STEPS": 7}  # scenes/stairs/dxf.py
+    stage_columns = ("step", "impact_time", "landing_x", "impact_speed", "vx", "spin_after")
+
+    @property
+    def part_words(self):
+        from .sheet import PART_WORDS
+
+        return PART_WORDS
+
+    def sheet_rows(self, spec, analysis, tolerance, count):
+        from .sheet import sheet_rows
+
+        return sheet_rows(spec, analysis, tolerance, count)
+
+    def sheet_words(self):
+        from .sheet import WORDS
+
+        return WORDS
+
+    def box_shift(self, spec):
+        from .sheet import box_shift
+
+        return box_shift(spec)
+
+    def parts(self, sheet):
+        from .sheet import parts
+
+        return parts(sheet)
+
+    def table_rows(self, sheet):
+        from .sheet import table_rows
+
+        return table_rows(sheet)
+
+    def draw_sheet(self, ax, labels, sheet, items, detail):
+        from .drawing import draw_stairs
+
+        draw_stairs(ax, labels, sheet, items, detail)
+
+    def draw_dxf(self, msp, sheet):
+        from .dxf import draw_dxf
+
+        return draw_dxf(msp, sheet)
+
+    def document_keys(self):
+        from .model import StairsDesign
+
+        return {"design": StairsDesign.VARIABLES,
+                "geometry": ("rise", "tread", "landing_offset", "nose_clearance"),
+                "periodic": ("impact_speed", "vertical_impact_speed", "horizontal_speed", "spin",
+                             "flight_time", "drift_per_bounce"),
+                "approach": ("first_vertical_impact_speed",)}
+
+    def plot_run(self, spec, design, result, path, *, offsets=(), stages=None, title=""):
+        from .sim.plot import plot_stairs_run
+
+        plot_stairs_run(result, path, title=title)
+
+    def animation(self, spec, result, timeline):
+        from .animation import animation
+
+        return animation(spec, result, timeline)
+
 
     # ------------------------------------------------------------------ command line, tables, API
     table_geometry = ("nose_clearance",)
