@@ -260,9 +260,6 @@ class Scene:
     """The analysis' geometry a design table shows, by name (Analysis.geometry keys)."""
     table_periodic: tuple[str, ...] = ()
     """The analysis' periodic orbit a design table shows, by name (Analysis.periodic keys)."""
-    tolerance_axes: tuple[str, ...] = ()
-    """The axes of the robust tolerance box of max_offset_tolerance (JSON `tolerance.<axis>`,
-    metres): a pivot's ("dx", "dy") or a step's ("rise", "tread")."""
 
     stage_errors: StageErrors | None = None
     """The per-stage build errors `simulate` takes (None: the scene takes none); they reach

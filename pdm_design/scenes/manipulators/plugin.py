@@ -178,7 +178,6 @@ class Manipulators(Scene):
     table_geometry = ("pitch_x", "pitch_y", "palm_mass", "landing_offset")
     table_periodic = ("handover_speed", "landing_speed", "contraction",
                       "drop_per_stage")
-    tolerance_axes = ("dx", "dy")
     def infeasible_words(self, spec, design):
         """Where the start and palm 1 are, when the least-violation design puts it below."""
         from .start import start_words

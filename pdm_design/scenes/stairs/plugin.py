@@ -149,7 +149,6 @@ class Stairs(Scene):
     table_geometry = ("nose_clearance",)
     table_periodic = ("impact_speed", "vertical_impact_speed", "horizontal_speed",
                       "spin", "flight_time", "drift_per_bounce")
-    tolerance_axes = ("rise", "tread")
     stage_errors = StageErrors("--step-error", "K:DRISE,DTREAD", "step_errors", "step",
                                lambda k, a, b: _step_error(step=k, rise=a, tread=b))
 
