@@ -8,8 +8,9 @@ the heel strike is the guard's first fall through 0 (physics.strike_guard). Fail
     fell_backward  the stance leg stops (w1 falls through 0) before the hip passes over the foot,
                    or the step ends with the walker moving back
     fell_forward   the hip reaches the ground (stance leg perpendicular to the ramp) first
-    scuffed        the swing leg, having passed the stance leg, swings back behind it: its foot
-                   goes through the ground
+    scuffed        the legs pass each other with the stance leg past the ramp's normal (the
+                   swing foot, at the ground as they pass, goes under it), or the swing leg,
+                   having passed the stance leg, swings back behind it
     flight         the stance foot's normal force falls through 0, or a heel strike's normal
                    impulse is not positive
     slip           the friction the stance foot needs exceeds the scene's, in the stance phase or
@@ -103,6 +104,10 @@ def one_step(params: phys.Params, ground, x0, friction: float, acc: Accuracy,
 
     base = [normal, slip_ahead, slip_back, backward, forward]
     which, t, x = run(0.0, np.asarray(x0, dtype=float), base + [passes])
+    if which is passes and phys.strike_guard(x[0], x[1], slope, rise) < 0.0:
+        return StepOutcome("scuffed", t, x, x, "the legs pass each other with the stance leg "
+                           f"{x[0] - slope:.4g} rad past the ramp's normal: the swing foot goes "
+                           "under the ground", stats, pieces)
     if which is passes:
         scuffed = _swings_back()
         which, t, x = run(t, x, base + [scuffed, strike])
