@@ -113,6 +113,7 @@ def _falls(params, x, gamma, passed, friction):
     normal, tangential = phys.ground_reaction(x[0], x[1], x[2], x[3], gamma, params)
     code[np.abs(tangential) > friction * normal] = FALLS.index("slip")
     code[normal <= 0] = FALLS.index("flight")
+    code[(normal <= 0) & (x[0] > gamma) & (x[0] < x[1])] = FALLS.index("fell_forward")
     code[passed & (x[0] < x[1])] = FALLS.index("scuffed")
     code[(x[2] < 0) & (x[0] < 0)] = FALLS.index("fell_backward")
     code[x[0] - gamma > math.pi / 2] = FALLS.index("fell_forward")

@@ -7,7 +7,9 @@ ground at mid-stance); the deepest it goes under the ramp is recorded (`scuff_de
 the heel strike is the guard's first fall through 0 (physics.strike_guard). Failures:
     fell_backward  the stance leg stops (w1 falls through 0) before the hip passes over the foot,
                    or the step ends with the walker moving back
-    fell_forward   the hip reaches the ground (stance leg perpendicular to the ramp) first
+    fell_forward   the hip reaches the ground (stance leg perpendicular to the ramp) first, or
+                   the stance foot leaves the ground with the stance leg past the ramp's normal
+                   and the swing leg still behind it
     scuffed        the legs pass each other with the stance leg past the ramp's normal (the
                    swing foot, at the ground as they pass, goes under it), or the swing leg,
                    having passed the stance leg, swings back behind it
@@ -103,6 +105,10 @@ def one_step(params: phys.Params, ground, x0, friction: float, acc: Accuracy,
         return None, float(sol.t[-1]), sol.y[:, -1]
 
     base = [normal, slip_ahead, slip_back, backward, forward]
+    x0 = np.asarray(x0, dtype=float)
+    for f in (normal, slip_ahead, slip_back):  # a condition that fails from the start
+        if not f(0.0, x0) > 0.0:
+            return StepOutcome(kinds[f], 0.0, x0, x0, _detail(kinds[f], x0, slope), stats)
     which, t, x = run(0.0, np.asarray(x0, dtype=float), base + [passes])
     if which is passes and phys.strike_guard(x[0], x[1], slope, rise) < 0.0:
         return StepOutcome("scuffed", t, x, x, "the legs pass each other with the stance leg "
@@ -119,9 +125,10 @@ def one_step(params: phys.Params, ground, x0, friction: float, acc: Accuracy,
         kind = "fell_forward" if x[0] > 0 else "fell_backward"
         return StepOutcome(kind, t, x, x, f"no heel strike within {t_max:.3g} s", stats, pieces)
     if which is not strike and which is not passes:
-        if which is backward and x[0] > 0.0:
-            pass  # the hip is past the foot: it still walks forward
-        return StepOutcome(kinds[which], t, x, x, _detail(kinds[which], x, slope), stats, pieces)
+        kind = kinds[which]
+        if kind == "flight" and x[0] > slope and x[0] < x[1]:
+            kind = "fell_forward"
+        return StepOutcome(kind, t, x, x, _detail(kind, x, slope), stats, pieces)
     after = np.array(phys.heel_strike(*x, params), dtype=float)
     pn, pt = phys.strike_impulse(*x, params, slope)
     stats["strike_friction"] = abs(pt) / pn if pn > 0 else math.inf
@@ -150,7 +157,8 @@ def _detail(kind, x, slope):
         "slip": "the stance foot needs more friction than the ground has",
         "fell_backward": f"the stance leg stops at {q1:.4g} rad, before the hip passes over the "
                          "foot: the walker falls back",
-        "fell_forward": "the hip reaches the ground before the heel strikes",
+        "fell_forward": "the walker falls forward (the hip to the ground, or the stance foot "
+                        "leaving it) before the swing leg passes the stance leg",
     }[kind]
 
 
