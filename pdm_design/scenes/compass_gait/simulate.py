@@ -110,6 +110,8 @@ def one_step(params: phys.Params, ground, x0, friction: float, acc: Accuracy,
         if not f(0.0, x0) > 0.0:
             return StepOutcome(kinds[f], 0.0, x0, x0, _detail(kinds[f], x0, slope), stats)
     which, t, x = run(0.0, np.asarray(x0, dtype=float), base + [passes])
+    if which is passes:  # the stance leg's lean past the ramp's normal as the legs pass
+        stats["passing_lean"] = float(x[0] - slope)
     if which is passes and phys.strike_guard(x[0], x[1], slope, rise) < 0.0:
         return StepOutcome("scuffed", t, x, x, "the legs pass each other with the stance leg "
                            f"{x[0] - slope:.4g} rad past the ramp's normal: the swing foot goes "
