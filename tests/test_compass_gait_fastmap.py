@@ -25,7 +25,7 @@ def test_one_step_matches_the_event_simulator():
     fast = fastmap.walk(params, starts, DESIGN.slope, 1)
     for x, got in zip(starts, fast.state):
         out = one_step(params, ground, x, math.inf, accuracy("precise"))
-        assert np.max(np.abs(got - out.after)) < 1e-7
+        assert np.max(np.abs(got - out.after)) < 2e-7  # RK4 at 0.04 sqrt(l / g): 6e-8
 
 
 def test_rough_ramp_walks_fail_alike():

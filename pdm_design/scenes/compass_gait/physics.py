@@ -100,6 +100,11 @@ def ground_reaction(q1, q2, w1, w2, slope, p: Params):
     with sum m r = A u1 - B u2, u = (sin q, cos q), A = l + beta (a + l), B = beta b,
         R = A (a1 u1' - w1^2 u1) - B (a2 u2' - w2^2 u2) + (0, (1 + 2 beta) g),  u' = (cos q, -sin q)."""
     a1, a2 = accelerations(q1, q2, w1, w2, p)
+    return reaction(q1, q2, w1, w2, a1, a2, slope, p)
+
+
+def reaction(q1, q2, w1, w2, a1, a2, slope, p: Params):
+    """ground_reaction with the accelerations (a1, a2) given."""
     big, small = p.l + p.beta * (p.a + p.l), p.beta * p.b
     rx = big * (a1 * cos(q1) - w1**2 * sin(q1)) - small * (a2 * cos(q2) - w2**2 * sin(q2))
     ry = big * (-a1 * sin(q1) - w1**2 * cos(q1)) - small * (-a2 * sin(q2) - w2**2 * cos(q2)) \
