@@ -6,12 +6,9 @@ from its fixed point (simulate.one_step, "precise"):
     stance_contact  the smallest normal force on the stance foot over the step, per weight
     no_slip         margin(friction, the largest friction the stance foot needs, in the stance
                     phase and at the heel strike's impulse)
-    legs_pass       the stance leg's lean back from the ramp's normal when the legs pass, per its
-                    lean at the step's start: the swing foot clears the ground after passing iff
-                    the legs pass before the stance leg reaches the normal
     stability       margin(max_spectral_radius (1 by default), the spectral radius)
-The swing foot's scuff below the ramp before the legs pass is ignored, as the field does; its
-depth per leg length is reported (geometry "scuff_depth").
+The swing foot's scuff below the ramp as the legs pass is ignored, as the field does; its depth
+per leg length is reported (geometry "scuff_depth").
 """
 
 from __future__ import annotations
@@ -41,11 +38,9 @@ def analyse_compass_gait(scene, design, stages: int | None = None,
     out = one_step(params, ground, gait.state, math.inf, accuracy_preset("precise"))
     stats = out.margins
     demand = max(stats["friction_max"], stats.get("strike_friction", 0.0))
-    lean0 = abs(gait.state[0] - ground.slope)
     margins = {
         "stance_contact": float(stats["normal_min"]),
         "no_slip": margin(scene.friction, demand),
-        "legs_pass": float(-stats.get("passing_lean", math.inf) / lean0),
         "stability": margin(max_spectral_radius, gait.spectral_radius),
     }
     problems = []

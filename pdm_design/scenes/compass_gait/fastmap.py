@@ -87,8 +87,8 @@ def _step(params, x, gamma, friction):
         fell = _falls(params, new, k1, g, passed, friction)
         guard_new = phys.strike_guard(new[0], new[1], g, 0.0)
         ahead = new[0] > new[1]
-        # legs passing with the stance leg past the ramp's normal: the swing foot goes under
-        fell[ahead & ~passed & (guard_new < 0) & (fell < 0)] = FALLS.index("scuffed")
+        # a fall with the swing foot under the ground since the legs passed: a scuff
+        fell[(fell >= 0) & ahead & (guard_new < 0)] = FALLS.index("scuffed")
         strikes = ahead & (guard > 0) & (guard_new <= 0) & (fell < 0)
         ended = strikes | (fell >= 0)
         if np.any(ended):

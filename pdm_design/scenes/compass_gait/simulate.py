@@ -1,18 +1,19 @@
 """Event simulator of the compass gait: each step integrated (scipy's DOP853) to its heel strike,
 the strike's reset, and the falls named.
 
-A step runs in two phases. Until the swing leg passes the stance leg (q1 - q2 rises through 0)
-its foot's scuffing is ignored, as the field does (straight legs of equal length must touch the
-ground at mid-stance); the deepest it goes under the ramp is recorded (`scuff_depth`). After it,
-the heel strike is the guard's first fall through 0 (physics.strike_guard). Failures:
+A step runs in two phases: until the swing leg passes the stance leg (q1 - q2 rises through 0),
+then until the heel strike, the guard's first fall through 0 (physics.strike_guard) after it.
+The swing foot's scuffing as the legs pass is ignored, as the field does (straight legs of equal
+length touch the ground there): the foot may go under the ground before the legs pass, and after
+it until the guard rises back through 0; the deepest it goes is recorded (`scuff_depth`, per leg
+length). Failures:
     fell_backward  the stance leg stops (w1 falls through 0) before the hip passes over the foot,
                    or the step ends with the walker moving back
     fell_forward   the hip reaches the ground (stance leg perpendicular to the ramp) first, or
                    the stance foot leaves the ground with the stance leg past the ramp's normal
                    and the swing leg still behind it
-    scuffed        the legs pass each other with the stance leg past the ramp's normal (the
-                   swing foot, at the ground as they pass, goes under it), or the swing leg,
-                   having passed the stance leg, swings back behind it
+    scuffed        the swing leg, having passed the stance leg, swings back behind it, or the
+                   walker falls with the swing foot still under the ground since the legs passed
     flight         the stance foot's normal force falls through 0, or a heel strike's normal
                    impulse is not positive
     slip           the friction the stance foot needs exceeds the scene's, in the stance phase or
@@ -110,12 +111,6 @@ def one_step(params: phys.Params, ground, x0, friction: float, acc: Accuracy,
         if not f(0.0, x0) > 0.0:
             return StepOutcome(kinds[f], 0.0, x0, x0, _detail(kinds[f], x0, slope), stats)
     which, t, x = run(0.0, np.asarray(x0, dtype=float), base + [passes])
-    if which is passes:  # the stance leg's lean past the ramp's normal as the legs pass
-        stats["passing_lean"] = float(x[0] - slope)
-    if which is passes and phys.strike_guard(x[0], x[1], slope, rise) < 0.0:
-        return StepOutcome("scuffed", t, x, x, "the legs pass each other with the stance leg "
-                           f"{x[0] - slope:.4g} rad past the ramp's normal: the swing foot goes "
-                           "under the ground", stats, pieces)
     if which is passes:
         scuffed = _swings_back()
         which, t, x = run(t, x, base + [scuffed, strike])
@@ -130,6 +125,8 @@ def one_step(params: phys.Params, ground, x0, friction: float, acc: Accuracy,
         kind = kinds[which]
         if kind == "flight" and x[0] > slope and x[0] < x[1]:
             kind = "fell_forward"
+        if x[0] > x[1] and phys.strike_guard(x[0], x[1], slope, rise) < 0.0:
+            kind = "scuffed"  # the swing foot has been under the ground since the legs passed
         return StepOutcome(kind, t, x, x, _detail(kind, x, slope), stats, pieces)
     after = np.array(phys.heel_strike(*x, params), dtype=float)
     pn, pt = phys.strike_impulse(*x, params, slope)
@@ -159,6 +156,8 @@ def _detail(kind, x, slope):
         "slip": "the stance foot needs more friction than the ground has",
         "fell_backward": f"the stance leg stops at {q1:.4g} rad, before the hip passes over the "
                          "foot: the walker falls back",
+        "scuffed": "the swing foot went under the ground as the legs passed and never came "
+                   "up before the walker fell: it scuffs",
         "fell_forward": "the walker falls forward (the hip to the ground, or the stance foot "
                         "leaving it) before the swing leg passes the stance leg",
     }[kind]
@@ -175,10 +174,8 @@ def _sample(sol, params, slope, stats, pieces):
     with np.errstate(divide="ignore", invalid="ignore"):
         demand = np.where(n > 0, np.abs(tang) / n, np.inf)
     stats["friction_max"] = max(stats["friction_max"], float(np.max(demand)))
-    before = x[0] < x[1]
-    if np.any(before):
-        depth = phys.foot_height(x[0][before], x[1][before], slope, params) / params.l
-        stats["scuff_depth"] = min(stats["scuff_depth"], float(np.min(depth)))
+    depth = phys.foot_height(x[0], x[1], slope, params) / params.l
+    stats["scuff_depth"] = min(stats["scuff_depth"], float(np.min(depth)))
     pieces.append((t, x))
 
 
