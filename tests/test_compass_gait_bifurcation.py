@@ -75,3 +75,16 @@ def test_plot_is_written(swept, tmp_path):
     path = tmp_path / "sweep.png"
     plot_sweep(swept, path)
     assert path.stat().st_size > 1000
+
+
+def test_simplest_walker_period_doubles_where_garcia_found():
+    """Garcia et al. (1998): the simplest walker's stable gait period-doubles at slope
+    0.0151 (three digits)."""
+    scene = CompassGaitScene(initial=CompassGaitInitial(-0.1913, 0.2093, 0.1998, 0.1840),
+                             walker=Walker(leg_length=1.0, leg_com=1.0, model="simplest"),
+                             gravity=1.0)
+    result = sweep(scene, CompassGaitDesign(slope=0.009), np.linspace(0.009, 0.02, 23),
+                   period_two_gaits=False)
+    kinds = [(b["kind"], b["value"]) for b in result["bifurcations"]]
+    assert len(kinds) == 1 and kinds[0][0] == "period_doubling"
+    assert kinds[0][1] == pytest.approx(0.0151, abs=5e-5)
