@@ -156,3 +156,17 @@ def test_goswamis_walker_doubles_its_period_as_the_slope_grows():
     ends = [np.array([run.stages[k][n] for n in names]) for k in (-2, -1)]
     nearest = min(np.max(np.abs(e - np.asarray(two.state))) for e in ends)
     assert nearest < 1e-6
+
+
+def test_on_stairs_each_strike_takes_one_rise_of_potential_energy():
+    from pdm_design.scenes.compass_gait import stepmap
+
+    sc, design = scene(), CompassGaitDesign(rise=0.028, tread=0.53)
+    gait = find_gait(sc, design)
+    params = params_for(sc, design)
+    end, after, _ = stepmap.step(params, ground_of(design, params), gait.state,
+                                 gait.step_period)
+    loss = phys.kinetic_energy(*end, params) - phys.kinetic_energy(*after, params)
+    assert loss == pytest.approx((1 + 2 * params.beta) * params.g * 0.028, rel=1e-8)
+    # the swing foot lands one rise below the stance foot
+    assert params.l * (math.cos(end[0]) - math.cos(end[1])) == pytest.approx(-0.028, abs=1e-12)
