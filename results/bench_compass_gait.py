@@ -28,8 +28,8 @@ from pdm_design.scenes.compass_gait import (  # noqa: E402
     CompassGaitInitial,
     CompassGaitScene,
     Walker,
+    fastmap,
 )
-from pdm_design.scenes.compass_gait import fastmap  # noqa: E402
 from pdm_design.scenes.compass_gait.bifurcation import plot_sweep, sweep  # noqa: E402
 from pdm_design.scenes.compass_gait.gait import find_gait, fixed_point  # noqa: E402
 from pdm_design.scenes.compass_gait.ground import params_for  # noqa: E402

@@ -6,8 +6,12 @@ import math
 import numpy as np
 
 from pdm_design.accuracy import accuracy
-from pdm_design.scenes.compass_gait import CompassGaitDesign, CompassGaitInitial, CompassGaitScene
-from pdm_design.scenes.compass_gait import fastmap
+from pdm_design.scenes.compass_gait import (
+    CompassGaitDesign,
+    CompassGaitInitial,
+    CompassGaitScene,
+    fastmap,
+)
 from pdm_design.scenes.compass_gait.gait import find_gait
 from pdm_design.scenes.compass_gait.ground import ground_of, params_for
 from pdm_design.scenes.compass_gait.simulate import one_step, simulate_compass_gait

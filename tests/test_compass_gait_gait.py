@@ -81,9 +81,9 @@ def asymptotic_gait(slope):
     leading order (rates unchanged); symmetry theta(tau) = theta0 gives theta'(0) = theta0
     coth(tau/2), the heel strike phi(tau) = 2 theta(tau) gives 3 cos tau + coth(tau/2) sin tau
     + 3 = 2 cos(tau/2) (3 cos(tau/2) + coth(tau/2) sin(tau/2)) = 0: tau = pi (the short-period
-    gait) or the long period's tan(tau/2) = -3 tanh(tau/2), and the energy lost at the strike, 2 theta0^2 theta'^2, equal to the drop
-    2 theta0 slope, gives theta0^3 coth^2(tau/2) = slope: theta0 = tanh^(2/3)(tau/2) slope^(1/3)
-    (Garcia et al. 1998: 0.970 slope^(1/3), tau = 3.812)."""
+    gait) or the long period's tan(tau/2) = -3 tanh(tau/2), and the energy lost at the strike,
+    2 theta0^2 theta'^2, equal to the drop 2 theta0 slope, gives theta0^3 coth^2(tau/2) = slope:
+    theta0 = tanh^(2/3)(tau/2) slope^(1/3) (Garcia et al. 1998: 0.970 slope^(1/3), tau = 3.812)."""
     from scipy.optimize import brentq
 
     half = brentq(lambda x: 3 * math.cos(x) + math.sin(x) / math.tanh(x), 1.6, 2.3)

@@ -22,7 +22,7 @@ import numpy as np
 from ...sim.numerics import RootError, brentq
 from . import physics as phys
 from . import stepmap
-from .gait import find_gait, period_two, _two_step_gait, _step_time
+from .gait import _step_time, _two_step_gait, find_gait, period_two
 from .ground import ground_of, params_for
 
 REFINE_TOL = 1e-6  # rad: bifurcations are reported to better than 1e-5

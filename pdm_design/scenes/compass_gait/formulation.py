@@ -32,7 +32,6 @@ ROBUST_HORIZON. First order in tau: the box is verified by the event simulator.
 from __future__ import annotations
 
 import functools
-import math
 
 import casadi as ca
 

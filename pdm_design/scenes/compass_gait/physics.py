@@ -98,7 +98,8 @@ def ground_reaction(q1, q2, w1, w2, slope, p: Params):
     """(normal, tangential): the stance foot's ground force per hip mass (N/kg) along the ramp's
     normal and downhill along it. The force is the rate of the walker's momentum plus its weight:
     with sum m r = A u1 - B u2, u = (sin q, cos q), A = l + beta (a + l), B = beta b,
-        R = A (a1 u1' - w1^2 u1) - B (a2 u2' - w2^2 u2) + (0, (1 + 2 beta) g),  u' = (cos q, -sin q)."""
+        R = A (a1 u1' - w1^2 u1) - B (a2 u2' - w2^2 u2) + (0, (1 + 2 beta) g),
+    u' = (cos q, -sin q)."""
     a1, a2 = accelerations(q1, q2, w1, w2, p)
     return reaction(q1, q2, w1, w2, a1, a2, slope, p)
 
