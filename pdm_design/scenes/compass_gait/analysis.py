@@ -7,6 +7,9 @@ from its fixed point (simulate.one_step, "precise"):
     no_slip         margin(friction, the largest friction the stance foot needs, in the stance
                     phase and at the heel strike's impulse)
     stability       margin(max_spectral_radius (1 by default), the spectral radius)
+    hip_limit       margin(the walker's hip_limit, the largest angle between the legs over the
+                    step): the heel strike comes before the swing leg reaches the hip's limit
+                    (only with a hip_limit)
 The swing foot's scuff below the ramp as the legs pass is ignored, as the field does; its depth
 per leg length is reported (geometry "scuff_depth").
 """
@@ -43,6 +46,9 @@ def analyse_compass_gait(scene, design, stages: int | None = None,
         "no_slip": margin(scene.friction, demand),
         "stability": margin(max_spectral_radius, gait.spectral_radius),
     }
+    limit = scene.walker.hip_limit
+    if limit is not None:
+        margins["hip_limit"] = margin(limit, stats["leg_angle_max"])
     problems = []
     if not gait.stable:
         problems.append(f"the gait is unstable: spectral radius {gait.spectral_radius:.4g} "

@@ -19,7 +19,8 @@ and Jury's conditions (all roots in the unit disc, exactly):
     1 + a2 + a1 + a0 > 0,  1 - a2 + a1 - a0 > 0,  1 - a0^2 > |a0 a2 - a1|  (so |a0| < 1).
 
 Margins along the step, at every NODE_EVERY-th RK4 node and at the strike: stance_contact
-(normal force per weight) and no_slip (1 - |tangential| / (friction normal)); over_the_top (the
+(normal force per weight), no_slip ((friction normal - |tangential|) / (friction weight)),
+hip_limit (with a walker's hip_limit: the angle between the legs below it); over_the_top (the
 stance rate stays positive, validity).
 
 Slope box tau (max_slope_tolerance), linearised: a slope error d on one step moves the next
@@ -218,6 +219,13 @@ def _margin_rows(scene, params, nodes, end, slope):
         rows.append(("no_slip", f"node {k}, ahead", mu * n - tang, mu * weight))
         rows.append(("no_slip", f"node {k}, back", mu * n + tang, mu * weight))
         rows.append((None, f"node {k}: the stance leg moves forward", x[2], 1.0))
+        if scene.walker.hip_limit is not None:
+            limit = scene.walker.hip_limit
+            rows.append(("hip_limit", f"node {k}, legs apart", limit - ca.fabs(x[0] - x[1]),
+                         limit))
+    if scene.walker.hip_limit is not None:  # and at the strike
+        limit = scene.walker.hip_limit
+        rows.append(("hip_limit", "heel strike", limit - (end[0] - end[1]), limit))
     pn, pt = phys.strike_impulse(end[0], end[1], end[2], end[3], params, slope)
     rows.append(("no_slip", "heel strike, ahead", mu * pn - pt, mu * ca.fabs(pn) + 1e-9))
     rows.append(("no_slip", "heel strike, back", mu * pn + pt, mu * ca.fabs(pn) + 1e-9))

@@ -8,11 +8,14 @@ docs/compass_gait.md holds the derivations.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
+from pydantic import Field, Strict
 from pydantic.dataclasses import dataclass
 
 from ..common import CONFIG, STANDARD_GRAVITY, NonNegative, Number, Positive
+
+PositiveHalfTurn = Annotated[float, Strict(), Field(gt=0, lt=3.141592653589793)]
 
 MODELS = ("compass", "simplest")
 
@@ -30,6 +33,7 @@ class Walker:
     leg_com: Positive = 0.5
     leg_inertia: NonNegative = 0.0
     model: Literal["compass", "simplest"] = "compass"
+    hip_limit: PositiveHalfTurn | None = None
 
     def __post_init__(self):
         if self.leg_com > self.leg_length:
@@ -95,4 +99,4 @@ class CompassGaitDesign:
         base = scene.walker
         values = {k: getattr(base, k) for k in self.WALKER}
         values.update({k: v for k in self.WALKER if (v := getattr(self, k)) is not None})
-        return Walker(**values, model=base.model)
+        return Walker(**values, model=base.model, hip_limit=base.hip_limit)

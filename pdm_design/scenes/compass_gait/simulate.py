@@ -174,6 +174,8 @@ def _sample(sol, params, slope, stats, pieces):
     with np.errstate(divide="ignore", invalid="ignore"):
         demand = np.where(n > 0, np.abs(tang) / n, np.inf)
     stats["friction_max"] = max(stats["friction_max"], float(np.max(demand)))
+    spread = float(np.max(np.abs(x[0] - x[1])))  # the angle between the legs
+    stats["leg_angle_max"] = max(stats.get("leg_angle_max", 0.0), spread)
     depth = phys.foot_height(x[0], x[1], slope, params) / params.l
     stats["scuff_depth"] = min(stats["scuff_depth"], float(np.min(depth)))
     pieces.append((t, x))

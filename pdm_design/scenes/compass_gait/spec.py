@@ -9,7 +9,7 @@ from ...errors import SpecError
 from .scene import CompassGaitDesign, CompassGaitInitial, CompassGaitScene, Walker
 
 # requirement keys of this scene: margins (analysis.py) and the stability bound
-MARGINS = ("stance_contact", "no_slip", "stability")
+MARGINS = ("stance_contact", "no_slip", "stability", "hip_limit")
 REQUIREMENTS = (*MARGINS, "max_spectral_radius")
 OBJECTIVES = ("min_spectral_radius", "max_slope_tolerance")
 
