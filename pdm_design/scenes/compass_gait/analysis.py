@@ -1,0 +1,64 @@
+"""The analysis of one compass-gait design: its period-1 gait, multipliers and margins
+(analysis.result.Analysis, as the other scenes give).
+
+Margins (>= 0: the condition holds), each measured on one step of the periodic gait simulated
+from its fixed point (simulate.one_step, "precise"):
+    stance_contact  the smallest normal force on the stance foot over the step, per weight
+    no_slip         margin(friction, the largest friction the stance foot needs, in the stance
+                    phase and at the heel strike's impulse)
+    stability       margin(max_spectral_radius (1 by default), the spectral radius)
+    hip_limit       margin(the walker's hip_limit, the largest angle between the legs over the
+                    step): the heel strike comes before the swing leg reaches the hip's limit
+                    (only with a hip_limit)
+The swing foot's scuff below the ramp as the legs pass is ignored, as the field does; its depth
+per leg length is reported (geometry "scuff_depth").
+"""
+
+from __future__ import annotations
+
+import math
+
+from ...accuracy import accuracy as accuracy_preset
+from ...analysis.result import Analysis, margin
+from . import stepmap
+from .gait import find_gait
+from .ground import ground_of, params_for
+from .simulate import one_step
+
+
+def analyse_compass_gait(scene, design, stages: int | None = None,
+                         max_spectral_radius: float = 1.0) -> Analysis:
+    """stages: unused (every step of the periodic gait is alike); kept for the shared shape."""
+    del stages
+    params = params_for(scene, design)
+    ground = ground_of(design, params)
+    values = {k: getattr(design, k) for k in design.VARIABLES}
+    try:
+        gait = find_gait(scene, design)
+    except stepmap.GaitNotFound as exc:
+        return Analysis(kind="compass_gait", design=values, geometry={}, periodic={},
+                        margins={}, problems=(f"no periodic gait: {exc}",))
+    out = one_step(params, ground, gait.state, math.inf, accuracy_preset("precise"))
+    stats = out.margins
+    demand = max(stats["friction_max"], stats.get("strike_friction", 0.0))
+    margins = {
+        "stance_contact": float(stats["normal_min"]),
+        "no_slip": margin(scene.friction, demand),
+        "stability": margin(max_spectral_radius, gait.spectral_radius),
+    }
+    limit = scene.walker.hip_limit
+    if limit is not None:
+        margins["hip_limit"] = margin(limit, stats["leg_angle_max"])
+    problems = []
+    if not gait.stable:
+        problems.append(f"the gait is unstable: spectral radius {gait.spectral_radius:.4g} "
+                        "(a disturbance grows step by step)")
+    q1, q2, w1, w2 = gait.state
+    return Analysis(
+        kind="compass_gait", design=values,
+        geometry={"step_length": gait.step_length, "scuff_depth": stats["scuff_depth"]},
+        periodic={"step_period": gait.step_period, "stance": q1, "swing": q2,
+                  "stance_rate": w1, "swing_rate": w2, "spectral_radius": gait.spectral_radius,
+                  "speed": gait.step_length / gait.step_period},
+        margins=margins, approach={"multipliers": [[m.real, m.imag] for m in gait.multipliers]},
+        problems=tuple(problems))
