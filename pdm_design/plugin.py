@@ -72,6 +72,11 @@ class Scene:
 
     margins: tuple[str, ...] = ()
     """Every margin the analysis reports, by name: the `[requirements]` a spec may set."""
+
+    @property
+    def requirement_keys(self) -> tuple[str, ...]:
+        """The `[requirements]` a spec may set: its margins (and any bound its NLP holds)."""
+        return self.margins
     verification_hints: dict[str, str] = {}
     """`[verification]` keys this scene does not take, each with the reason shown to the user."""
 
@@ -120,6 +125,10 @@ class Scene:
     # ------------------------------------------------------------------ the NLP
     objectives: tuple[str, ...] = ("max_min_margin",)
     """The `[objective]` terms the scene's NLP gives (SceneModel.objective_terms)."""
+    objective_aliases: dict[str, str] = {}
+    """The scene's own names of shared objective terms (formulation.common.OBJECTIVE_SENSE):
+    a walker's max_slope_tolerance is the shared max_offset_tolerance. The loader stores the
+    spec's objective under the shared names."""
     outside_min_margin: tuple[str, ...] = ()
     """Margins the max_min_margin objective does not cover."""
 

@@ -27,7 +27,6 @@ from ..errors import SpecError, did_you_mean
 from .. import plugin
 from ..scenes.common import CONFIG, is_number
 from .model import (
-    OBJECTIVES,
     Bounds,
     Expectations,
     Spec,
@@ -161,11 +160,7 @@ def _parse(data: Any, source: str) -> Spec:
     if "min_yield" in expect_table and not tolerances:
         raise _Invalid("expect.min_yield", "a [tolerances] table to draw the builds from",
                        "no [tolerances]")
-    objective = _named_numbers(data, "objective", OBJECTIVES, _WEIGHT)
-    for term in objective:
-        if term not in kind.plugin.objectives:
-            raise _Invalid(f"objective.{term}", f"an objective of a {kind.plugin.kind} scene "
-                           f"({', '.join(kind.plugin.objectives)})", "one it does not give")
+    objective = _objective(data, kind.plugin)
     _check_max_yield(objective, kind.plugin, scene, tolerances)
     _check_yield_target(tolerances)
     return Spec(
@@ -173,7 +168,8 @@ def _parse(data: Any, source: str) -> Spec:
         scene=scene,
         design=design,
         objective=objective,
-        requirements=_named_numbers(data, "requirements", kind.margins, _REQUIRED_MARGIN),
+        requirements=_named_numbers(data, "requirements", kind.plugin.requirement_keys,
+                                    _REQUIRED_MARGIN),
         verification=verification,
         expect=_build(Expectations, expect_table, "expect"),
         tolerances=tolerances,
@@ -181,6 +177,13 @@ def _parse(data: Any, source: str) -> Spec:
         description=description,
         digest=content_digest(data),
     )
+
+
+def _objective(data: dict, scene: plugin.Scene) -> dict[str, float]:
+    """[objective]: weights of the scene's objectives (Scene.objectives), stored under the
+    shared terms' names (Scene.objective_aliases)."""
+    weights = _named_numbers(data, "objective", scene.objectives, _WEIGHT)
+    return {scene.objective_aliases.get(name, name): w for name, w in weights.items()}
 
 
 def _verification(table: dict, kind: _Kind) -> Verification:
