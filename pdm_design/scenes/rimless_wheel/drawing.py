@@ -62,8 +62,9 @@ def _stairs(ax, labels, sheet, items, g, detail, start):
     rise, tread, s0 = g["rise"] * MM, g["tread"] * MM, g["landing_offset"] * MM
     first, last = items[0], items[-1]
     outline = []
-    if start:  # tread 0, where the wheel starts
-        outline += [(-s0 - 0.3 * tread, 0.0), (-s0, 0.0)]
+    if start:  # tread 0, where the wheel starts, its back s0 behind foothold 0
+        outline += [(-s0 - 0.3 * tread, rise), (-s0, rise), (-s0, 0.0),
+                    (first["back_x_m"] * MM, 0.0)]
     else:
         outline.append((first["back_x_m"] * MM, first["level_m"] * MM + rise))
     for item in items:

@@ -1,7 +1,7 @@
 """The rimless wheel in the build sheet's DXF (sheet/dxf.py): GROUND (the ramp's surface or the
 stairs' profile, and a POINT at every foothold: foothold 0 and one a step), WHEEL (the wheel at
 its start: a LINE a spoke from the hub's centre to its tip, a CIRCLE of the hub's radius of
-gyration), and on DIMENSIONS the footholds' spacing along the ramp (ALIGNED) or the tread and
+gyration, or a mark 1/40 of the spacing across for a point mass), and on DIMENSIONS the footholds' spacing along the ramp (ALIGNED) or the tread and
 the rise, and NOTES the step numbers and the slope in degrees."""
 
 from __future__ import annotations
@@ -55,7 +55,8 @@ def _ramp(msp, sheet, g, size):
 
 def _stairs(msp, sheet, g, size):
     items, s0 = sheet.items, g["landing_offset"]
-    profile = [(-s0 - 0.3 * g["tread"], 0.0), (-s0, 0.0)]
+    profile = [(-s0 - 0.3 * g["tread"], g["rise"]), (-s0, g["rise"]), (-s0, 0.0),
+               (items[0]["back_x_m"], 0.0)]
     for item in items:
         profile += [(item["back_x_m"], item["level_m"]), (item["nose_x_m"], item["level_m"])]
     last = items[-1]
