@@ -21,7 +21,7 @@ def animation(spec, result, timeline) -> Animation:
     frame), feet (every foothold, mm) and ground (the surface's polyline, mm)."""
     from .analysis import resolve
 
-    wheel, geometry, _ = resolve(spec.scene, spec.design_at())
+    wheel, _, _ = resolve(spec.scene, spec.design_at())
     pitch = 2 * wheel.alpha
     impacts = np.asarray([e.time for e in result.events if e.kind == "impact"], float)
     t = timeline.times
@@ -37,7 +37,7 @@ def animation(spec, result, timeline) -> Animation:
         "turn": rounded(np.interp(frames, t, turn), 5),
         "stance": [int(m) for m in stance],
         "feet": [[round(x * MM, 3), round(y * MM, 3)] for x, y in feet],
-        "ground": _ground(spec, geometry, result, feet),
+        "ground": [[round(x * MM, 3), round(y * MM, 3)] for x, y in ground_outline(spec, result)],
         "window": max(8.0 * wheel.chord * MM, 3.0 * leg), "below": 0.4 * leg,
         "extent_x": [min(xs) * MM - leg, max(xs) * MM + leg]}, SCRIPT)
 
@@ -49,26 +49,26 @@ def _impacts_before(phi, pitch):
     return np.cumsum(drops)
 
 
-def _ground(spec, geometry, result, feet) -> list[list[float]]:
-    """The ground's surface, mm: the ramp through the footholds, or the stairs' treads (each
-    from its back to its nose: the next tread's back) with vertical risers."""
+def ground_outline(spec, result) -> list[tuple[float, float]]:
+    """The ground's surface as the run met it, m: the ramp through the recorded footholds, or
+    the stairs' treads (each from its back, the recorded foothold less its landing_x, to the
+    next tread's back) with vertical risers, tread 0 from landing_offset behind foothold 0."""
+    from .analysis import resolve
+
+    feet = [(0.0, 0.0)] + [(s["foot_x"], s["foot_y"]) for s in result.stages]
+    _, geometry, _ = resolve(spec.scene, spec.design_at())
     if spec.scene.ground != "stairs":
-        x0, y0 = feet[0]
-        x1, y1 = feet[-1] if len(feet) > 1 else (x0 + 1.0, y0)
-        d = (x1 - x0, y1 - y0)
-        scale = 1.0 / max(len(feet) - 1, 1)
-        first = (x0 - 2 * d[0] * scale, y0 - 2 * d[1] * scale)
-        last = (x1 + 2 * d[0] * scale, y1 + 2 * d[1] * scale)
-        return [[round(p[0] * MM, 3), round(p[1] * MM, 3)] for p in (first, *feet, last)]
+        (x0, y0), (x1, y1) = feet[0], feet[-1] if len(feet) > 1 else (1.0, 0.0)
+        dx, dy = (x1 - x0) / max(len(feet) - 1, 1), (y1 - y0) / max(len(feet) - 1, 1)
+        return [(x0 - 2 * dx, y0 - 2 * dy), *feet, (x1 + 2 * dx, y1 + 2 * dy)]
     backs = [-geometry["landing_offset"]]
     backs += [s["foot_x"] - s["landing_x"] for s in result.stages]
-    levels = [0.0] + [s["foot_y"] for s in result.stages]
     tread = geometry["tread"]
-    out = [[backs[0] - 0.5 * tread, 0.0]]
-    for k, (back, level) in enumerate(zip(backs, levels)):
+    out = [(backs[0] - 0.5 * tread, 0.0)]
+    for k, (back, (_, level)) in enumerate(zip(backs, feet)):
         nose = backs[k + 1] if k + 1 < len(backs) else back + tread
-        out += [[back, level], [nose, level]]
-    return [[round(x * MM, 3), round(y * MM, 3)] for x, y in out]
+        out += [(back, level), (nose, level)]
+    return out
 
 
 # the ground as a filled polygon, the wheel as spokes about its hub turned at each frame

@@ -9,7 +9,7 @@ from pathlib import Path
 from ...io import atomic_path
 
 
-def plot_wheel_run(result, path, *, title: str | None = None, dpi: int = 120) -> Path:
+def plot_wheel_run(spec, result, path, *, title: str | None = None, dpi: int = 120) -> Path:
     """Draw the recorded trajectory of a rimless wheel run into a PNG at `path`; returns it.
 
     Panels: the stance spoke's angle from the vertical phi(t) (forward positive; it jumps back
@@ -34,10 +34,12 @@ def plot_wheel_run(result, path, *, title: str | None = None, dpi: int = 120) ->
              title="the stance spoke from the vertical")
     aom.plot(t, omega, lw=1.2, color="tab:purple")
     aom.set(xlabel="time (s)", ylabel="omega (rad/s, forward +)", title="angular speed")
-    _path(apath, result, traj)
-    aphase.plot(np.degrees(phi), omega, lw=0.8, color="tab:purple")
+    _path(apath, spec, result, traj)
+    cut = np.flatnonzero(np.diff(phi) < 0.0) + 1  # the impacts: one line a stance
+    aphase.plot(np.insert(np.degrees(phi), cut, np.nan), np.insert(omega, cut, np.nan), lw=0.8,
+                color="tab:purple")
     aphase.set(xlabel="stance angle phi (deg)", ylabel="omega (rad/s)",
-               title="speed against angle (impacts: the jumps)")
+               title="speed against angle, a line a stance")
     for ax in axes.flat:
         ax.grid(alpha=0.3)
     if title:
@@ -48,9 +50,12 @@ def plot_wheel_run(result, path, *, title: str | None = None, dpi: int = 120) ->
     return path
 
 
-def _path(ax, result, traj):
+def _path(ax, spec, result, traj):
+    from .animation import ground_outline
+
+    ax.plot(*zip(*ground_outline(spec, result)), color="0.3", lw=1.0, label="ground")
     feet = [(0.0, 0.0)] + [(s["foot_x"], s["foot_y"]) for s in result.stages]
-    ax.plot(*zip(*feet), color="0.3", lw=1.0, marker="o", ms=2.5, label="footholds")
+    ax.plot(*zip(*feet), "o", color="0.3", ms=2.5, label="footholds")
     ax.plot(traj["x"], traj["y"], lw=1.2, color="tab:blue", label="hub")
     impacts = [e for e in result.events if e.kind == "impact"]
     ax.plot([e.before["x"] for e in impacts], [e.before["y"] for e in impacts], "o", ms=3,

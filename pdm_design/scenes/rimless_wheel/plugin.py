@@ -114,7 +114,7 @@ class RimlessWheel(Scene):
     def plot_run(self, spec, design, result, path, *, offsets=(), stages=None, title=""):
         from .plot import plot_wheel_run
 
-        plot_wheel_run(result, path, title=title)
+        plot_wheel_run(spec, result, path, title=title)
 
     def animation(self, spec, result, timeline):
         from .animation import animation
