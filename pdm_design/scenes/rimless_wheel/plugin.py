@@ -91,6 +91,11 @@ class RimlessWheel(Scene):
 
         return WORDS
 
+    def box_tolerances(self, sheet, why):
+        from .sheet import box_tolerances
+
+        return box_tolerances(sheet, why)
+
     def parts(self, sheet):
         from .sheet import parts
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 from ...sheet.generic import SheetWords
-from ...sheet.parts import MM, Part, deg, mm
+from ...sheet.parts import MM, Part, ToleranceEntry, deg, mm
 
 PART_WORDS = {"hub": ("hub", "mass", "gyration", "start"),
               "spoke": ("spoke", "leg"),
@@ -96,6 +96,16 @@ def _summary(spec, analysis, g, tol, count):
              ("speed after each impact (periodic)", analysis.periodic.get("post_impact_speed"),
               "rad/s", None)]
     return rows
+
+
+def box_tolerances(sheet, why: str) -> tuple[ToleranceEntry, ...]:
+    """The box's half-widths on the steps they cover: the ramp's slope (rad), or every
+    step's rise and tread (m)."""
+    covers = f"steps 1 to {sheet.tolerance_covers}"
+    where = covers if sheet.spec.scene.ground == "stairs" else f"the ramp's slope, {covers}"
+    units = {"slope": "rad", "rise": "m", "tread": "m"}
+    return tuple(ToleranceEntry(f"{axis} (box)", where, value, units.get(axis, "m"), why)
+                 for axis, value in sheet.tolerance.items())
 
 
 def parts(sheet) -> list[Part]:
