@@ -9,8 +9,6 @@ foothold m_i, `feet[m_i]`, the contact point the simulator recorded."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ...report.animation import MM, Animation, rounded

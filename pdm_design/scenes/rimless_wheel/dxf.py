@@ -1,8 +1,9 @@
 """The rimless wheel in the build sheet's DXF (sheet/dxf.py): GROUND (the ramp's surface or the
 stairs' profile, and a POINT at every foothold: foothold 0 and one a step), WHEEL (the wheel at
 its start: a LINE a spoke from the hub's centre to its tip, a CIRCLE of the hub's radius of
-gyration, or a mark 1/40 of the spacing across for a point mass), and on DIMENSIONS the footholds' spacing along the ramp (ALIGNED) or the tread and
-the rise, and NOTES the step numbers and the slope in degrees."""
+gyration, or a mark 1/40 of the spacing across for a point mass), DIMENSIONS (the footholds'
+spacing along the ramp, ALIGNED; or the tread and the rise) and NOTES (the step numbers, the
+slope in degrees)."""
 
 from __future__ import annotations
 
@@ -12,8 +13,6 @@ from ...sheet.dxf import dimension_style
 from ...sheet.dxf import point_mm as _p
 from ...sheet.parts import MM
 from .sheet import numbers, wheel_spokes
-
-LAYERS = {"GROUND": 7, "WHEEL": 5}
 
 
 def draw_dxf(msp, sheet) -> float:
