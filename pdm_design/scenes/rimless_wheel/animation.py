@@ -36,7 +36,7 @@ def animation(spec, result, timeline) -> Animation:
         "stance": [int(m) for m in stance],
         "feet": [[round(x * MM, 3), round(y * MM, 3)] for x, y in feet],
         "ground": [[round(x * MM, 3), round(y * MM, 3)] for x, y in ground_outline(spec, result)],
-        "window": max(8.0 * wheel.chord * MM, 3.0 * leg), "below": 0.4 * leg,
+        "window": max(8.0 * wheel.chord * MM, 7.0 * leg), "below": 0.1 * leg,
         "extent_x": [min(xs) * MM - leg, max(xs) * MM + leg]}, SCRIPT)
 
 
