@@ -262,3 +262,10 @@ def test_animation_wheel_stands_on_the_recorded_footholds(spec, n, leg):
     turns = data["turn"]
     assert all(b >= a for a, b in zip(turns, turns[1:]))  # it rolls forward, continuously
     assert max(b - a for a, b in zip(turns, turns[1:])) < 0.5 * pitch
+
+
+def test_scene_parameters_give_the_wheel_as_built():
+    wheel = scene_kind("rimless_wheel").scene_parameters(ramp_spec().scene)
+    assert wheel == {"wheel": {"mass": 2.0, "gyration": 0.1, "spoke_mass": 0.05}}  # the spec's
+    defaults = scene_kind("rimless_wheel").scene_parameters(load_spec(STAIRS).scene)
+    assert defaults == {"wheel": {"mass": 1.0, "gyration": 0.0, "spoke_mass": 0.0}}

@@ -116,6 +116,12 @@ class RimlessWheel(Scene):
 
         return draw_dxf(msp, sheet)
 
+    def scene_parameters(self, scene):
+        """`wheel` as built: the hub's mass (kg), its radius of gyration (m) and each spoke's
+        mass (kg), the defaults (1, 0, 0) when the spec leaves them out."""
+        w = scene.wheel
+        return {"wheel": {"mass": w.mass, "gyration": w.gyration, "spoke_mass": w.spoke_mass}}
+
     def plot_run(self, spec, design, result, path, *, offsets=(), stages=None, title=""):
         from .plot import plot_wheel_run
 

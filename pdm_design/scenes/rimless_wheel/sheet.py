@@ -17,7 +17,7 @@ import math
 from ...sheet.generic import SheetWords
 from ...sheet.parts import MM, Part, ToleranceEntry, deg, mm
 
-PART_WORDS = {"hub": ("hub", "mass", "gyration", "start"),
+PART_WORDS = {"hub": ("hub", "mass", "gyration"),
               "spoke": ("spoke", "leg"),
               "spoke tip": ("tip", "friction"),
               "ramp": ("slope", "ramp"),
