@@ -191,10 +191,17 @@ def test_dxf_stairs_profile_and_dimensions():
 # ------------------------------------------------------------------------- the drawing
 
 @pytest.mark.parametrize("spec, count, tol", [
-    (ramp_spec(), 6, {"slope": 0.01}), (ramp_spec(), 50, None),
-    (stairs_spec(), 5, {"rise": 0.004, "tread": 0.005}), (stairs_spec(), 20, None)])
+    (ramp_spec(), 6, {"slope": 0.01}), (ramp_spec(), 14, {"slope": 0.01}),
+    (ramp_spec(), 50, None), (stairs_spec(), 5, {"rise": 0.004, "tread": 0.005}),
+    (stairs_spec(), 14, {"rise": 0.004, "tread": 0.005}), (stairs_spec(), 20, None)])
 def test_drawing_labels_are_apart_off_the_lines_and_inside_the_figure(spec, count, tol):
-    figure = draw(sheet_of(spec, count, tol))
+    sheet = sheet_of(spec, count, tol)
+    pages = [draw(sheet, first, min(first + 5, count), notes=False)
+             for first in range(1, count + 1, 6)][:3]
+    for page in pages:  # the PDF's pages, each dimensioned
+        assert overlapping_texts(page) == []
+        assert labels_on_lines(page, page.sheet_labels) == []
+    figure = draw(sheet)
     assert overlapping_texts(figure) == []
     assert labels_on_lines(figure, figure.sheet_labels) == []
     renderer = figure.canvas.get_renderer()

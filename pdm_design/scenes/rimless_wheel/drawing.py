@@ -50,10 +50,10 @@ def _ramp(ax, labels, items, g, detail, start):
     more = f" +-{math.degrees(tol):.3g} deg" if tol is not None else ""
     a, b = (feet[0], feet[1]) if len(feet) > 1 else ((0.0, 0.0), feet[0])
     dimension(ax, labels, a, b, f"{chord:.2f} mm", offset=-0.12 * g["leg"] * MM, side=-1.0)
-    corner = (bottom[0], top[1])  # the slope against the horizontal at the ramp's top
+    corner = (top[0] + 0.3 * (bottom[0] - top[0]), top[1])  # the horizontal at the top
     ax.plot([top[0], corner[0]], [top[1], corner[1]], color="0.55", lw=0.5, ls=":")
-    labels.add(ax, f"slope {math.degrees(beta):.3f} deg{more}",
-               (0.5 * (top[0] + bottom[0]), top[1]), (0, 9))
+    mid = (0.65 * bottom[0] + 0.35 * top[0], 0.65 * bottom[1] + 0.35 * top[1])
+    labels.add(ax, f"slope {math.degrees(beta):.3f} deg{more}", mid, (0, 14))
 
 
 def _stairs(ax, labels, sheet, items, g, detail, start):
@@ -79,8 +79,9 @@ def _stairs(ax, labels, sheet, items, g, detail, start):
         return
     more = {e: (f" +-{first[f'{e}_tolerance_m'] * MM:.3g} mm"
                 if first[f"{e}_tolerance_m"] is not None else "") for e in ("rise", "tread")}
-    depth = first["level_m"] * MM - 0.3 * max(rise, 0.1 * tread)
-    dimension(ax, labels, (first["back_x_m"] * MM, depth), (first["nose_x_m"] * MM, depth),
+    dim = items[1] if len(items) > 1 else first  # clear of the rise beside the first
+    depth = dim["level_m"] * MM - 0.3 * max(rise, 0.1 * tread)
+    dimension(ax, labels, (dim["back_x_m"] * MM, depth), (dim["nose_x_m"] * MM, depth),
               f"tread {tread:.2f} mm{more['tread']}", side=-1.0)
     x = first["back_x_m"] * MM - 0.05 * tread
     dimension(ax, labels, (x, first["level_m"] * MM), (x, first["level_m"] * MM + rise),
