@@ -276,3 +276,25 @@ def test_scene_parameters_give_the_wheel_as_built():
     assert wheel == {"wheel": {"mass": 2.0, "gyration": 0.1, "spoke_mass": 0.05}}  # the spec's
     defaults = scene_kind("rimless_wheel").scene_parameters(load_spec(STAIRS).scene)
     assert defaults == {"wheel": {"mass": 1.0, "gyration": 0.0, "spoke_mass": 0.0}}
+
+
+def test_allocated_tolerances_land_on_their_parts():
+    """Tolerances of an optimize answer: the slope on the ramp; leg length, hub mass, rise
+    and tread on the spokes, the hub and the steps."""
+    from pdm_design.sheet.build import allocated_entries
+
+    def given(*rows):
+        return allocated_entries([{"quantity": q, "applies_to": "each", "value": v,
+                                   "unit": u, "allocated": False} for q, v, u in rows])
+
+    sheet = dataclasses.replace(sheet_of(ramp_spec(), 4), tolerances=given(("slope", 0.02,
+                                                                            "rad")))
+    ramp = next(p for p in parts_list(sheet)[0] if p.name == "ramp")
+    assert [(e.quantity, e.value) for e in ramp.tolerances] == [("slope", 0.02)]
+    sheet = dataclasses.replace(sheet_of(stairs_spec(), 4), tolerances=given(
+        ("leg_length", 0.001, "m"), ("mass", 0.01, "kg"), ("rise", 0.002, "m"),
+        ("tread", 0.003, "m")))
+    parts, other = parts_list(sheet)
+    on = {p.name: [e.quantity for e in p.tolerances] for p in parts}
+    assert on["spoke"] == ["leg length"] and on["hub"] == ["mass"]
+    assert on["step"] == ["rise", "tread"] and other == ()
