@@ -4,7 +4,8 @@ Modules: `model` (the scene and the design), `physics` (closed forms for floats,
 and CasADi symbols), `analysis` (the closed-form analysis of a fixed design), `sim` (the event
 simulator and the vectorised step map), `rough` (steps before failure on rough ground: Monte
 Carlo and the Markov chain's mean first-passage time), `formulation` (the NLP rows),
-`template` (a spec to start from). The derivations are in docs/rimless_wheel.md.
+`template` (a spec to start from), and for the build sheet and the report `sheet`, `drawing`,
+`dxf`, `plot` and `animation`. The derivations are in docs/rimless_wheel.md.
 """
 
 from .model import (

@@ -72,6 +72,65 @@ class RimlessWheel(Scene):
     # ------------------------------------------------------------------ tolerances, yield, verification
 
     # ------------------------------------------------------------------ sheets, drawings, reports
+    dxf_layers = {"GROUND": 7, "WHEEL": 5}  # scenes/rimless_wheel/dxf.py
+    stage_columns = ("step", "impact_time", "speed_before", "speed_after", "foot_x", "foot_y")
+
+    @property
+    def part_words(self):
+        from .sheet import PART_WORDS
+
+        return PART_WORDS
+
+    def sheet_rows(self, spec, analysis, tolerance, count):
+        from .sheet import sheet_rows
+
+        return sheet_rows(spec, analysis, tolerance, count)
+
+    def sheet_words(self):
+        from .sheet import WORDS
+
+        return WORDS
+
+    def box_tolerances(self, sheet, why):
+        from .sheet import box_tolerances
+
+        return box_tolerances(sheet, why)
+
+    def parts(self, sheet):
+        from .sheet import parts
+
+        return parts(sheet)
+
+    def table_rows(self, sheet):
+        from .sheet import table_rows
+
+        return table_rows(sheet)
+
+    def draw_sheet(self, ax, labels, sheet, items, detail):
+        from .drawing import draw_wheel_sheet
+
+        draw_wheel_sheet(ax, labels, sheet, items, detail)
+
+    def draw_dxf(self, msp, sheet):
+        from .dxf import draw_dxf
+
+        return draw_dxf(msp, sheet)
+
+    def scene_parameters(self, scene):
+        """`wheel` as built: the hub's mass (kg), its radius of gyration (m) and each spoke's
+        mass (kg), the defaults (1, 0, 0) when the spec leaves them out."""
+        w = scene.wheel
+        return {"wheel": {"mass": w.mass, "gyration": w.gyration, "spoke_mass": w.spoke_mass}}
+
+    def plot_run(self, spec, design, result, path, *, offsets=(), stages=None, title=""):
+        from .plot import plot_wheel_run
+
+        plot_wheel_run(spec, result, path, title=title)
+
+    def animation(self, spec, result, timeline):
+        from .animation import animation
+
+        return animation(spec, result, timeline)
 
     # ------------------------------------------------------------------ command line, tables, API
     tolerance_axes = ("slope",)
