@@ -124,10 +124,6 @@ def _streamed_check(form, x, p, tau, samples: int, seed: int) -> dict:
 
 
 def _parked_reach(form, x) -> int:
-    """The parked palms that can reach the object at design x (formulation.manipulators.
-    parked_rows with the design's values for bounds): those further back never can."""
-    from ..scenes.manipulators.formulation import parked_rows
-
-    stages = form.scenario_source
-    values = form.design_values(x)
-    return parked_rows(stages.spec.scene, values, {}, stages.N)
+    """The parked palms that can reach the object at design x (the stage maps' `reach` at the
+    design's values): those further back never can."""
+    return form.scenario_source.reach(form.design_values(x))

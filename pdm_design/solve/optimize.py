@@ -265,7 +265,7 @@ def _tolerance(spec, form, x):
     allocated = None
     if allocating(spec):  # one half-width per quantity (formulation/allocation.py)
         allocated = tuple(values_at(spec, tol_value))
-        tolerance = pivot_box(spec.kind, allocated)
+        tolerance = pivot_box(spec, allocated)
     return tolerance, allocated
 
 
@@ -424,8 +424,8 @@ def _check_requirements(spec, requirements: dict) -> None:
 
 
 def _length_scale(spec, design) -> float:
-    """The device's size: its tread or its link length (m)."""
-    if spec.kind == "stairs":
-        return float(design.get("tread") or spec.scene.initial.drop_height)
-    return float(design.get("link_length", 1.0))
+    """The device's size (m): Scene.length_scale."""
+    from ..plugin import of
+
+    return of(spec).length_scale(spec, design)
 
