@@ -105,6 +105,12 @@ class Scene:
         numbers a table sweeps (formulation/parametric.py), or None."""
         raise NotImplementedError
 
+    def nlp_key(self, spec) -> tuple:
+        """What else of a spec shapes the scene's NLP, beyond its scene, design, objective,
+        stages and tolerances: requirements that add rows, accuracy settings its rows follow
+        (a part of the NLP's cache key, formulation.common.spec_key). () by default."""
+        return ()
+
     # ------------------------------------------------------------------ tolerances, yield, verification
     allocatable: tuple[str, ...] = ()
     """The quantities whose worst-case tolerance the robust NLP allocates, or takes as given

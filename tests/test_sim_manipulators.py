@@ -16,7 +16,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import ellipkinc
 
-from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators import physics as phys
 from pdm_design.scenes.manipulators.model import (
     Body,
     ManipulatorsDesign,

@@ -88,6 +88,13 @@ class Manipulators(Scene):
         # the stage maps also stream samples through the row: solve/check.py
         return model, bounds, closed_forms, Stages(spec, model, closed_forms, parameters)
 
+    def nlp_key(self, spec):
+        """The accuracy's agreement where the carry's integration steps follow it (damped
+        pivots, or the carry integrated)."""
+        forced = spec.verification.accuracy.carry == "integrated"
+        damped = spec.scene.pivots.damping or forced
+        return (spec.verification.accuracy.agreement if damped else None,)
+
     # ------------------------------------------------------------------ tolerances, yield, verification
     allocatable = ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
                    "palm_mass", "object_mass", "back_stop", "link_length", "link_mass",

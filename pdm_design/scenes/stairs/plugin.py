@@ -72,6 +72,12 @@ class Stairs(Scene):
         return model, bounds, closed_forms, functools.partial(scenario, spec, model,
                                                               closed_forms)
 
+    def nlp_key(self, spec):
+        """Whether a nose_clearance requirement adds its rows."""
+        from .formulation import requires_rows
+
+        return (requires_rows(spec),)
+
     # ------------------------------------------------------------------ tolerances, yield, verification
     allocatable = ("rise", "tread", "launch_x", "restitution", "friction", "launch_speed")
     sizes_for_yield_target = True
