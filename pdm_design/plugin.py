@@ -184,6 +184,12 @@ class Scene:
         stages}; None (the default) when nothing is compared."""
         return None
 
+    def condition_words(self) -> dict[str, tuple[str, str, tuple[tuple[str, str], ...]]]:
+        """Each NLP condition in a designer's words, by name: (what it asks, what to change,
+        ((a phrase of the row's `where`, what to change there instead), ...)) for the elastic
+        diagnosis (solve/words.py). None by default: a condition is shown by its name."""
+        return {}
+
     def disagreement_note(self, spec) -> str:
         """What the closed forms leave out that the simulator models, where the spec has it,
         as words appended to a disagreement (" (...)"); "" by default."""

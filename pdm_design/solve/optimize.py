@@ -246,7 +246,7 @@ def _assemble(spec, search: _Search, status, x, p, reqs, violations, at_bounds, 
         robust_margins=robust_margins,
         periodic=dict(analysis.periodic) if analysis is not None else {},
         violations=tuple(violations), checks=checks, stats=_stats(search, tic),
-        message=_message(status, violations, at_bounds),
+        message=_message(status, violations, at_bounds, spec.kind),
         at_bounds=tuple(at_bounds) if violations else (),
         solution=Solution(form.key, x, search.chosen.lam_x, search.chosen.lam_g),
         tolerances=allocated, optima=optima(form, search.runs),
@@ -359,10 +359,10 @@ def _robust_margins(form, x, p, slack, scale) -> dict[str, float]:
     return out
 
 
-def _message(status, violations, at_bounds) -> str:
+def _message(status, violations, at_bounds, kind=None) -> str:
     message = status.message
     if violations:
-        message += " Cannot be met: " + "; ".join(summarise(violations)[:5]) + "."
+        message += " Cannot be met: " + "; ".join(summarise(violations, kind)[:5]) + "."
         if at_bounds:
             hint = bounds_hint(at_bounds)
             message += f" {hint[0].upper()}{hint[1:]}."

@@ -154,6 +154,11 @@ class Manipulators(Scene):
 
         return closed_form_agreement(spec, analysis, result)
 
+    def condition_words(self):
+        from .words import CONDITIONS
+
+        return {name: (what, advice, ()) for name, (what, advice) in CONDITIONS.items()}
+
     def tolerance_refusal(self, spec, quantity):
         from .refusals import tolerance_refusal
 

@@ -120,6 +120,12 @@ class Stairs(Scene):
 
         return closed_form_agreement(spec, analysis, result)
 
+    def condition_words(self):
+        from .words import CONDITIONS, PHASE_HINTS
+
+        return {name: (what, advice, PHASE_HINTS.get(name, ()))
+                for name, (what, advice) in CONDITIONS.items()}
+
     def tolerance_refusal(self, spec, quantity):
         from .refusals import tolerance_refusal
 
