@@ -29,8 +29,8 @@ PLACEHOLDER = 0.0  # the parameters' value in the cache key's spec (the key also
 
 def names(spec) -> tuple[str, ...]:
     """The spec's nlp_parameters that its NLP can take as parameters: a fixed number at one of
-    its scene's Scene.nlp_parameters paths, and no linearised yield in the NLP (max_yield, a yield target: its chain
-    of stage maps reads the scene as numbers, formulation/manipulators/statistical.py)."""
+    its scene's Scene.nlp_parameters paths, and no linearised yield in the NLP (max_yield, a
+    yield target: its chain of stage maps reads the scene as numbers)."""
     from ..plugin import of
     from .yield_target import active
 

@@ -107,7 +107,8 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
 
 def _lot_signs(quantity: str, stages: int, box) -> list[tuple[str, object]]:
     """(name, sign) of a quantity's corners: +-1 (a lot, or every part alike), and for an
-    alternating quantity (BoxAxes.alternating) every other part at the other end (+-(1, -1, 1, ...))."""
+    alternating quantity (BoxAxes.alternating) every other part at the other end
+    (+-(1, -1, 1, ...))."""
     signs = [("+1", 1.0), ("-1", -1.0)]
     if quantity in box.alternating:
         alternate = [(-1.0) ** k for k in range(stages)]
