@@ -190,6 +190,12 @@ class Scene:
         diagnosis (solve/words.py). None by default: a condition is shown by its name."""
         return {}
 
+    def left_closed_forms(self, result) -> str:
+        """Words appended to a nominal run's summary when the run left the closed forms'
+        regime (an object that lifted off and flew on), so they are not compared with it
+        ("; ..."); "" (the default) when it did not."""
+        return ""
+
     def disagreement_note(self, spec) -> str:
         """What the closed forms leave out that the simulator models, where the spec has it,
         as words appended to a disagreement (" (...)"); "" by default."""

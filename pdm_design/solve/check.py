@@ -118,7 +118,7 @@ def _streamed_check(form, x, p, tau, samples: int, seed: int) -> dict:
     which = (PATTERNS[j][0] if j < len(PATTERNS) else f"random corner {j - len(PATTERNS) + 1}"
              if j < len(PATTERNS) + corners else f"uniform point {j - len(PATTERNS) - corners + 1}")
     return {"passed": worst["value"] >= -CHECK_TOL, "samples": count,
-            "tolerance": float(tau) if np.ndim(tau) == 0 else dict(zip(("dx", "dy"), half)),
+            "tolerance": float(tau) if np.ndim(tau) == 0 else dict(zip(form.tolerance_axes, half)),
             "worst_excess_margin": worst["value"], "worst_condition": worst["label"],
             "worst_sample": which, "worst_stage": worst["stage"]}
 

@@ -124,6 +124,11 @@ class Manipulators(Scene):
         return simulate_build(scene, design, deviations, stages, accuracy=accuracy,
                               record_trajectory=record_trajectory)
 
+    def left_closed_forms(self, result):
+        from .verification import left_closed_forms
+
+        return left_closed_forms(result)
+
     def disagreement_note(self, spec):
         from .verification import disagreement_note
 
