@@ -128,7 +128,7 @@ def unmet_expectations(outcome: DesignOutcome) -> list[str]:
             out.append(f"smallest margin {name} = {_show(margins.get(name))} is below the "
                        f"expected minimum {expect.min_margin:g}")
     if expect.min_yield is not None:
-        from .tolerances.command import unmet_min_yield
+        from .commands.yield_ import unmet_min_yield
 
         out += unmet_min_yield(outcome)
     return out

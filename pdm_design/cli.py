@@ -351,7 +351,7 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
                         "parts are drawn)", "both")
     try:
         if build is not None:
-            from .tolerances.command import simulate_build_of_spec
+            from .commands.yield_ import simulate_build_of_spec
 
             result = simulate_build_of_spec(loaded, spec, point, build, row, accuracy=accuracy,
                                             record_trajectory=plot is not None)
@@ -500,7 +500,7 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
     Sobol' indices, each failing build as one `simulate --build` command; the event simulator
     confirms a sample."""
     from .spec import load_spec
-    from .tolerances.command import run_yield, write_outputs, yield_json, yield_text
+    from .commands.yield_ import run_yield, write_outputs, yield_json, yield_text
 
     loaded = load_spec(spec)
     result = run_yield(loaded, spec, builds=builds, stages=stages, seed=seed, accuracy=accuracy)

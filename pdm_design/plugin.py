@@ -92,7 +92,7 @@ class Scene:
         return 10_000_000, ""
 
     def quantities(self) -> dict:
-        """The quantities a `[tolerances]` table may name (tolerances.model.Quantity by name);
+        """The quantities a `[tolerances]` table may name (tolerance_model.Quantity by name);
         none by default."""
         return {}
 
@@ -140,7 +140,101 @@ class Scene:
         numbers a table sweeps (Scene.parametric; formulation/parametric.py), or None."""
         raise NotImplementedError
 
+    def nlp_key(self, spec) -> tuple:
+        """What else of a spec shapes the scene's NLP, beyond its scene, design, objective,
+        stages and tolerances: requirements that add rows, accuracy settings its rows follow
+        (a part of the NLP's cache key, formulation.common.spec_key). () by default."""
+        return ()
+
     # ------------------------------------------------------------------ tolerances, yield, verification
+    allocatable: tuple[str, ...] = ()
+    """The quantities whose worst-case tolerance the robust NLP allocates, or takes as given
+    half-widths while allocating: those over whose box a sound outer bound of every row is
+    derived (docs/optimizer.md section 4a). None by default: any allocation is refused."""
+
+    def allocation_refusal(self, spec) -> tuple[str, str, str] | None:
+        """(key, expected, found) when the spec's worst-case allocation, of allocatable
+        quantities, needs what the scene's robust rows do not bound (a sloped start, a nominal
+        of 0); None (the default) when the rows bound it."""
+        return None
+
+    nlp_parameters: tuple[str, ...] = ()
+    """Spec paths ("design.mass_ratio", "scene.palm.friction") whose numbers `formulate` can
+    take as CasADi parameters (formulation/parametric.py): read only in the rows' expressions,
+    never to shape the NLP. None by default: a table builds each point's own NLP."""
+
+    sizes_for_yield_target: bool = False
+    """Whether `formulate` sizes the allocated tolerances for tolerances.yield_target (the
+    nines row of formulation/yield_target.py). False by default: such a spec is treated as a
+    worst-case allocation."""
+
+    box_axes = None
+    """The explicit-offset box (a plugin_tolerances.BoxAxes): the two errors each stage takes
+    in the scenario (`formulate`) and in `simulate`, with their quantities, and the quantities
+    every part holds. None by default: the scene has no per-stage box."""
+
+    def length_scale(self, spec, design: dict) -> float:
+        """The device's size (m) at a design (values by name): the unit the linearised
+        tolerance regions are solved in. 1 m by default."""
+        return 1.0
+
+    def tolerance_refusal(self, spec, quantity: str) -> tuple[str, str, str] | None:
+        """(key, expected, found) when a yield cannot draw builds of this toleranced quantity
+        of the spec (a nominal of 0 that half the parts would fall below; a quantity the
+        scene's spec leaves out of its physics); None (the default) when it can."""
+        return None
+
+    def run_builds(self, scene, design, deviations: dict, stages: int):
+        """The closed-form outcome (tolerances.outcome.BuildOutcome) of many builds of one
+        design: deviations {quantity: (builds, stages) array for each part, (builds,) for a
+        lot} in SI units, added to the nominal values."""
+        raise NotImplementedError(f"a {self.kind} scene has no closed-form map of its builds")
+
+    def simulate_build(self, scene, design, deviations: dict, stages: int, *,
+                       accuracy="default", record_trajectory: bool = False):
+        """The event simulator's run (sim.core.SimulationResult) of one build, deviations as
+        `run_builds` takes them for one build (1-row arrays)."""
+        raise NotImplementedError(f"a {self.kind} scene cannot simulate a toleranced build")
+
+    def simulate_box_build(self, spec, design, errors, deviations: dict, accuracy):
+        """The event simulator's run of one build of the explicit-offset box: errors the
+        (a, b) pair of each stage along `box_axes` (m), deviations {quantity: a number, or a
+        list of one per part} of the other quantities of an allocated box; the spec's own
+        initial state and stages, accuracy an accuracy.Accuracy."""
+        raise NotImplementedError(f"a {self.kind} scene has no explicit-offset box")
+
+    def linearised_yield(self, scene, design, tolerances, stages: int) -> dict:
+        """The linearised yield of a fixed design under valued tolerances: a dict whose
+        "yield" is a lower bound on the fraction of builds that pass `stages` stages."""
+        raise NotImplementedError(f"no linearised yield is derived for a {self.kind} scene")
+
+    def linearised_rows(self, scene, design, tolerances, stages: int):
+        """The rows of the linearised yield, placed along the run
+        (plugin_tolerances.PlacedRows): what limits tolerances sized for a yield."""
+        raise NotImplementedError(f"no linearised yield is derived for a {self.kind} scene")
+
+    def closed_form_agreement(self, spec, analysis, result) -> dict | None:
+        """How far a nominal run's simulated stage quantities are from the closed forms':
+        {"quantity": what, in words, "relative_error": the largest, "compared": how many
+        stages}; None (the default) when nothing is compared."""
+        return None
+
+    def condition_words(self) -> dict[str, tuple[str, str, tuple[tuple[str, str], ...]]]:
+        """Each NLP condition in a designer's words, by name: (what it asks, what to change,
+        ((a phrase of the row's `where`, what to change there instead), ...)) for the elastic
+        diagnosis (solve/words.py). None by default: a condition is shown by its name."""
+        return {}
+
+    def left_closed_forms(self, result) -> str:
+        """Words appended to a nominal run's summary when the run left the closed forms'
+        regime (an object that lifted off and flew on), so they are not compared with it
+        ("; ..."); "" (the default) when it did not."""
+        return ""
+
+    def disagreement_note(self, spec) -> str:
+        """What the closed forms leave out that the simulator models, where the spec has it,
+        as words appended to a disagreement (" (...)"); "" by default."""
+        return ""
 
     # ------------------------------------------------------------------ sheets, drawings, reports
     # A build sheet lists one item (a CSV row) per stage: whatever a workshop places for that

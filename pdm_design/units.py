@@ -1,5 +1,5 @@
 """SI units to the workshop's, one table for every layer: the tolerance quantities' build units
-(tolerances.model), the build sheet and the report (sheet.parts.workshop_value)."""
+(tolerance_model), the build sheet and the report (sheet.parts.workshop_value)."""
 
 from __future__ import annotations
 

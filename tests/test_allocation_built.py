@@ -18,7 +18,7 @@ from pdm_design.scenes.manipulators.formulation import carry_box
 from pdm_design.formulation.common import DEFAULT_BACKOFF
 from pdm_design.scenes.manipulators.formulation.rows import MASS_KEPT
 from pdm_design.scenes.manipulators.formulation import _Model
-from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators import physics as phys
 from pdm_design.api import optimize
 from pdm_design.spec import load_spec
 from pdm_design.scenes.manipulators.tolerances import simulate_build

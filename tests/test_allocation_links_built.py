@@ -14,7 +14,7 @@ import sys
 import numpy as np
 import pytest
 
-from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators import physics as phys
 
 from test_allocation_built import BASE, ROOT
 from test_allocation_links import _links, allocated

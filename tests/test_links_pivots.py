@@ -19,7 +19,7 @@ import pytest
 import sympy as sp
 
 from pdm_design.scenes.manipulators.analysis import analyse_manipulators
-from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators import physics as phys
 from pdm_design.scenes.manipulators.model import Links, Pivots
 from pdm_design.scenes.manipulators.sim import phases as ph
 from pdm_design.scenes.manipulators.sim import simulate_manipulators

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from pdm_design.formulation.common import DEFAULT_BACKOFF
-from pdm_design.scenes.stairs.model import physics as phys
+from pdm_design.scenes.stairs import physics as phys
 from pdm_design.solve import optimize
 from pdm_design.spec import load_spec
 from pdm_design.scenes.stairs.tolerances import simulate_build

@@ -26,19 +26,10 @@ from dataclasses import replace
 import casadi as ca
 
 from ..errors import SpecError
-from ..tolerances.model import allocation_shares
+from ..tolerance_model import allocation_shares
 
-# Quantities the robust rows bound soundly, per scene kind (docs/optimizer.md section 4a).
-ALLOCATABLE = {
-    "manipulators": ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
-                     "palm_mass", "object_mass", "back_stop", "link_length", "link_mass",
-                     "pivot_friction"),
-    "stairs": ("rise", "tread", "launch_x", "restitution", "friction", "launch_speed"),
-}
 # Why the others are refused: what a sound bound of them would need (the words of the error).
-NOT_YET: dict[str, str] = {
-}
-STAIRS_NOT_YET = "no outer bound over its box is derived yet"
+NOT_YET = "no outer bound over its box is derived yet"
 
 
 def allocating(spec) -> bool:
@@ -67,58 +58,21 @@ def check(spec) -> None:
         raise SpecError(source, f"tolerances.{name}.allocate",
                         "an [objective] with max_offset_tolerance > 0 (allocation maximises "
                         "the weighted tolerances)", found="no max_offset_tolerance")
-    allowed = ALLOCATABLE[spec.kind]
-    if spec.kind == "manipulators" and spec.scene.initial.velocity[1] != 0.0 and any(
-            t.quantity == "feed_speed" for t in spec.tolerances):
-        raise SpecError(source, "tolerances.feed_speed", "a horizontal start (initial."
-                        "velocity[1] = 0) to bound the feed speed's tolerance (along a sloped "
-                        "start it moves the fall speed as well; not derived yet)",
-                        found=f"initial.velocity[1] = {spec.scene.initial.velocity[1]:g}")
-    if spec.kind == "manipulators":
-        _check_links(spec, source)
-        _check_mechanism(spec, source)
+    from ..plugin import of
+
+    scene = of(spec)
+    allowed = scene.allocatable
+    refusal = scene.allocation_refusal(spec)
+    if refusal is not None:
+        raise SpecError(source, *refusal[:2], found=refusal[2])
     for tol in spec.tolerances:
         if tol.quantity in allowed:
             continue
         key = "allocate" if tol.allocate else "value"
-        why = STAIRS_NOT_YET if spec.kind == "stairs" else NOT_YET.get(
-            tol.quantity, "no outer bound over its box is derived yet")
         raise SpecError(source, f"tolerances.{tol.quantity}.{key}",
                         "a quantity the worst-case allocation can bound: "
-                        + ", ".join(allowed) + f" ({why})",
+                        + ", ".join(allowed) + f" ({NOT_YET})",
                         found=tol.quantity)
-
-
-def _check_links(spec, source) -> None:
-    """A link length's tolerance is bounded on the paper's device and on the device as built
-    with links and Coulomb pivot friction (the carry's q_e, g_e and f are free of a build's
-    link error: docs/optimizer.md section 4a), not with the back stops toleranced too there
-    (carry_box.back_contact takes the design's link; damping is refused with every robust
-    objective: formulation/manipulators integrated_steps)."""
-    names = {t.quantity for t in spec.tolerances}
-    scene = spec.scene
-    if "link_length" not in names or scene.plain_mechanism:
-        return
-    if "back_stop" in names:
-        raise SpecError(source, "tolerances.link_length", "the back stops exact to bound the "
-                        "link lengths' tolerance on real links or pivot friction (the palm's "
-                        "force at a toleranced back stop is bounded at the design's link only; "
-                        "not derived yet)", found="tolerances.back_stop with scene.links or "
-                        "scene.pivots")
-
-
-def _check_mechanism(spec, source) -> None:
-    """The built device's quantities: link_mass and pivot_friction need a nominal above 0 (a
-    box around 0 is half made of parts below their limit, as `yield` refuses it too)."""
-    names = {t.quantity for t in spec.tolerances}
-    scene = spec.scene
-    for name, key, nominal in (("link_mass", "scene.links.mass", scene.links.mass),
-                               ("pivot_friction", "scene.pivots.friction_torque",
-                                scene.pivots.friction_torque)):
-        if name in names and nominal <= 0.0:
-            raise SpecError(source, f"tolerances.{name}", f"{key} > 0 to bound a tolerance of "
-                            f"it (a box around 0 is half made of parts below 0)",
-                            found=f"{key} = {nominal:g}")
 
 
 def half_widths(spec, s) -> dict[str, object]:
@@ -132,7 +86,7 @@ def half_widths(spec, s) -> dict[str, object]:
 def values_at(spec, s: float) -> list[dict]:
     """The tolerance list of an answer with scale s: one entry per toleranced quantity, the
     allocated first ({quantity, applies_to, value (SI), unit, allocated})."""
-    from ..tolerances.model import quantities_of
+    from ..tolerance_model import quantities_of
 
     coeff = coefficients(spec)
     entries = []
@@ -144,17 +98,14 @@ def values_at(spec, s: float) -> list[dict]:
     return entries
 
 
-# the optimizer's box axes of the quantities the scenario samples (solve/check.py) and the
-# simulator's corner patterns take per stage (verify/tolerance.py)
-AXES = {"manipulators": (("dx", "pivot_x"), ("dy", "pivot_y")),
-        "stairs": (("rise", "rise"), ("tread", "tread"))}
+def pivot_box(spec, entries) -> dict[str, float]:
+    """{axis: half-width} of the scene's explicit-offset box (Scene.box_axes: {"dx", "dy"} of a
+    row of manipulators, {"rise", "tread"} of a staircase) of a tolerance list, 0 where exact:
+    the box the offsets or step errors are checked in."""
+    from ..plugin import of
 
-
-def pivot_box(kind: str, entries) -> dict[str, float]:
-    """{"dx", "dy"} (manipulators) or {"rise", "tread"} (stairs): the per-stage half-widths of a
-    tolerance list (0 where exact), the box the offsets or step errors are checked in."""
     value = {e["quantity"]: e["value"] for e in entries}
-    return {axis: float(value.get(q, 0.0)) for axis, q in AXES[kind]}
+    return {axis: float(value.get(q, 0.0)) for axis, q in of(spec).box_axes.axes}
 
 
 def box_conditions(spec, rows_of, today: dict, s) -> list:

@@ -471,23 +471,14 @@ def _fixed_values(spec) -> dict[str, float]:
 
 # Requirements that add rows when above 0 (the stairs' exact nose rows,
 # formulation/stairs/__init__.py).
-ROW_ADDING_REQUIREMENTS = ("first_nose_clearance", "nose_clearance")
-
-
-def requires_rows(spec) -> bool:
-    return any(float(spec.requirements.get(k, 0.0)) > 0.0 for k in ROW_ADDING_REQUIREMENTS)
-
-
 def spec_key(spec) -> str:
     """A canonical text of everything in a spec that the NLP depends on (the build cache key):
     the requirements' values are parameters, but some add rows when above 0."""
     design = sorted((k, repr(v)) for k, v in spec.design.items())
     objective = sorted((k, float(v)) for k, v in spec.objective.items())
-    required = requires_rows(spec)
-    pivots = getattr(spec.scene, "pivots", None)  # damping: the carry's steps follow accuracy
-    forced = spec.verification.accuracy.carry == "integrated"  # (the carry integrated: steps)
-    steps = (spec.verification.accuracy.agreement
-             if pivots is not None and (pivots.damping or forced) else None)
+    from ..plugin import of
+
+    shaped = of(spec).nlp_key(spec)  # requirements that add rows, accuracy the rows follow
     tolerances = getattr(spec, "tolerances", ())
     allocated = tuple(tolerances) if any(t.allocate for t in tolerances) else ()  # allocation.py
     from .yield_target import active  # tolerances sized for a yield target
@@ -495,7 +486,7 @@ def spec_key(spec) -> str:
     stated = repr(tolerances) if spec.objective.get("max_yield") or active(spec) \
         else None  # statistical.py
     return repr((spec.kind, repr(spec.scene), design, objective, spec.verification.stages,
-                 required, steps, stated) + ((allocated,) if allocated else ()))
+                 shaped, stated) + ((allocated,) if allocated else ()))
 
 
 # objective terms measured in metres (the others are pure numbers)

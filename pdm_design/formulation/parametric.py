@@ -6,7 +6,7 @@ expressions, its IPOPT solvers and its stage maps built again, most of a point's
 (results/bench_scale.md). Written as CasADi parameters, the NLP of the first point serves
 every point: a point binds its numbers (`Formulation.bind`) and reuses the built solvers.
 
-Which numbers can be parameters (PARAMETRIC): those the manipulators' formulation uses only in
+Which numbers can be parameters (Scene.nlp_parameters): those the formulation uses only in
 its rows' expressions, never to decide the NLP's shape (how many parked palms are checked, the
 tolerance variable's bound, the objective's scale read the alpha, beta and link length the box
 allows, so those stay constants). The symbolic build also checks this: a number compared or
@@ -24,24 +24,20 @@ from dataclasses import replace
 
 import numpy as np
 
-# spec paths ("design.mass_ratio", "scene.palm.friction") that can be NLP parameters, by kind
-PARAMETRIC = {
-    "manipulators": ("design.mass_ratio", "design.first_pivot_x", "design.first_pivot_y",
-                     "scene.palm.friction"),
-}
 PLACEHOLDER = 0.0  # the parameters' value in the cache key's spec (the key also names them)
 
 
 def names(spec) -> tuple[str, ...]:
-    """The spec's nlp_parameters that its NLP can take as parameters: a fixed number at a
-    PARAMETRIC path, and no linearised yield in the NLP (max_yield, a yield target: its chain
-    of stage maps reads the scene as numbers, formulation/manipulators/statistical.py)."""
+    """The spec's nlp_parameters that its NLP can take as parameters: a fixed number at one of
+    its scene's Scene.nlp_parameters paths, and no linearised yield in the NLP (max_yield, a
+    yield target: its chain of stage maps reads the scene as numbers)."""
+    from ..plugin import of
     from .yield_target import active
 
     asked = getattr(spec, "nlp_parameters", ())
     if not asked or spec.objective.get("max_yield") or active(spec):
         return ()
-    allowed = PARAMETRIC.get(spec.kind, ())
+    allowed = of(spec).nlp_parameters
     out = []
     for name in asked:
         if name not in allowed:

@@ -4,7 +4,7 @@ what every scene's NLP shares.
 A spec whose `[tolerances]` has a `yield_target` and quantities marked `allocate = true`, and
 whose `[objective]` does not ask for the worst-case box (`max_offset_tolerance`), asks
 `optimize` for the design and the largest common scale s of the allocated tolerances
-(t_q = s * w_min / w_q: tolerances.model.allocation_shares) at which the scene's linearised
+(t_q = s * w_min / w_q: tolerance_model.allocation_shares) at which the scene's linearised
 yield reaches the target. One NLP:
 
     maximise  log s
@@ -28,13 +28,14 @@ AUX = "yield_scale"
 SCALE_BOUNDS = (1e-9, 1e3)  # s within these (SI units of the smallest-weight quantity)
 START_GRID = 49  # scales tried at the spec's guess for the start of s (evenly in log s)
 CONDITION = "yield_target"  # the nines row's name (a validity row: no margin, no requirement)
-KINDS = ("manipulators", "stairs")  # scenes whose NLP sizes tolerances for a yield target
 
 
 def active(spec) -> bool:
     """Whether `optimize(spec)` allocates tolerances for a yield target (module docstring)."""
+    from ..plugin import of
+
     tolerances = getattr(spec, "tolerances", ())
-    return (spec.kind in KINDS
+    return (of(spec).sizes_for_yield_target
             and getattr(tolerances, "yield_target", None) is not None
             and any(t.allocate for t in tolerances)
             and not float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0)
@@ -95,7 +96,7 @@ def scaled_sigmas(tolerances, s, sigmas):
     """The scene's `sigmas` (tolerances, scale) -> (part sigmas, lot sigmas) with every
     allocated tolerance at s times its share (w_min / w) and the given ones at their values,
     SX where s is."""
-    from ..tolerances.model import allocation_shares
+    from ..tolerance_model import allocation_shares
 
     shares = allocation_shares(tolerances)
     given = sigmas([t for t in tolerances if not t.allocate])

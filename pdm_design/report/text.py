@@ -124,7 +124,7 @@ def allocation_rows(kind: str, entries) -> list[str]:
     """The allocated tolerance table in build units (mm, degrees, g, %), with what limits each
     (optimize's `tolerances`, docs/optimizer.md section 4a)."""
     from ..solve.binding import SHARED, in_words
-    from ..tolerances.model import quantities_of
+    from ..tolerance_model import quantities_of
 
     rows = []
     for e in entries:

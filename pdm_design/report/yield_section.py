@@ -30,14 +30,14 @@ def spec_yield(spec, source: str):
     if to_allocate and not sized:
         return None, (f"{', '.join(to_allocate)} {'is' if len(to_allocate) == 1 else 'are'} "
                       "to be allocated (no value in the spec's [tolerances])")
-    from ..tolerances.command import run_yield
+    from ..commands.yield_ import run_yield
 
     return run_yield(spec, source).to_json(), ""
 
 
 def yield_html(data: dict, data_uri) -> str:
     """The section's HTML of a `pdm-design yield` document; data_uri(png) -> an img src."""
-    from ..tolerances.command import yield_figures
+    from ..commands.yield_ import yield_figures
 
     y = data["yield"]
     rows = [("yield (pass all stages)", f"{100 * y['estimate']:.2f} % (95 % interval "

@@ -176,7 +176,7 @@ def spec_entries(spec) -> tuple:
     """ToleranceEntry of every tolerance the spec's [tolerances] gives a value, pivots too,
     on its part: statistical tolerances (the yield draws each build's error from their
     distribution), not the worst-case box the optimizer computes (the sheet's own)."""
-    from ..tolerances.model import SIGMAS_PER_TOLERANCE
+    from ..tolerance_model import SIGMAS_PER_TOLERANCE
     from .parts import ToleranceEntry
 
     out = []

@@ -118,16 +118,12 @@ def _streamed_check(form, x, p, tau, samples: int, seed: int) -> dict:
     which = (PATTERNS[j][0] if j < len(PATTERNS) else f"random corner {j - len(PATTERNS) + 1}"
              if j < len(PATTERNS) + corners else f"uniform point {j - len(PATTERNS) - corners + 1}")
     return {"passed": worst["value"] >= -CHECK_TOL, "samples": count,
-            "tolerance": float(tau) if np.ndim(tau) == 0 else dict(zip(("dx", "dy"), half)),
+            "tolerance": float(tau) if np.ndim(tau) == 0 else dict(zip(form.tolerance_axes, half)),
             "worst_excess_margin": worst["value"], "worst_condition": worst["label"],
             "worst_sample": which, "worst_stage": worst["stage"]}
 
 
 def _parked_reach(form, x) -> int:
-    """The parked palms that can reach the object at design x (formulation.manipulators.
-    parked_rows with the design's values for bounds): those further back never can."""
-    from ..scenes.manipulators.formulation import parked_rows
-
-    stages = form.scenario_source
-    values = form.design_values(x)
-    return parked_rows(stages.spec.scene, values, {}, stages.N)
+    """The parked palms that can reach the object at design x (the stage maps' `reach` at the
+    design's values): those further back never can."""
+    return form.scenario_source.reach(form.design_values(x))

@@ -112,7 +112,8 @@ def diagnose(form, p, starts: list[np.ndarray], *, max_iter: int = 500) -> Diagn
             name=info.name, where=info.where, required=float(required),
             achieved=float(achieved), equality=info.equality,
             text=describe(info.name, info.where, float(required), float(achieved),
-                          equality=info.equality, value=float(sl[info.index])),
+                          equality=info.equality, value=float(sl[info.index]),
+                          kind=form.kind),
         ))
     violations.sort(key=lambda v: v.achieved - v.required)
     at_bounds = []

@@ -246,7 +246,7 @@ def _assemble(spec, search: _Search, status, x, p, reqs, violations, at_bounds, 
         robust_margins=robust_margins,
         periodic=dict(analysis.periodic) if analysis is not None else {},
         violations=tuple(violations), checks=checks, stats=_stats(search, tic),
-        message=_message(status, violations, at_bounds),
+        message=_message(status, violations, at_bounds, spec.kind),
         at_bounds=tuple(at_bounds) if violations else (),
         solution=Solution(form.key, x, search.chosen.lam_x, search.chosen.lam_g),
         tolerances=allocated, optima=optima(form, search.runs),
@@ -265,7 +265,7 @@ def _tolerance(spec, form, x):
     allocated = None
     if allocating(spec):  # one half-width per quantity (formulation/allocation.py)
         allocated = tuple(values_at(spec, tol_value))
-        tolerance = pivot_box(spec.kind, allocated)
+        tolerance = pivot_box(spec, allocated)
     return tolerance, allocated
 
 
@@ -359,10 +359,10 @@ def _robust_margins(form, x, p, slack, scale) -> dict[str, float]:
     return out
 
 
-def _message(status, violations, at_bounds) -> str:
+def _message(status, violations, at_bounds, kind=None) -> str:
     message = status.message
     if violations:
-        message += " Cannot be met: " + "; ".join(summarise(violations)[:5]) + "."
+        message += " Cannot be met: " + "; ".join(summarise(violations, kind)[:5]) + "."
         if at_bounds:
             hint = bounds_hint(at_bounds)
             message += f" {hint[0].upper()}{hint[1:]}."
@@ -424,8 +424,8 @@ def _check_requirements(spec, requirements: dict) -> None:
 
 
 def _length_scale(spec, design) -> float:
-    """The device's size: its tread or its link length (m)."""
-    if spec.kind == "stairs":
-        return float(design.get("tread") or spec.scene.initial.drop_height)
-    return float(design.get("link_length", 1.0))
+    """The device's size (m): Scene.length_scale."""
+    from ..plugin import of
+
+    return of(spec).length_scale(spec, design)
 

@@ -77,8 +77,6 @@ def linearised_tolerance(form, x, p, *, cap: float, length: float) -> Linearised
     """
     sc = form.scenario
     names = sc.offset_names
-    if form.kind == "manipulators":  # dy of pivot N + 1: what receives the object from N
-        names = names[:-1] + ("dy_receiver",)
     if len(names) > MAX_COORDINATES:
         return LinearisedTolerance(0.0, {}, {}, names, status=(
             f"not computed: {len(names)} offset coordinates (more than {MAX_COORDINATES}); the "

@@ -4,76 +4,34 @@ from __future__ import annotations
 
 import re
 
-CONDITIONS = {
-    # manipulators
-    "over_the_top": ("the object is carried over the top of the palm's arc",
-                     "raise the landing speed: larger beta - alpha, smaller alpha, lighter palm"),
-    "first_over_the_top": ("the first landing carries the object over the top",
-                           "move the first manipulator or reduce alpha"),
-    "lift_off": ("the object stays pressed on the palm (no lift-off)",
-                 "slow the carry: smaller beta - alpha or longer links"),
-    "first_lift_off": ("the object stays on palm 1 after the first landing",
-                       "lower the start or move the first manipulator"),
-    "slip_carry": ("friction holds the object on the palm during the carry",
-                   "smaller alpha and beta, or more friction"),
-    "tip_carry": ("the object does not tip over during the carry",
-                  "smaller angles, a wider or lower object, or centre the landing"),
-    "slip_impact": ("the object sticks where it lands on a palm",
-                    "land more along the palm's path: change alpha + beta or the mass ratio"),
-    "first_slip_impact": ("the object sticks where it first lands",
-                          "change the start velocity, alpha or the mass ratio"),
-    "tip_impact": ("the object does not tip when it lands on a palm",
-                   "a wider or lower object, or centre the landing"),
-    "first_tip_impact": ("the object does not tip when it first lands",
-                         "centre the first landing on palm 1"),
-    "landing": ("the object lands fully on the palm",
-                "move the first manipulator to centre the landing, or widen the palm"),
-    "palm_clearance": ("the next palm stays below the object until the handover",
-                       "larger beta - alpha (more drop per stage) or a smaller offset box"),
-    "front_stop": ("the palm hands over before its front stop", "smaller beta or a later stop"),
-    "parked_palms": ("the carried object clears the palms parked at their front stops behind it",
-                     "a later front stop, narrower palms, or a longer pitch (larger alpha + beta)"),
-    "forward_landing": ("the landing pushes the palm forward", "smaller alpha + beta"),
-    "start_height": ("the object starts above palm 1's top surface (at first_pivot_y + "
-                     "link_length cos alpha)",
-                     "raise the start (initial.position) or lower the first pivot "
-                     "(first_pivot_y); a larger alpha or a shorter link lowers palm 1 too"),
-    # stairs
-    "riser_clearance": ("the ball lands clear of the riser behind it",
-                        "land further forward on the tread (a larger landing_offset)"),
-    "nose_clearance": ("the ball clears the nose of the step it leaves",
-                       "move the landing along the tread (landing_offset)"),
-    "first_nose_clearance": ("the launch clears the top landing's nose",
-                             "land further forward on tread 1 (a larger landing_offset moves the "
-                             "stairs back under the launch), or a slower launch"),
-    "first_impact_friction": ("friction stops the ball slipping at the first impact",
-                              "more friction, or launch speed and spin that match rolling"),
-    "periodic_tread": ("the tread matches the periodic flight (no drift per bounce)",
-                       "free the tread or the launch speed"),
-    "forward_flight": ("the ball keeps moving down the stairs", "a faster launch"),
-    "step_down": ("every step goes down", "a larger rise"),
-}
+
+def _words(kind: str | None) -> dict:
+    """{condition: (what it asks, what to change, ((phrase, what to change), ...))}: the
+    scene's (Scene.condition_words), or with no kind every installed scene's, the first kind
+    in order naming a condition giving its words."""
+    from .. import plugin
+
+    if kind is not None:
+        return plugin.scene_kind(kind).condition_words()
+    merged: dict = {}
+    for name in plugin.kinds():
+        try:
+            found = plugin.scene_kind(name).condition_words()
+        except plugin.SceneUnavailable:
+            continue
+        for condition, words in found.items():
+            merged.setdefault(condition, words)
+    return merged
 
 
-# The way to move a nose_clearance row's landing depends on the phase of the flight its `where`
-# names (formulation/stairs/__init__.py NOSE_ENDS): landing_offset is measured from the back of the
-# tread, so a smaller one takes off further behind the nose ahead, a larger one nearer to it.
-_BACK = "land further back on the tread (a smaller landing_offset)"
-_FORWARD = "land further forward on the tread (a larger landing_offset)"
-PHASE_HINTS = {
-    "nose_clearance": (
-        ("takes off", f"{_BACK}: it lands too near the nose ahead"),
-        ("comes down", f"{_FORWARD}: it comes down on the nose ahead"),
-    ),
-}
-
-
-def hint(name: str, where: str) -> str:
-    """What to change, in words, for condition `name` violated at `where`."""
-    for phrase, text in PHASE_HINTS.get(name, ()):
+def hint(name: str, where: str, kind: str | None = None) -> str:
+    """What to change, in words, for condition `name` violated at `where` (of a scene of
+    `kind`, or of any installed scene)."""
+    _, advice, phases = _words(kind).get(name, ("", "", ()))
+    for phrase, text in phases:
         if phrase in where:
             return text
-    return CONDITIONS.get(name, ("", ""))[1]
+    return advice
 
 
 def normalised_margin(slack: float, scale: float) -> float:
@@ -85,9 +43,9 @@ def normalised_margin(slack: float, scale: float) -> float:
 
 
 def describe(name: str, where: str, required: float, achieved: float, *,
-             equality: bool = False, value: float | None = None) -> str:
-    what = CONDITIONS.get(name, (name.replace("_", " "), ""))[0]
-    advice = hint(name, where)
+             equality: bool = False, value: float | None = None, kind: str | None = None) -> str:
+    what = _words(kind).get(name, (name.replace("_", " "),))[0]
+    advice = hint(name, where, kind)
     place = f" ({where})" if where else ""
     if equality:
         text = f"{what}{place}: cannot be met, best achievable residual {value:.3g}"
@@ -108,10 +66,10 @@ def _reached(required: float, achieved: float) -> str:
 _NUMBERED = re.compile(r"\b(flight|landing|palm) (\d+)\b")
 
 
-def summarise(violations) -> list[str]:
+def summarise(violations, kind: str | None = None) -> list[str]:
     """The elastic diagnosis' violations (most violated first) in words, one line per condition
     and place: a row violated at several flights or palms is one line that names them all, with
-    the worst margin among them."""
+    the worst margin among them (in the words of a scene of `kind`, or of any installed one)."""
     groups: dict[tuple, list] = {}
     for v in violations:
         pattern = _NUMBERED.sub(lambda m: f"{m.group(1)} #", v.where)
@@ -123,11 +81,11 @@ def summarise(violations) -> list[str]:
             if members[0].text not in lines:  # a row held by two keys is one line
                 lines.append(members[0].text)
             continue
-        kind = _NUMBERED.search(members[0].where).group(1)
+        noun = _NUMBERED.search(members[0].where).group(1)
         numbers = sorted({int(_NUMBERED.search(v.where).group(2)) for v in members})
-        where = pattern.replace(f"{kind} #", f"{kind}s {_spans(numbers)}", 1)
+        where = pattern.replace(f"{noun} #", f"{noun}s {_spans(numbers)}", 1)
         worst = min(members, key=lambda v: v.achieved - v.required)
-        lines.append(describe(name, where, worst.required, worst.achieved))
+        lines.append(describe(name, where, worst.required, worst.achieved, kind=kind))
     return lines
 
 

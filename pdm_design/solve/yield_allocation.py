@@ -1,5 +1,5 @@
 """Tolerances allocated for a yield target: the largest common scale s of the tolerances to
-allocate (each t_q = s * w_min / w_q, SI: tolerances.model.allocation_shares) at which a design's
+allocate (each t_q = s * w_min / w_q, SI: tolerance_model.allocation_shares) at which a design's
 linearised yield still reaches the target: the scene's own (`linearised_yield_function`): the
 manipulators' union bound 1 - sum_i Phi(-beta_i) (formulation/manipulators/statistical.py), the
 stairs' Hunter's bound (formulation/stairs/statistical.py).
@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from ..tolerances.model import Tolerance, Tolerances, allocation_shares
+from ..tolerance_model import Tolerance, Tolerances, allocation_shares
 
 BISECTIONS = 60
 SCALE_RANGE = (1e-9, 1e3)  # s searched within (SI units)
@@ -39,7 +39,7 @@ class Allocation:
 
 def with_scale(tolerances: Tolerances, scale: float) -> Tolerances:
     """The tolerances with every one to allocate given its value at this scale
-    (scale * w_min / w_q: tolerances.model.allocation_shares)."""
+    (scale * w_min / w_q: tolerance_model.allocation_shares)."""
     shares = allocation_shares(tolerances)
     items = tuple(Tolerance(t.quantity, t.applies_to, scale * shares[t.quantity], t.weight,
                             t.distribution) if t.allocate else t for t in tolerances)
@@ -48,12 +48,10 @@ def with_scale(tolerances: Tolerances, scale: float) -> Tolerances:
 
 def linearised_yield_function(scene):
     """The scene's linearised yield of a fixed design, (scene, design, tolerances, stages) ->
-    dict with "yield": the stairs' or the manipulators' statistical.linearised_yield."""
-    if scene.kind == "stairs":
-        from ..scenes.stairs.formulation.statistical import linearised_yield
-    else:
-        from ..scenes.manipulators.formulation.statistical import linearised_yield
-    return linearised_yield
+    dict with "yield" (Scene.linearised_yield)."""
+    from ..plugin import of
+
+    return of(scene).linearised_yield
 
 
 def allocate_for_yield(scene, design, tolerances: Tolerances, *, stages: int,
@@ -121,26 +119,12 @@ def dominant_rows(scene, design, tolerances: Tolerances, stages: int, *,
 
 def _rows_placed(scene, design, tolerances, stages):
     """(g, sd, names, the union bound's weight of each row, its place, word(place)) of the
-    scene's linearised rows: on a row of manipulators place 0 is the first landing, k palm k
-    (the carry on palm k, the handover to and the landing on k + 1), slips not counted; on a
-    staircase place k is bounce k (the flight to step k and the landing there)."""
-    import numpy as np
+    scene's linearised rows (Scene.linearised_rows: on a row of manipulators place 0 is the
+    first landing, k palm k; on a staircase place k is bounce k)."""
+    from ..plugin import of
 
-    if scene.kind == "stairs":
-        from ..scenes.stairs.formulation import statistical as st
-
-        g, sd, names = st.row_reliability(scene, design, tolerances, stages)
-        chain = st.StairsChain(scene)
-        sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1)
-        return (g, sd, names, np.ones(len(names)), np.repeat(np.arange(1, stages + 1), sizes),
-                ("bounce", "bounces", None))
-    from ..scenes.manipulators.formulation.statistical import Chain, counted, row_reliability
-
-    g, sd, names = row_reliability(scene, design, tolerances, stages)
-    chain = Chain(scene)
-    sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1) + [len(chain.last[1])]
-    return (g, sd, names, np.asarray(counted(names)).ravel(),
-            np.repeat(np.arange(len(sizes)), sizes), ("palm", "palms", "the first landing"))
+    rows = of(scene).linearised_rows(scene, design, tolerances, stages)
+    return rows.g, rows.sd, rows.names, rows.weight, rows.place, rows.word
 
 
 def _places(places, tails, total, word) -> str:

@@ -335,7 +335,7 @@ def _tolerances(table: dict, scene: plugin.Scene):
     """[tolerances]: settings (distribution, builds, seed, confirm) and one table per quantity
     of the scene (Scene.quantities) with value = +-t (SI) or allocate = true (and a weight),
     applies_to ("each" or "lot") and distribution ("normal" or "uniform")."""
-    from ..tolerances.model import DISTRIBUTIONS, Tolerance, Tolerances
+    from ..tolerance_model import DISTRIBUTIONS, Tolerance, Tolerances
 
     quantities = scene.quantities()
     _check_keys(table, tuple(TOLERANCE_SETTINGS) + tuple(quantities), "tolerances")

@@ -10,7 +10,7 @@ from pydantic.dataclasses import dataclass as checked
 
 from ..accuracy import ACCURACY_PRESETS, Accuracy, accuracy
 from ..scenes.common import CONFIG, LARGEST, Number
-from ..tolerances.model import Tolerances
+from ..tolerance_model import Tolerances
 
 Count = Annotated[int, Strict(), Field(ge=1, le=10_000_000)]
 SampleCount = Annotated[int, Strict(), Field(ge=0, le=1_000_000)]

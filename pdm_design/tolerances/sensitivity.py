@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .model import APPLIES_TO, DISTRIBUTIONS
+from ..tolerance_model import APPLIES_TO, DISTRIBUTIONS
 
 OUTPUTS = ("min_margin", "pass")
 

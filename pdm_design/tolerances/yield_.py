@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .draw import draw
-from .model import Tolerances
+from ..tolerance_model import Tolerances
 from .outcome import BuildOutcome
 
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
@@ -102,15 +102,11 @@ def one_build(tolerances, seed: int, index: int, stages: int) -> dict:
 def simulate_one(scene, design, tolerances, seed, index, stages, *, accuracy="default",
                  record_trajectory=False):
     """The event simulator on build `index` of a yield run with `seed` and `stages`."""
-    deviations = one_build(tolerances, seed, index, stages)
-    if scene.kind == "manipulators":  # takes 1-row arrays
-        from ..scenes.manipulators.tolerances import simulate_build
-    else:  # takes one build's values: a number for a lot, K for each step
-        from ..scenes.stairs.tolerances import simulate_build
+    from ..plugin import of
 
-        deviations = {q: d[0] for q, d in deviations.items()}
-    return simulate_build(scene, design, deviations, stages, accuracy=accuracy,
-                          record_trajectory=record_trajectory)
+    deviations = one_build(tolerances, seed, index, stages)
+    return of(scene).simulate_build(scene, design, deviations, stages, accuracy=accuracy,
+                                    record_trajectory=record_trajectory)
 
 
 def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int) -> BuildOutcome:

@@ -7,11 +7,8 @@ the tolerance the accuracy preset promises.
 
 from __future__ import annotations
 
-import math
-
 from ..accuracy import accuracy as accuracy_preset
 from ..analysis import Analysis
-from ..scenes.manipulators import physics as phys
 from ..sim.core import SimulationRefused
 from ..plugin import of
 from ..spec.model import Spec
@@ -54,17 +51,18 @@ def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> 
         what = f"{where.kind} at stage {where.stage}: {where.detail}" if where else "incomplete"
         failures.append(f"nominal run stopped after {outcome.stages_passed} stages ({what})")
     exact_build = not spec.verification.offsets and not spec.verification.step_errors
-    # after a lift-off the object flies (the run is judged by its outcome); the closed forms,
-    # which keep it on its palm, describe neither that flight nor the stages after it
-    lifted = next((e for e in result.events if e.kind == "lift_off"), None)
-    agreement = _agreement(spec, analysis, result) if exact_build and not lifted else None
+    # a run that left the closed forms' regime (an object that lifted off and flew) is judged
+    # by its outcome: the closed forms describe neither that nor the stages after it
+    left = of(spec).left_closed_forms(result)
+    agreement = (of(spec).closed_form_agreement(spec, analysis, result)
+                 if exact_build and not left else None)
     if agreement is not None and not agreement["relative_error"] <= acc.agreement:
         failures.append(f"simulator and closed form disagree on {agreement['quantity']}: "
-                        f"relative error {agreement['relative_error']:.2e}{_why_apart(spec)}")
+                        f"relative error {agreement['relative_error']:.2e}"
+                        f"{of(spec).disagreement_note(spec)}")
     summary = (f"{outcome.stages_passed} stages simulated from the initial state"
                + (", closed forms confirmed" if agreement and not failures else "")
-               + (f"; the object lifted off palm {lifted.stage} and flew on (closed forms not "
-                  "compared)" if lifted else ""))
+               + left)
     return {
         "passed": not failures,
         "summary": summary if not failures else "; ".join(failures),
@@ -75,57 +73,3 @@ def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> 
         "samples": 1,
         "failures": failures,
     }
-
-
-def _why_apart(spec) -> str:
-    """What the closed forms leave out that the simulator models, where the spec has it."""
-    if spec.kind == "manipulators" and spec.scene.palm.restitution > 0.0:
-        return (f" (the closed forms assume a plastic landing; the palm's restitution "
-                f"{spec.scene.palm.restitution:g} makes the object hop on the palm before it "
-                "rests, and the run drifts from them: simulate more stages to see where it goes)")
-    return ""
-
-
-def _agreement(spec, analysis, result):
-    """Largest relative difference between simulated and closed-form stage quantities."""
-    if spec.kind == "stairs":
-        predicted = _impact_speeds(spec, analysis, len(result.stages))
-        simulated = [s["impact_speed"] for s in result.stages]
-        quantity = "the impact speeds"
-    else:
-        predicted = _handover_speeds(spec, analysis, len(result.stages))
-        simulated = [s["handover_speed"] for s in result.stages if s["handover_speed"] is not None]
-        quantity = "the handover speeds"
-    if not simulated or not predicted:
-        return None
-    errors = [abs(s - p) / p for s, p in zip(simulated, predicted)]
-    return {"quantity": quantity, "relative_error": max(errors), "compared": len(errors)}
-
-
-def _impact_speeds(spec, analysis, stages):
-    """Closed-form speed before each impact, transient included: the first fall is h0 at the
-    launch speed; then v_y'^2 = eps^2 v_y^2 + 2 g rise at the speed after the first impact."""
-    vx_after = analysis.periodic.get("horizontal_speed")
-    rise = analysis.geometry.get("rise")
-    if vx_after is None or rise is None:
-        return []
-    g, eps = spec.scene.gravity, analysis.design["restitution"]
-    vy2 = 2.0 * g * spec.scene.initial.drop_height
-    speeds = [math.sqrt(analysis.design["launch_speed"] ** 2 + vy2)]
-    while len(speeds) < stages:
-        vy2 = eps**2 * vy2 + 2.0 * g * rise
-        speeds.append(math.sqrt(vx_after**2 + vy2))
-    return speeds
-
-
-def _handover_speeds(spec, analysis, stages):
-    """Closed-form handover speeds of the first `stages` stages (extends the analysis' list)."""
-    speeds = list(analysis.approach.get("handover_speeds", []))
-    if not speeds or analysis.periodic.get("handover_speed") is None:
-        return speeds
-    d = analysis.design
-    while len(speeds) < stages:
-        speeds.append(float(phys.next_handover_speed(
-            speeds[-1], d["alpha"], d["beta"], d["mass_ratio"], gravity=spec.scene.gravity,
-            link_length=d["link_length"])))
-    return speeds

@@ -26,11 +26,10 @@ import itertools
 
 import numpy as np
 
-from ..formulation.allocation import AXES
+from ..plugin import of
 from ..progress import progress_bar
 from ..sim.core import SimulationRefused
-from ..spec.model import ManipulatorOffset, Spec, StepError
-from . import simulate_spec
+from ..spec.model import Spec
 
 SIGNS = tuple(itertools.product((1.0, -1.0), repeat=2))
 RANDOM_ROW = 100
@@ -66,19 +65,20 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
     pivot_friction: every manipulator alike; on stairs the lots restitution, friction,
     launch_speed, launch_x) take every sign corner with every pivot or step pattern, and a
     uniform value in each random build (a part's quantity: one per manipulator); link_length
-    (ALTERNATING) also alternately long and short."""
+    (BoxAxes.alternating) also alternately long and short."""
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
-    per_stage = {q for _, q in AXES[spec.kind]}  # the corner patterns' own quantities
+    box = of(spec).box_axes
+    per_stage = set(box.quantities)  # the corner patterns' own quantities
     lot = {e["quantity"]: e["value"] for e in (lots or ()) if e["quantity"] not in per_stage}
     builds = [(name + _lot_name(signs_l), [(sx * half[0], sy * half[1]) for sx, sy in signs],
                {q: _scaled(sl, lot[q]) for q, (_, sl) in zip(lot, signs_l)})
               for name, signs in corner_patterns(stages)
-              for signs_l in itertools.product(*(_lot_signs(q, stages) for q in lot))]
+              for signs_l in itertools.product(*(_lot_signs(q, stages, box) for q in lot))]
     for i in range(random_builds(samples, stages)):
         draws = rng.uniform(-1.0, 1.0, size=(stages, 2)) * np.asarray(half)
-        built = {q: rng.uniform(-t, t, stages).tolist() if q in PER_PART  # palm by palm
+        built = {q: rng.uniform(-t, t, stages).tolist() if q in box.per_part  # part by part
                  else float(rng.uniform(-t, t)) for q, t in lot.items()}
         builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws], built))
 
@@ -105,11 +105,12 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
             "box": dict(zip(_axes(spec), half, strict=True))}
 
 
-def _lot_signs(quantity: str, stages: int) -> list[tuple[str, object]]:
+def _lot_signs(quantity: str, stages: int, box) -> list[tuple[str, object]]:
     """(name, sign) of a quantity's corners: +-1 (a lot, or every part alike), and for an
-    ALTERNATING quantity every other part at the other end (+-(1, -1, 1, ...))."""
+    alternating quantity (BoxAxes.alternating) every other part at the other end
+    (+-(1, -1, 1, ...))."""
     signs = [("+1", 1.0), ("-1", -1.0)]
-    if quantity in ALTERNATING:
+    if quantity in box.alternating:
         alternate = [(-1.0) ** k for k in range(stages)]
         signs += [("alternating +1", alternate), ("alternating -1", [-s for s in alternate])]
     return signs
@@ -125,46 +126,16 @@ def _lot_name(signs) -> str:
 
 def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
     """One build: the spec's own path (offsets or step errors), or, with deviations of other
-    quantities (an allocated box), the yield's per-part build (tolerances.manipulators.
-    simulate_build: a part quantity such as palm_mass at one value on every palm)."""
-    if not deviations:
-        return simulate_spec(spec, design, accuracy=accuracy, **_as_errors(spec, errors))
+    quantities (an allocated box), the yield's per-part build (Scene.simulate_box_build)."""
     from ..accuracy import accuracy as accuracy_preset
 
-    stages = spec.verification.stages
     accuracy = accuracy_preset(accuracy or spec.verification.accuracy)
-    if spec.kind == "stairs":  # one build's values: K per step, a number for a lot
-        from ..scenes.stairs.tolerances import simulate_build as simulate_steps
-
-        built = {"rise": [e[0] for e in errors], "tread": [e[1] for e in errors], **deviations}
-        return simulate_steps(spec.scene, design, built, stages, accuracy=accuracy)
-    from ..scenes.manipulators.tolerances import simulate_build
-
-    built = {"pivot_x": np.array([[e[0] for e in errors]]),
-             "pivot_y": np.array([[e[1] for e in errors]])}
-    for q, dev in deviations.items():  # a list: every part its own value
-        built[q] = (np.broadcast_to(np.asarray(dev, float), (stages,))[None, :].copy()
-                    if q in PER_PART else np.array([dev]))
-    return simulate_build(spec.scene, design, built, stages, accuracy=accuracy)
-
-
-# quantities of every manipulator: a corner takes them all high or all low
-PER_PART = ("palm_mass", "link_length", "back_stop", "link_mass", "pivot_friction")
-ALTERNATING = ("link_length",)  # per-part quantities whose corners also alternate part by part
+    return of(spec).simulate_box_build(spec, design, errors, deviations, accuracy)
 
 
 def _axes(spec: Spec) -> tuple[str, str]:
-    return ("rise", "tread") if spec.kind == "stairs" else ("dx", "dy")
+    return of(spec).box_axes.names
 
 
 def _half_widths(spec: Spec, tolerance: dict) -> tuple[float, float]:
     return tuple(float(tolerance.get(axis, 0.0)) for axis in _axes(spec))
-
-
-def _as_errors(spec: Spec, errors) -> dict:
-    """Per-stage (a, b) pairs as the simulator's offsets or step errors."""
-    if spec.kind == "stairs":
-        return {"step_errors": tuple(StepError(step=k + 1, rise=a, tread=b)
-                                     for k, (a, b) in enumerate(errors))}
-    return {"offsets": tuple(ManipulatorOffset(manipulator=k + 1, dx=a, dy=b)
-                             for k, (a, b) in enumerate(errors))}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ...plugin import Scene, StageErrors
+from ...plugin_tolerances import BoxAxes
 
 # A manipulator run keeps every stage's record and event (about 15 kB a stage).
 MAX_MANIPULATOR_STAGES = 100_000
@@ -94,7 +95,86 @@ class Manipulators(Scene):
         # the stage maps also stream samples through the row: solve/check.py
         return model, bounds, Stages(spec, model, closed_forms, parameters)
 
+    def nlp_key(self, spec):
+        """The accuracy's agreement where the carry's integration steps follow it (damped
+        pivots, or the carry integrated)."""
+        forced = spec.verification.accuracy.carry == "integrated"
+        damped = spec.scene.pivots.damping or forced
+        return (spec.verification.accuracy.agreement if damped else None,)
+
     # ------------------------------------------------------------------ tolerances, yield, verification
+    allocatable = ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
+                   "palm_mass", "object_mass", "back_stop", "link_length", "link_mass",
+                   "pivot_friction")
+    nlp_parameters = ("design.mass_ratio", "design.first_pivot_x", "design.first_pivot_y",
+                      "scene.palm.friction")
+    sizes_for_yield_target = True
+    # the quantities of every manipulator: a corner takes them all high or all low
+    box_axes = BoxAxes((("dx", "pivot_x"), ("dy", "pivot_y")),
+                       per_part=("palm_mass", "link_length", "back_stop", "link_mass",
+                                 "pivot_friction"),
+                       alternating=("link_length",))
+
+    def allocation_refusal(self, spec):
+        from .refusals import allocation_refusal
+
+        return allocation_refusal(spec)
+
+    def length_scale(self, spec, design):
+        """Its link length."""
+        return float(design.get("link_length", 1.0))
+
+    def simulate_build(self, scene, design, deviations, stages, *, accuracy="default",
+                       record_trajectory=False):
+        from .tolerances import simulate_build
+
+        return simulate_build(scene, design, deviations, stages, accuracy=accuracy,
+                              record_trajectory=record_trajectory)
+
+    def left_closed_forms(self, result):
+        from .verification import left_closed_forms
+
+        return left_closed_forms(result)
+
+    def disagreement_note(self, spec):
+        from .verification import disagreement_note
+
+        return disagreement_note(spec)
+
+    def run_builds(self, scene, design, deviations, stages):
+        from .tolerances import run_builds
+
+        return run_builds(scene, design, deviations, stages)
+
+    def linearised_yield(self, scene, design, tolerances, stages):
+        from .formulation.statistical import linearised_yield
+
+        return linearised_yield(scene, design, tolerances, stages)
+
+    def linearised_rows(self, scene, design, tolerances, stages):
+        from .formulation.statistical import placed_rows
+
+        return placed_rows(scene, design, tolerances, stages)
+
+    def simulate_box_build(self, spec, design, errors, deviations, accuracy):
+        from .verification import simulate_box_build
+
+        return simulate_box_build(self, spec, design, errors, deviations, accuracy)
+
+    def closed_form_agreement(self, spec, analysis, result):
+        from .verification import closed_form_agreement
+
+        return closed_form_agreement(spec, analysis, result)
+
+    def condition_words(self):
+        from .words import CONDITIONS
+
+        return {name: (what, advice, ()) for name, (what, advice) in CONDITIONS.items()}
+
+    def tolerance_refusal(self, spec, quantity):
+        from .refusals import tolerance_refusal
+
+        return tolerance_refusal(spec, quantity)
 
     # ------------------------------------------------------------------ sheets, drawings, reports
     tolerance_axes = ("dx", "dy")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ...plugin import Scene, StageErrors
+from ...plugin_tolerances import BoxAxes
 
 # A stairs NLP has rows for every bounce, and IPOPT needs ever more iterations for them (23 at
 # 100 bounces, 327 at 300, one start), so a design with free variables is optimised over at
@@ -77,7 +78,64 @@ class Stairs(Scene):
         # the explicit-offset scenario grows with the row: built when first asked for
         return model, bounds, functools.partial(scenario, spec, model, closed_forms)
 
+    def nlp_key(self, spec):
+        """Whether a nose_clearance requirement adds its rows."""
+        from .formulation import requires_rows
+
+        return (requires_rows(spec),)
+
     # ------------------------------------------------------------------ tolerances, yield, verification
+    allocatable = ("rise", "tread", "launch_x", "restitution", "friction", "launch_speed")
+    sizes_for_yield_target = True
+    box_axes = BoxAxes((("rise", "rise"), ("tread", "tread")))
+
+    def length_scale(self, spec, design):
+        """Its tread (the drop height while the tread is not known)."""
+        return float(design.get("tread") or spec.scene.initial.drop_height)
+
+    def simulate_build(self, scene, design, deviations, stages, *, accuracy="default",
+                       record_trajectory=False):
+        from .tolerances import simulate_build
+
+        # one build's values: K for each step, a number for a lot
+        return simulate_build(scene, design, {q: d[0] for q, d in deviations.items()}, stages,
+                              accuracy=accuracy, record_trajectory=record_trajectory)
+
+    def run_builds(self, scene, design, deviations, stages):
+        from .tolerances import run_builds
+
+        return run_builds(scene, design, deviations, stages)
+
+    def linearised_yield(self, scene, design, tolerances, stages):
+        from .formulation.statistical import linearised_yield
+
+        return linearised_yield(scene, design, tolerances, stages)
+
+    def linearised_rows(self, scene, design, tolerances, stages):
+        from .formulation.statistical import placed_rows
+
+        return placed_rows(scene, design, tolerances, stages)
+
+    def simulate_box_build(self, spec, design, errors, deviations, accuracy):
+        from .verification import simulate_box_build
+
+        return simulate_box_build(self, spec, design, errors, deviations, accuracy)
+
+    def closed_form_agreement(self, spec, analysis, result):
+        from .verification import closed_form_agreement
+
+        return closed_form_agreement(spec, analysis, result)
+
+    def condition_words(self):
+        from .words import CONDITIONS, PHASE_HINTS
+
+        return {name: (what, advice, PHASE_HINTS.get(name, ()))
+                for name, (what, advice) in CONDITIONS.items()}
+
+    def tolerance_refusal(self, spec, quantity):
+        from .refusals import tolerance_refusal
+
+        return tolerance_refusal(spec, quantity)
 
     # ------------------------------------------------------------------ sheets, drawings, reports
     tolerance_axes = ("rise", "tread")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ...tolerances.model import EACH_OR_LOT, LOT, Quantity, quantity
+from ...tolerance_model import EACH_OR_LOT, LOT, Quantity, quantity
 
 QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
     quantity("rise", "m", EACH_OR_LOT, "a step's rise"),

@@ -52,6 +52,13 @@ class Stages:
         """The whole row's scenario (Formulation.scenario builds it on first use)."""
         return self.scenario()
 
+    def reach(self, values: dict) -> int:
+        """The parked palms that can reach the object at a design (values by name:
+        `parked_rows` with the design's values for bounds)."""
+        from . import parked_rows
+
+        return parked_rows(self.spec.scene, values, {}, self.N)
+
     def bind(self, numbers, spec) -> Bound:
         """These maps at one spec's scene numbers (the parameters after x)."""
         return Bound(self, np.asarray(numbers, dtype=float), spec)
@@ -176,7 +183,9 @@ class Stages:
             infos += _infos(rows, K, len(infos))
         d = ca.vertcat(dx, dy)
         function = ca.Function("offsets", [self.x, d], [ca.vertcat(*slacks), ca.vertcat(*scales)])
-        names = tuple(f"dx{K}" for K in range(1, N + 1)) + tuple(f"dy{K}" for K in range(1, N + 2))
+        # dy of pivot N + 1: what receives the object from N
+        names = (tuple(f"dx{K}" for K in range(1, N + 1)) + tuple(f"dy{K}" for K in range(1, N + 1))
+                 + ("dy_receiver",))
         return Scenario(function, names, {"dx": tuple(range(N)), "dy": tuple(range(N, 2 * N + 1))},
                         tuple(infos))
 
@@ -248,6 +257,12 @@ class Bound:
         d = ca.SX.sym("d", sc.function.size1_in(1))
         slack, scale = sc.function(ca.vertcat(x, self.numbers), d)
         return replace(sc, function=ca.Function("offsets", [x, d], [slack, scale]))
+
+    def reach(self, values: dict) -> int:
+        """Stages.reach at this spec's scene."""
+        from . import parked_rows
+
+        return parked_rows(self.spec.scene, values, {}, self.N)
 
     def stream(self, x, *args, **kwargs) -> dict:
         x = np.concatenate([np.asarray(x, dtype=float).ravel(), self.numbers])

@@ -236,3 +236,17 @@ def linearised_yield(scene, design, tolerances, stages: int) -> dict:
     smallest reliability index and the row count, as numbers."""
     g, sd, names = row_reliability(scene, design, tolerances, stages)
     return chain_moments.summary(g, sd, np.asarray(counted(names)).ravel() > 0.0)
+
+
+def placed_rows(scene, design, tolerances, stages: int):
+    """The rows of the linearised yield placed along the row (plugin_tolerances.PlacedRows):
+    place 0 is the first landing, k palm k (the carry on palm k, the handover to and the
+    landing on k + 1); slips not counted in the union bound."""
+    from ....plugin_tolerances import PlacedRows
+
+    g, sd, names = row_reliability(scene, design, tolerances, stages)
+    chain = Chain(scene)
+    sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1) + [len(chain.last[1])]
+    return PlacedRows(g, sd, names, np.asarray(counted(names)).ravel(),
+                      np.repeat(np.arange(len(sizes)), sizes),
+                      ("palm", "palms", "the first landing"))

@@ -64,13 +64,11 @@ from ....formulation import allocation, yield_target
 from ....formulation.common import (
     MARGIN,
     MODEL,
-    ROW_ADDING_REQUIREMENTS,
     VALIDITY,
     Condition,
     SceneModel,
     design_inputs,
     objective_scale,
-    requires_rows,
 )
 
 DEFAULTS = {"rise": None, "tread": None, "landing_offset": None}
@@ -88,8 +86,15 @@ MIN_STEP_FRACTION = 1e-6
 SPEED2_FLOOR = 1e-20
 # The flight's two nose rows, by the phase of the flight each guards (solve/words.py reads it).
 NOSE_ENDS = ("leading edge: takes off behind the nose", "trailing edge: comes down beyond the nose")
+# Requirements that add rows when above 0 (the NLP's shape depends on them: Stairs.nlp_key).
+ROW_ADDING_REQUIREMENTS = ("first_nose_clearance", "nose_clearance")
 # A nose_clearance requirement covers the launch too (its own name, as manipulators' first_ ones).
 LAUNCH_KEYS = ROW_ADDING_REQUIREMENTS
+
+
+def requires_rows(spec) -> bool:
+    return any(float(spec.requirements.get(k, 0.0)) > 0.0 for k in ROW_ADDING_REQUIREMENTS)
+
 # Every reported margin is in the max_min_margin epigraph.
 OUTSIDE_MIN_MARGIN = ()
 # The exact gaps of one flight (physics.stairs.flight_clearances, in its order) and of the launch

@@ -282,3 +282,17 @@ def target_rows(spec, model, symbols: dict, bounds: dict, aux_start: dict):
         return expression
 
     return yield_target.target_rows(spec, symbols, bounds, nines_of, at_start)
+
+
+def placed_rows(scene, design, tolerances, stages: int):
+    """The rows of the linearised yield placed along the staircase (plugin_tolerances.
+    PlacedRows): place k is bounce k (the flight to step k and the landing there), every row
+    counted in the union bound."""
+    from ....plugin_tolerances import PlacedRows
+
+    g, sd, names = row_reliability(scene, design, tolerances, stages)
+    chain = StairsChain(scene)
+    sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1)
+    return PlacedRows(g, sd, names, np.ones(len(names)), np.repeat(np.arange(1, stages + 1),
+                                                                    sizes),
+                      ("bounce", "bounces", None))

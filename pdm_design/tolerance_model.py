@@ -13,15 +13,18 @@ Distributions, for the statistical analysis:
 
 Each scene lists (Scene.quantities) every quantity that may vary, with its SI unit, the unit a
 build sheet shows it in (and the factor from SI to that unit), and how it may apply. A new
-quantity (the link and pivot parameters of the built device, say) is one more entry, added at
-the end of STREAM_ORDER so that earlier quantities keep their random streams.
+quantity is one more entry of its scene's list; its random stream follows from its name
+(tolerances/draw.py), so the other quantities keep theirs.
+
+This is the vocabulary every layer speaks (the spec, the formulation, the yield, the sheets):
+it imports nothing of theirs.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..units import WORKSHOP
+from .units import WORKSHOP
 
 DISTRIBUTIONS = ("normal", "uniform")
 APPLIES_TO = ("each", "lot")
@@ -54,12 +57,6 @@ def quantity(name, unit, applies, what) -> Quantity:
 EACH_OR_LOT, LOT = ("each", "lot"), ("lot",)
 
 
-# One random stream per quantity name, in this fixed order (tolerances.draw): append only.
-STREAM_ORDER = ("pivot_x", "pivot_y", "link_length", "back_stop", "palm_mass", "friction",
-                "object_mass", "object_width", "feed_x", "feed_speed", "rise", "tread",
-                "restitution", "launch_speed", "launch_x", "link_mass", "pivot_friction")
-
-
 @dataclass(frozen=True)
 class Tolerance:
     """One toleranced quantity. value: +- t in SI units, or None when it is to be allocated
@@ -72,7 +69,7 @@ class Tolerance:
     distribution: str = "normal"
 
     def __post_init__(self):
-        if self.quantity not in STREAM_ORDER:
+        if not (isinstance(self.quantity, str) and self.quantity.isidentifier()):
             raise ValueError(f"unknown quantity {self.quantity!r}")
         if self.applies_to not in APPLIES_TO:
             raise ValueError(f"applies_to must be one of {APPLIES_TO}")
@@ -144,8 +141,20 @@ def allocation_shares(tolerances) -> dict[str, float]:
 
 
 
+def zero_nominal(quantity: str, nominal: float, setter: str) -> tuple[str, str, str] | None:
+    """(key, expected, found) refusing a tolerance on a quantity whose nominal is 0 (links of
+    no mass, a frictionless material: every part drawn around it would be at or below 0);
+    setter: what sets the nominal, in words ("a scene.friction"). None when nominal > 0."""
+    if nominal > 0.0:
+        return None
+    name = quantity.replace("_", " ")
+    return (f"tolerances.{quantity}", f"{setter} > 0: the nominal {name} is 0, and a "
+            "tolerance around 0 draws half the parts below it (give the nominal, or drop the "
+            "tolerance)", f"nominal {name} = 0")
+
+
 def quantities_of(kind: str) -> dict[str, Quantity]:
     """The toleranced quantities of the scene `kind` (its Scene.quantities)."""
-    from ..plugin import scene_kind
+    from .plugin import scene_kind
 
     return scene_kind(kind).quantities()

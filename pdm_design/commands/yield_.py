@@ -6,8 +6,8 @@ from __future__ import annotations
 import json
 
 from ..errors import PdmError, SpecError
-from .model import quantities_of
-from .yield_ import YieldResult, yield_of
+from ..tolerance_model import quantities_of
+from ..tolerances.yield_ import YieldResult, yield_of
 
 SHOWN_IN_TEXT = 5  # failing builds whose simulate command the text report prints
 
@@ -24,35 +24,19 @@ def spec_tolerances(spec, source: str):
                             "a yield: allocate = true asks the optimizer for one, or "
                             "tolerances.yield_target",
                             "allocate = true")
-        if spec.kind == "stairs" and tol.quantity == "friction" and spec.scene.ball.radius == 0:
-            raise SpecError(source, "tolerances.friction", "no friction tolerance for a point "
-                            "ball (a ball of radius 0 cannot roll: give scene.ball a radius)",
-                            "scene.ball.radius = 0")
-        _refuse_zero_nominal(spec, source, tol.quantity)
+        _refuse(spec, source, tol.quantity)
     return spec.tolerances
 
 
-# Quantities whose nominal may be 0, where a +- tolerance around it means nothing (half the
-# parts below a physical limit): (scene kind, quantity) -> (the nominal, the key that sets it)
-_ZERO_NOMINALS = {
-    ("manipulators", "link_mass"): (lambda s: s.scene.links.mass, "a [scene.links] mass"),
-    ("manipulators", "pivot_friction"): (lambda s: s.scene.pivots.friction_torque,
-                                         "a [scene.pivots] friction_torque"),
-    ("manipulators", "friction"): (lambda s: s.scene.palm.friction, "a scene.palm.friction"),
-    ("stairs", "friction"): (lambda s: s.scene.friction, "a scene.friction"),
-}
+def _refuse(spec, source, quantity):
+    """A tolerance the scene cannot draw builds of (Scene.tolerance_refusal; exit 2): a point
+    ball's friction, a nominal of 0 that every part drawn around would fall below."""
+    from ..plugin import of
 
-
-def _refuse_zero_nominal(spec, source, quantity):
-    """A tolerance on a quantity whose nominal is 0 (exit 2): links of no mass, pivots with no
-    friction, a frictionless material; every part drawn from it would be below 0 or at 0."""
-    found = _ZERO_NOMINALS.get((spec.kind, quantity))
-    if found is None or found[0](spec) > 0.0:
-        return
-    name = quantity.replace("_", " ")
-    raise SpecError(source, f"tolerances.{quantity}", f"{found[1]} > 0: the nominal {name} is "
-                    "0, and a tolerance around 0 draws half the parts below it (give the "
-                    "nominal, or drop the tolerance)", f"nominal {name} = 0")
+    refusal = of(spec).tolerance_refusal(spec, quantity)
+    if refusal is not None:
+        key, expected, found = refusal
+        raise SpecError(source, key, expected, found)
 
 
 def design_point(spec, source: str):
@@ -125,7 +109,7 @@ def simulate_build_of_spec(spec, source, design, build: str, stages, *, accuracy
                            record_trajectory=False):
     """`simulate --build SEED:INDEX`: build INDEX of a yield run with SEED and `stages`."""
     from ..accuracy import accuracy as resolve
-    from .yield_ import simulate_one
+    from ..tolerances.yield_ import simulate_one
 
     seed, index = parse_build(build)
     accuracy = resolve(accuracy or spec.verification.accuracy)
@@ -237,7 +221,7 @@ def yield_figures(result: YieldResult) -> dict[str, bytes]:
                   else f"{counts[0]} builds a point") + ")")
         out["yield_scale.png"] = render_figure(fig, "png")
     if r.sensitivity:
-        from .sensitivity import sensitivity_figure
+        from ..tolerances.sensitivity import sensitivity_figure
 
         fig = sensitivity_figure(list(r.sensitivity), title="which tolerance matters most "
                                  f"(smallest margin over {r.stages} stages)")
