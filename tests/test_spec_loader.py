@@ -221,7 +221,7 @@ BAD_VALUES = [
     ("manipulators", ("scene", "body"), 3, "scene.body", "a table"),
     ("manipulators", ("name",), 7, "name", "a string"),
     ("manipulators", ("scene", "kind"), "conveyor", "scene.kind",
-     "one of the installed scenes: manipulators, stairs"),
+     "one of the installed scenes: compass_gait, manipulators, rimless_wheel, stairs"),
     ("stairs", ("scene", "friction"), -0.5, "scene.friction", "a number >= 0"),
 ]
 
@@ -323,7 +323,7 @@ def test_key_with_a_dot_is_quoted_in_the_path():
 
 MISSING = [
     ("manipulators", ("scene",), "scene", "a [scene] table"),
-    ("manipulators", ("scene", "kind"), "scene.kind", "one of: stairs, manipulators"),
+    ("manipulators", ("scene", "kind"), "scene.kind", "one of the installed scenes: compass_gait, manipulators, rimless_wheel, stairs"),
     ("manipulators", ("scene", "body"), "scene.body", "a table"),
     ("manipulators", ("scene", "body", "mass"), "scene.body.mass", "a value"),
     ("manipulators", ("initial",), "initial", "an [initial] table"),

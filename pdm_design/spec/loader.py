@@ -204,9 +204,10 @@ def _check_stages(verification: Verification, kind: _Kind, design: dict) -> None
     and offsets or step errors on stages that are run."""
     stages = verification.stages
     free = any(isinstance(v, Bounds) for v in design.values())
-    limit, why = kind.plugin.stage_limit(free)
-    if stages > limit:
-        raise _Invalid("verification.stages", f"an integer <= {limit} {why}", str(stages))
+    for asked in (False, True) if free else (False,):  # what is run, then what is optimised
+        limit, why = kind.plugin.stage_limit(asked)
+        if stages > limit:
+            raise _Invalid("verification.stages", f"an integer <= {limit} {why}", str(stages))
     for key, items, attribute in (("offsets", verification.offsets, "manipulator"),
                                   ("step_errors", verification.step_errors, "step")):
         for i, item in enumerate(items):
