@@ -27,7 +27,7 @@ def draw_walker(ax, labels, sheet, items, detail=True):
     ax.add_patch(Polygon(ground_outline(design, feet[0], adv, left, right, l), closed=True,
                          facecolor="0.85", edgecolor="black", lw=1.1))
     _path(ax, sheet, left, right)
-    for item, (x, y) in zip(items, feet):
+    for x, y in feet:
         ax.plot([x], [y], marker="o", color="black", markersize=3)
     if start:
         _walker(ax, labels, sheet, walker, hip, trailing, detail)
@@ -53,9 +53,8 @@ def _mm(point):
 def ground_outline(design, foot, adv, left, right, l):
     """The ground's outline (mm): a ramp through the feet, or a tread under each foot."""
     if design.slope is not None:
-        s = float(design.slope)
-        y_at = (lambda x: foot[1] - (x - foot[0]) * math.tan(s))
-        top = [(left, y_at(left)), (right, y_at(right))]
+        drop = math.tan(float(design.slope))
+        top = [(x, foot[1] - (x - foot[0]) * drop) for x in (left, right)]
     else:
         rise, tread = float(design.rise) * MM, float(design.tread) * MM
         top, x, y = [(left, foot[1])], foot[0] + 0.5 * tread, foot[1]
@@ -99,6 +98,7 @@ def _walker(ax, labels, sheet, walker, hip, trailing, detail):
     if walker.model != "simplest":
         com = (hip[0] + (foot[0] - hip[0]) * b / l, hip[1] + (foot[1] - hip[1]) * b / l)
         dimension(ax, labels, hip, com, f"c.o.m. {b:.1f} mm", offset=0.1 * l, side=-1.0)
-        behind = (hip[0] + (trailing[0] - hip[0]) * b / l, hip[1] + (trailing[1] - hip[1]) * b / l)
+        behind = (hip[0] + (trailing[0] - hip[0]) * b / l,
+                  hip[1] + (trailing[1] - hip[1]) * b / l)
         labels.add(ax, f"each leg {walker.leg_mass * 1e3:.0f} g", behind, (-40, 0),
                    color="tab:orange")

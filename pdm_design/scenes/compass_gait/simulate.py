@@ -20,6 +20,9 @@ length). Failures:
                    at a heel strike (impulse ratio)
 step_errors: per-step slope errors (rad) added to the design's slope for the ground from each
 stance foot to the next (rough ground).
+Each step's record gives its new stance foot's place (foot_x, foot_y; m, x downhill along the
+horizontal, y up, the first stance foot at the origin); a recorded trajectory gives the state,
+the hip's place (x, y) and the stance foot's (foot_x, foot_y) at every sample.
 """
 
 from __future__ import annotations
@@ -218,7 +221,8 @@ def simulate_compass_gait(scene, design, *, stages: int, accuracy: str | Accurac
         lost = phys.kinetic_energy(*out.end, params) - phys.kinetic_energy(*out.after, params)
         record = {"step": passed, "time": t_sum, "step_period": out.time,
                   "step_length": float(phys.step_length(out.end[0], out.end[1], params)),
-                  "foot_x": foot[0], "foot_y": foot[1], "slope": ground.slope, "energy_lost": float(lost), **out.margins,
+                  "foot_x": foot[0], "foot_y": foot[1], "slope": ground.slope,
+                  "energy_lost": float(lost), **out.margins,
                   **_named(out.after)}
         records.append(record)
         events.append(Event(t_sum, "heel_strike", passed, _named(out.end), _named(out.after),
