@@ -27,11 +27,14 @@ def walker_frames(result, timeline, leg_length: float) -> dict:
              swing_y[at] + share * (swing_y[after] - swing_y[at])]
     feet = [(0.0, 0.0)] + [(r["foot_x"], r["foot_y"]) for r in result.stages]
     return {"leg": leg_length * MM,
-            "foot": [[round(x * MM, 2), round(y * MM, 2)] for x, y in
-                     zip(foot_x[at], foot_y[at])],
-            "swing": [[round(x * MM, 2), round(y * MM, 2)] for x, y in zip(*swing)],
+            "foot": _points(foot_x[at], foot_y[at]), "swing": _points(*swing),
             "ground": _ground(feet, leg_length),
             "window": 4.0 * leg_length * MM, "below": 0.4 * leg_length * MM}
+
+
+def _points(xs, ys) -> list[list[float]]:
+    """[[x, y], ...] in mm, rounded to 0.01 mm."""
+    return [[round(float(x) * MM, 2), round(float(y) * MM, 2)] for x, y in zip(xs, ys)]
 
 
 def _within_step(timeline, foot_x, foot_y):
