@@ -118,7 +118,7 @@ def test_the_sheet_places_each_foot_one_step_down_the_ramp(sheet, expected):
     for k, item in enumerate(sheet.items):
         assert item["foot_x_m"] == pytest.approx(k * length * math.cos(SLOPE), abs=1e-9)
         assert item["foot_y_m"] == pytest.approx(-k * length * math.sin(SLOPE), abs=1e-9)
-        assert item["along_ground_m"] == pytest.approx(k * length, abs=1e-12)
+        assert item["from_foot_1_m"] == pytest.approx(k * length, abs=1e-12)
 
 
 def test_the_leg_inertia_is_listed_in_g_mm2(spec):

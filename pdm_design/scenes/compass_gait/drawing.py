@@ -57,7 +57,9 @@ def ground_outline(design, foot, adv, left, right, l):
         top = [(x, foot[1] - (x - foot[0]) * drop) for x in (left, right)]
     else:
         rise, tread = float(design.rise) * MM, float(design.tread) * MM
-        top, x, y = [(left, foot[1])], foot[0] + 0.5 * tread, foot[1]
+        behind = math.ceil((foot[0] - 0.5 * tread - left) / tread)  # treads left of foot 1's
+        x, y = foot[0] + (0.5 - behind) * tread, foot[1] + behind * rise
+        top = [(left, y)]
         while x < right:
             top += [(x, y), (x, y - rise)]
             x, y = x + tread, y - rise

@@ -73,7 +73,7 @@ def sheet_rows(spec, analysis, tol, count):
                 ("step period (periodic)", periodic["step_period"], "s", None),
                 ("spectral radius", periodic["spectral_radius"], "", None)]
     items = [{"step": k, "foot_x_m": (k - 1) * advance[0], "foot_y_m": (k - 1) * advance[1],
-              "along_ground_m": (k - 1) * periodic["step_length"]}
+              "from_foot_1_m": (k - 1) * periodic["step_length"]}
              for k in range(1, count + 1)]
     return summary, items
 
@@ -97,8 +97,11 @@ def parts(sheet) -> list[Part]:
                       f"{step} mm along it, {sheet.count} steps "
                       f"{mm(sheet.count * sheet.periodic['step_length'])} mm long")
     else:
+        advance = pose(sheet.periodic["fixed_point"], walker.leg_length).advance
         ground = Part("stairs", sheet.count, f"rise {mm(float(design.rise))} mm, tread "
-                      f"{mm(float(design.tread))} mm; the periodic step {step} mm foot to foot")
+                      f"{mm(float(design.tread))} mm; the periodic step {step} mm foot to "
+                      f"foot, {mm(advance[0])} mm along the stairs (each foot's place: the "
+                      "CSV)")
     return [Part("hip", 1, hip), Part("leg", 2, leg), ground]
 
 
@@ -112,8 +115,8 @@ def box_tolerances(scene, sheet, why: str) -> tuple:
 
 def table_rows(sheet) -> list[str]:
     """Fixed-width rows of the stance feet, mm."""
-    rows = [f"{'step':>4} {'foot x':>12} {'foot y':>12} {'along ground':>13}"]
+    rows = [f"{'step':>4} {'foot x':>12} {'foot y':>12} {'from foot 1':>13}"]
     for item in sheet.items:
         rows.append(f"{item['step']:>4} {item['foot_x_m'] * MM:>12.3f} "
-                    f"{item['foot_y_m'] * MM:>12.3f} {item['along_ground_m'] * MM:>13.3f}")
+                    f"{item['foot_y_m'] * MM:>12.3f} {item['from_foot_1_m'] * MM:>13.3f}")
     return rows
