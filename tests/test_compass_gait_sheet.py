@@ -200,3 +200,23 @@ def test_the_animated_feet_advance_one_step_length_a_step(spec, expected):
     assert data["window"] > 0 and data["below"] > 0
     page = animation_html(shown)
     assert "D.foot[i]" in page and "D.swing[i]" in page
+
+
+def test_simulate_writes_its_plot_and_each_foot_lands_one_step_on(tmp_path):
+    """`simulate --plot` writes the figure; each record's foot is its step length (2 l sin((q1 -
+    q2) / 2), from the angles) from the one before, on the ramp (the y drop over the x advance
+    is tan(slope))."""
+    from click.testing import CliRunner
+
+    from pdm_design.cli import main
+
+    target = tmp_path / "run.png"
+    result = CliRunner().invoke(main, ["simulate", str(RAMP), "--stages", "4", "--format",
+                                       "json", "--plot", str(target)])
+    assert result.exit_code == 0, result.output
+    assert target.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    records = json.loads(result.stdout)["stages"]
+    feet = [(0.0, 0.0)] + [(r["foot_x"], r["foot_y"]) for r in records]
+    for (x0, y0), (x1, y1), record in zip(feet, feet[1:], records):
+        assert math.hypot(x1 - x0, y1 - y0) == pytest.approx(record["step_length"], abs=1e-12)
+        assert (y0 - y1) / (x1 - x0) == pytest.approx(math.tan(SLOPE), abs=1e-9)
