@@ -63,9 +63,28 @@ def analyse_compass_gait(scene, design, stages: int | None = None,
         periodic=periodic_of(gait), margins=margins, problems=tuple(problems))
 
 
+class FixedPoint(dict):
+    """The post-strike state {stance, swing, stance_rate, swing_rate} (rad, rad/s): a dict (the
+    JSON's object) that the text report shows in words."""
+
+    def __str__(self) -> str:
+        return ", ".join(f"{name} {value:.6g} {'rad/s' if name.endswith('_rate') else 'rad'}"
+                         for name, value in self.items())
+
+
+class Multipliers(list):
+    """The multipliers as [re, im] pairs: a list (the JSON's) shown as complex numbers."""
+
+    def __str__(self) -> str:
+        return ", ".join(f"{re:.6g}{im:+.6g}i" for re, im in self)
+
+
 def periodic_of(gait: stepmap.Gait) -> dict:
     """The optimize JSON's `periodic` (PERIODIC_KEYS): the post-strike fixed point {stance,
     swing, stance_rate, swing_rate} (rad, rad/s), step_length (m, along the ground),
     step_period (s), multipliers [[re, im], ...] (largest modulus first), spectral_radius."""
     json = gait.to_json()
-    return {key: json[key] for key in PERIODIC_KEYS}
+    periodic = {key: json[key] for key in PERIODIC_KEYS}
+    periodic["fixed_point"] = FixedPoint(periodic["fixed_point"])
+    periodic["multipliers"] = Multipliers(periodic["multipliers"])
+    return periodic
