@@ -220,3 +220,21 @@ def test_simulate_writes_its_plot_and_each_foot_lands_one_step_on(tmp_path):
     for (x0, y0), (x1, y1), record in zip(feet, feet[1:], records):
         assert math.hypot(x1 - x0, y1 - y0) == pytest.approx(record["step_length"], abs=1e-12)
         assert (y0 - y1) / (x1 - x0) == pytest.approx(math.tan(SLOPE), abs=1e-9)
+
+
+def test_the_slope_box_goes_on_the_ramp_in_degrees(spec):
+    boxed = make_sheet(spec, "optimal", {"slope": 0.002}, "given for this test", 5)
+    assert ("ramp slope", SLOPE, "rad", 0.002) in boxed.summary
+    parts, other = parts_list(boxed)
+    ramp = {p.name: p for p in parts}["ramp"]
+    assert other == () and [t.quantity for t in ramp.tolerances] == ["slope (box)"]
+    assert ramp.tolerances[0].shown() == "+-0.1146 deg"  # 0.002 rad = 0.114592 deg
+
+
+def test_the_simplest_walkers_sheet_lists_no_masses():
+    simplest = load_spec(RAMP.parent / "simplest_walker.toml")
+    sheet = make_sheet(simplest, "evaluated", None, "given for this test", 3)
+    names = [row[0] for row in sheet.summary]
+    assert "hip mass" not in names and "leg mass (each leg)" not in names
+    texts = [note.get_text() for note, _ in draw(sheet).sheet_labels.made]
+    assert "hip" in texts and not any(t.startswith("hip ") for t in texts)

@@ -90,7 +90,8 @@ def _walker(ax, labels, sheet, walker, hip, trailing, detail):
         com = (hip[0] + (end[0] - hip[0]) * b / l, hip[1] + (end[1] - hip[1]) * b / l)
         ax.plot([com[0]], [com[1]], marker="o", color="tab:orange", markersize=5)
     fixed = sheet.periodic["fixed_point"]
-    labels.add(ax, f"hip {walker.hip_mass * 1e3:.0f} g", hip, (0, 14), color="tab:red")
+    mass = "" if walker.model == "simplest" else f" {walker.hip_mass * 1e3:.0f} g"
+    labels.add(ax, f"hip{mass}", hip, (0, 14), color="tab:red")
     if not detail:
         return
     labels.add(ax, f"stance {math.degrees(fixed['stance']):.2f} deg, swing "

@@ -44,8 +44,10 @@ def draw_dxf(msp, sheet) -> float:
                             dxfattribs=attribs).render()
     ground = (f"ramp slope {deg(float(design.slope))} deg" if design.slope is not None else
               f"stairs rise {mm(float(design.rise))} mm, tread {mm(float(design.tread))} mm")
-    msp.add_text(f"walker: hip {walker.hip_mass * 1e3:.1f} g; legs {mm(walker.leg_length)} mm, "
-                 f"{walker.leg_mass * 1e3:.1f} g, centre of mass {mm(walker.leg_com)} mm from "
-                 f"the hip; {ground}", height=0.7 * size,
+    masses = ("the simplest walker" if walker.model == "simplest" else
+              f"hip {walker.hip_mass * 1e3:.1f} g; legs {walker.leg_mass * 1e3:.1f} g, centre "
+              f"of mass {mm(walker.leg_com)} mm from the hip")
+    msp.add_text(f"walker: legs {mm(walker.leg_length)} mm; {masses}; {ground}",
+                 height=0.7 * size,
                  dxfattribs={"layer": "NOTES"}).set_placement((left, hip[1] + 3 * size))
     return size

@@ -58,11 +58,17 @@ def sheet_rows(spec, analysis, tol, count):
     advance = pose(fixed, walker.leg_length).advance
     box = (tol or {}).get("slope")
     summary = [("steps", count, "", None)]
-    summary += [("hip mass", walker.hip_mass, "kg", None),
-                ("leg length (each leg)", walker.leg_length, "m", None),
-                ("leg mass (each leg)", walker.leg_mass, "kg", None),
-                ("leg centre of mass from the hip", walker.leg_com, "m", None),
-                ("leg inertia about its centre of mass", walker.leg_inertia, "kg m^2", None)]
+    summary.append(("leg length (each leg)", walker.leg_length, "m", None))
+    if walker.model == "simplest":
+        summary.append(("model", "the simplest walker (point masses: hip >> feet)", "", None))
+    else:
+        summary += [("hip mass", walker.hip_mass, "kg", None),
+                    ("leg mass (each leg)", walker.leg_mass, "kg", None),
+                    ("leg centre of mass from the hip", walker.leg_com, "m", None),
+                    ("leg inertia about its centre of mass", walker.leg_inertia, "kg m^2",
+                     None)]
+    if walker.hip_limit is not None:
+        summary.append(("hip limit (the legs' largest angle)", walker.hip_limit, "rad", None))
     if design.slope is not None:
         summary.append(("ramp slope", float(design.slope), "rad", box))
     else:
