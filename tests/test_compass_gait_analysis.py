@@ -29,7 +29,7 @@ def test_simplest_walker_margins_are_the_pendulums():
                              gravity=1.0, friction=0.5)
     design = CompassGaitDesign(slope=SLOPE)
     result = analyse_compass_gait(scene, design)
-    q0, w0 = result.periodic["stance"], result.periodic["stance_rate"]
+    q0, w0 = (result.periodic["fixed_point"][k] for k in ("stance", "stance_rate"))
     q = np.linspace(q0, 2 * SLOPE - q0, 20001)  # the stance leg's sweep over the step
     w2 = w0**2 + 2 * (math.cos(q0) - np.cos(q))
     normal = (np.cos(q) - w2) * np.cos(q - SLOPE)

@@ -12,6 +12,9 @@ from its fixed point (simulate.one_step, "precise"):
                     (only with a hip_limit)
 The swing foot's scuff below the ramp as the legs pass is ignored, as the field does; its depth
 per leg length is reported (geometry "scuff_depth").
+
+The periodic gait (`periodic`, the optimize JSON's): its post-strike fixed point, step length and
+period, multipliers and spectral radius (periodic_of).
 """
 
 from __future__ import annotations
@@ -24,6 +27,8 @@ from . import stepmap
 from .gait import find_gait
 from .ground import ground_of, params_for
 from .simulate import one_step
+
+PERIODIC_KEYS = ("fixed_point", "step_length", "step_period", "multipliers", "spectral_radius")
 
 
 def analyse_compass_gait(scene, design, stages: int | None = None,
@@ -53,12 +58,33 @@ def analyse_compass_gait(scene, design, stages: int | None = None,
     if not gait.stable:
         problems.append(f"the gait is unstable: spectral radius {gait.spectral_radius:.4g} "
                         "(a disturbance grows step by step)")
-    q1, q2, w1, w2 = gait.state
     return Analysis(
-        kind="compass_gait", design=values,
-        geometry={"step_length": gait.step_length, "scuff_depth": stats["scuff_depth"]},
-        periodic={"step_period": gait.step_period, "stance": q1, "swing": q2,
-                  "stance_rate": w1, "swing_rate": w2, "spectral_radius": gait.spectral_radius,
-                  "speed": gait.step_length / gait.step_period},
-        margins=margins, approach={"multipliers": [[m.real, m.imag] for m in gait.multipliers]},
-        problems=tuple(problems))
+        kind="compass_gait", design=values, geometry={"scuff_depth": stats["scuff_depth"]},
+        periodic=periodic_of(gait), margins=margins, problems=tuple(problems))
+
+
+class FixedPoint(dict):
+    """The post-strike state {stance, swing, stance_rate, swing_rate} (rad, rad/s): a dict (the
+    JSON's object) that the text report shows in words."""
+
+    def __str__(self) -> str:
+        return ", ".join(f"{name} {value:.6g} {'rad/s' if name.endswith('_rate') else 'rad'}"
+                         for name, value in self.items())
+
+
+class Multipliers(list):
+    """The multipliers as [re, im] pairs: a list (the JSON's) shown as complex numbers."""
+
+    def __str__(self) -> str:
+        return ", ".join(f"{re:.6g}{im:+.6g}i" for re, im in self)
+
+
+def periodic_of(gait: stepmap.Gait) -> dict:
+    """The optimize JSON's `periodic` (PERIODIC_KEYS): the post-strike fixed point {stance,
+    swing, stance_rate, swing_rate} (rad, rad/s), step_length (m, along the ground),
+    step_period (s), multipliers [[re, im], ...] (largest modulus first), spectral_radius."""
+    json = gait.to_json()
+    periodic = {key: json[key] for key in PERIODIC_KEYS}
+    periodic["fixed_point"] = FixedPoint(periodic["fixed_point"])
+    periodic["multipliers"] = Multipliers(periodic["multipliers"])
+    return periodic

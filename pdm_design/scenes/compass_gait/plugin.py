@@ -66,6 +66,67 @@ class CompassGait(Scene):
     # ------------------------------------------------------------------ tolerances, yield, verification
 
     # ------------------------------------------------------------------ sheets, drawings, reports
+    dxf_layers = {"GROUND": 7, "WALKER": 5}  # scenes/compass_gait/dxf.py
+    stage_columns = ("step", "time", "step_period", "step_length", "foot_x", "foot_y",
+                     "stance", "swing", "stance_rate", "swing_rate")
+
+    @property
+    def part_words(self):
+        from .sheet import PART_WORDS
+
+        return PART_WORDS
+
+    def sheet_rows(self, spec, analysis, tolerance, count):
+        from .sheet import sheet_rows
+
+        return sheet_rows(spec, analysis, tolerance, count)
+
+    def sheet_words(self):
+        from .sheet import WORDS
+
+        return WORDS
+
+    def box_tolerances(self, sheet, why):
+        from .sheet import box_tolerances
+
+        return box_tolerances(self, sheet, why)
+
+    def parts(self, sheet):
+        from .sheet import parts
+
+        return parts(sheet)
+
+    def table_rows(self, sheet):
+        from .sheet import table_rows
+
+        return table_rows(sheet)
+
+    def draw_sheet(self, ax, labels, sheet, items, detail):
+        from .drawing import draw_walker
+
+        draw_walker(ax, labels, sheet, items, detail)
+
+    def draw_dxf(self, msp, sheet):
+        from .dxf import draw_dxf
+
+        return draw_dxf(msp, sheet)
+
+    def document_keys(self):
+        from .analysis import PERIODIC_KEYS
+        from .scene import CompassGaitDesign
+
+        return {"design": CompassGaitDesign.VARIABLES, "geometry": ("scuff_depth",),
+                "periodic": PERIODIC_KEYS, "approach": ()}
+
+    def plot_run(self, spec, design, result, path, *, offsets=(), stages=None, title=""):
+        from .plot import plot_compass_gait_run
+
+        plot_compass_gait_run(result, path, title=title)
+
+    def animation(self, spec, result, timeline):
+        from .animation import animation
+
+        return animation(spec, result, timeline)
 
     # ------------------------------------------------------------------ command line, tables, API
     tolerance_axes = ("slope",)

@@ -20,6 +20,9 @@ length). Failures:
                    at a heel strike (impulse ratio)
 step_errors: per-step slope errors (rad) added to the design's slope for the ground from each
 stance foot to the next (rough ground).
+Each step's record gives its new stance foot's place (foot_x, foot_y; m, x downhill along the
+horizontal, y up, the first stance foot at the origin); a recorded trajectory gives the state,
+the hip's place (x, y) and the stance foot's (foot_x, foot_y) at every sample.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from .ground import ground_of, params_for
 
 FAILURE_KINDS = ("fell_forward", "fell_backward", "scuffed", "slip", "flight")
 STATE_NAMES = ("stance", "swing", "stance_rate", "swing_rate")
+PLACE_NAMES = ("x", "y", "foot_x", "foot_y")  # trajectory: the hip's place, the stance foot's (m)
 MAX_STEP_TIME = 20.0  # x sqrt(l / g): a step that long is a fall
 SAMPLES = 64  # dense-output samples per step for the margins
 
@@ -198,24 +202,27 @@ def simulate_compass_gait(scene, design, *, stages: int, accuracy: str | Accurac
     errors = list(step_errors)
     records, events, traj = [], [], {}
     if record_trajectory:
-        traj = {n: [] for n in ("time", *STATE_NAMES)}
+        traj = {n: [] for n in ("time", *STATE_NAMES, *PLACE_NAMES)}
+    foot = (0.0, 0.0)  # the stance foot's place (m): x downhill, y up, the first at the origin
     t_sum, failure, passed = 0.0, None, 0
     while passed < stages:
         error = float(errors[passed]) if passed < len(errors) else 0.0
         ground = ground_of(design, params, error)
         out = one_step(params, ground, x, scene.friction, acc)
         if record_trajectory:
-            _append(traj, out.trajectory, t_sum)
+            _append(traj, out.trajectory, t_sum, foot, params.l)
         t_sum += out.time
         if out.kind != "step":
             failure = Event(t_sum, out.kind, passed + 1, _named(out.end), _named(out.after),
                             out.detail, failure=True)
             break
         passed += 1
+        foot = next_foot(foot, out.end, params.l)
         lost = phys.kinetic_energy(*out.end, params) - phys.kinetic_energy(*out.after, params)
         record = {"step": passed, "time": t_sum, "step_period": out.time,
                   "step_length": float(phys.step_length(out.end[0], out.end[1], params)),
-                  "slope": ground.slope, "energy_lost": float(lost), **out.margins,
+                  "foot_x": foot[0], "foot_y": foot[1], "slope": ground.slope,
+                  "energy_lost": float(lost), **out.margins,
                   **_named(out.after)}
         records.append(record)
         events.append(Event(t_sum, "heel_strike", passed, _named(out.end), _named(out.after),
@@ -228,8 +235,21 @@ def simulate_compass_gait(scene, design, *, stages: int, accuracy: str | Accurac
                             events=events, accuracy=acc, trajectory=traj)
 
 
-def _append(traj, pieces, t0):
+def next_foot(foot, end, leg_length):
+    """The new stance foot's place (m) after a heel strike from the pre-strike state `end`: the
+    swing foot's, foot + l (sin q1 - sin q2, cos q1 - cos q2)."""
+    q1, q2 = float(end[0]), float(end[1])
+    return (foot[0] + leg_length * (math.sin(q1) - math.sin(q2)),
+            foot[1] + leg_length * (math.cos(q1) - math.cos(q2)))
+
+
+def _append(traj, pieces, t0, foot, leg_length):
+    """The step's samples: time, state, the hip's place (x, y) and the stance foot's (m)."""
     for t, x in pieces or ():
         traj["time"].extend((t + t0).tolist())
         for name, row in zip(STATE_NAMES, x):
             traj[name].extend(row.tolist())
+        traj["x"].extend((foot[0] + leg_length * np.sin(x[0])).tolist())
+        traj["y"].extend((foot[1] + leg_length * np.cos(x[0])).tolist())
+        traj["foot_x"].extend([foot[0]] * len(t))
+        traj["foot_y"].extend([foot[1]] * len(t))
