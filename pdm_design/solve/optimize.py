@@ -275,7 +275,9 @@ def _checks(spec, form, x, p, design, reqs, tolerance, allocated, check_samples,
     closed = check.closed_form_check(spec, design, reqs)
     checks: dict[str, object] = {"closed_form": {"passed": closed["passed"],
                                                  "failures": closed["failures"]}}
-    if form.tolerance_index is not None and tolerance and check_samples > 0:
+    # (a scene without explicit-error scenarios: its simulator checks the box, verify/)
+    if (form.tolerance_index is not None and tolerance and check_samples > 0
+            and form.scenario_source is not None):
         checks["sampled_offsets"] = check.sampled_offsets_check(
             form, x, p, tuple(tolerance.values()) if allocated else
             float(x[form.tolerance_index]), samples=check_samples, seed=seed)

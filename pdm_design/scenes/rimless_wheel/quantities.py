@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ...tolerances.model import EACH_OR_LOT, LOT, Quantity, quantity
+from ...tolerance_model import EACH_OR_LOT, LOT, Quantity, quantity
 
 QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
     quantity("slope", "rad", ("each", "lot"), "every step's own slope (a ramp that is not flat)"),
