@@ -138,7 +138,8 @@ ACCURACY = click.option(
 @main.command()
 @click.argument("kind", type=click.Choice(["manipulators", "stairs"]))
 @click.option("--out", default=None, metavar="FILE",
-              help="Write the spec to FILE (not over an existing file) instead of stdout.")
+              help="Write the spec to FILE (not over an existing file; in an existing folder) instead "
+              "of stdout.")
 @_guarded
 def init(kind, out):
     """A commented spec to start from: KIND manipulators (the object's start lands on palm 1's
@@ -152,11 +153,12 @@ def init(kind, out):
     from pathlib import Path
 
     from .errors import SpecError
-    from .io import write_atomic
+    from .io import check_output, write_atomic
 
     if Path(out).exists() or not out:
         raise SpecError("command line", "--out", "the name of a file that does not exist yet "
                         "(init does not overwrite)", repr(out))
+    check_output(out, "--out", new_folders=False)
     write_atomic(out, text)
     click.echo(f"wrote {out}: a {kind} spec; next: pdm-design optimize {out}")
     return EXIT_OK
