@@ -138,8 +138,8 @@ ACCURACY = click.option(
 @main.command()
 @click.argument("kind", type=click.Choice(["manipulators", "stairs"]))
 @click.option("--out", default=None, metavar="FILE",
-              help="Write the spec to FILE (not over an existing file; in an existing folder) instead "
-              "of stdout.")
+              help="Write the spec to FILE (not over an existing file; in an existing "
+              "folder) instead of stdout.")
 @_guarded
 def init(kind, out):
     """A commented spec to start from: KIND manipulators (the object's start lands on palm 1's
@@ -253,6 +253,31 @@ def _check_plot_path(plot: str) -> None:
                         repr(plot))
     if Path(plot).is_dir():
         raise SpecError("command line", "--plot", "a file name", f"{plot!r}, a directory")
+    from .io import check_output
+
+    check_output(plot, "--plot")
+
+
+# The files each command writes into its output folder (checked before any work: io.check_output)
+OUTPUT_FILES = {
+    "table": ("table.csv", "table.md", "sweep.json"),
+    "sheet": ("sheet.md", "sheet.csv", "sheet.png", "sheet.svg", "sheet.pdf", "sheet.dxf",
+              "sheet_dxf.png"),
+    "report": ("report.html",),
+    "yield": ("yield.json", "survival.png", "yield_scale.png", "sensitivity.png"),
+}
+
+
+def _out_folder(out: str | None, source: str, command: str) -> str:
+    """The output folder of `command` (--out, else the default named after the source),
+    refused before any work when it cannot be written (exit 2)."""
+    from pathlib import Path
+
+    from .io import check_output
+
+    folder = out if out is not None else f"{Path(source).stem}-{command}"
+    check_output(folder, "--out", folder=True, names=OUTPUT_FILES[command])
+    return folder
 
 
 @main.command()
@@ -383,7 +408,7 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
 
     from .sweep.run import run_sweep
 
-    folder = out or f"{Path(spec).stem}-table"
+    folder = _out_folder(out, spec, "table")
     try:
         result = run_sweep(spec, sweeps, folder, workers=workers, scheduler=scheduler,
                            resume=resume, chain=chain, plots=not no_plots)
@@ -429,11 +454,9 @@ def sheet(source, out, count, no_tolerance, no_drawing):
     document. Pivot coordinates, stop angles, link length and palm mass of every manipulator,
     or every step's rise and tread, each with its tolerance; Markdown, CSV and a dimensioned
     drawing. Exit 1 (sheet still written) when the design does not work."""
-    from pathlib import Path
-
     from .sheet import sheet_for, write_sheet
 
-    folder = out or f"{Path(source).stem}-sheet"
+    folder = _out_folder(out, source, "sheet")
     built = sheet_for(source, count=count, tolerance=not no_tolerance)
     files = write_sheet(built, folder, drawing=not no_drawing)
     what = "manipulators" if built.kind == "manipulators" else "steps"
@@ -475,6 +498,8 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
     from .spec import load_spec
     from .tolerances.command import run_yield, write_outputs, yield_json, yield_text
 
+    if out is not None:
+        out = _out_folder(out, spec, "yield")
     loaded = load_spec(spec)
     result = run_yield(loaded, spec, builds=builds, stages=stages, seed=seed, accuracy=accuracy)
     files = write_outputs(result, out) if out else []
@@ -502,6 +527,7 @@ def report(source, out, count, no_tolerance, yield_path, no_yield):
     design does not work."""
     from .report.page import report_command
 
+    out = _out_folder(out, source, "report")
     works = report_command(source, out, count, no_tolerance, click.echo, yield_path,
                            no_yield)
     return EXIT_OK if works else EXIT_FAILED
@@ -524,6 +550,10 @@ def check(targets, junit):
 
     if junit is not None and not junit:  # else the report the user asked for is silently lost
         raise SpecError("command line", "--junit", "a file name", "''")
+    if junit is not None:
+        from .io import check_output
+
+        check_output(junit, "--junit")
     paths = spec_paths(list(targets))
     if junit and Path(junit).resolve() in {p.resolve() for p in paths}:
         raise SpecError("command line", "--junit", "a file that is not one of the specs checked",

@@ -37,3 +37,51 @@ def test_init_into_an_existing_folder_writes_only_the_file(tmp_path):
     assert code == 0 and err == ""
     assert [p.name for p in tmp_path.iterdir()] == ["x.toml"]
     assert "[scene]" in target.read_text()
+
+
+# ------------------------------------------- an unwritable output is refused before the work
+
+STAIRS = PROBLEMS / "paper_stairs_frictionless.toml"
+WORK = {  # the function each command computes with: refusing the output must come first
+    "yield": "pdm_design.tolerances.command.run_yield",
+    "sheet": "pdm_design.sheet.sheet_for",
+    "report": "pdm_design.report.page.report_command",
+    "table": "pdm_design.sweep.run.run_sweep",
+    "simulate": "pdm_design.verify.simulate_spec",
+    "check": "pdm_design.check.check_spec",
+}
+
+
+def _args(command, target):
+    spec = PROBLEMS / "stairs_yield.toml" if command == "yield" else STAIRS
+    return {"yield": ["--out", target], "sheet": ["--out", target], "report": ["--out", target],
+            "table": ["--sweep", "restitution=0.7:0.8:2", "--out", target],
+            "simulate": ["--plot", f"{target}.png"],
+            "check": ["--junit", f"{target}.xml"]}[command], spec
+
+
+@pytest.mark.parametrize("command", sorted(WORK))
+def test_an_output_under_a_file_is_refused_before_any_work(tmp_path, monkeypatch, command):
+    def no_work(*args, **kwargs):
+        raise AssertionError("the work started before the output was checked")
+
+    monkeypatch.setattr(WORK[command], no_work)
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("")
+    options, spec = _args(command, blocker / "out")
+    code, out, err = run(command, spec, *options)
+    option = options[-2]
+    assert code == 2, err
+    assert err.startswith(f"error: command line: {option}: expected a ")
+    assert f"that can be written, found {options[-1]}: {blocker} is a file, not a folder" in err
+    assert blocker.read_text() == "" and list(tmp_path.iterdir()) == [blocker]
+
+
+def test_an_output_folder_whose_file_name_is_a_folder_is_refused_before_the_yield(
+        tmp_path, monkeypatch):
+    monkeypatch.setattr(WORK["yield"], lambda *a, **k: pytest.fail("the yield ran"))
+    (tmp_path / "yield.json").mkdir()
+    code, out, err = run("yield", PROBLEMS / "stairs_yield.toml", "--out", tmp_path)
+    assert code == 2
+    assert f"--out: expected a folder that can be written, found {tmp_path}, whose " \
+           "yield.json is a folder" in err
