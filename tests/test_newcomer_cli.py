@@ -85,3 +85,61 @@ def test_an_output_folder_whose_file_name_is_a_folder_is_refused_before_the_yiel
     assert code == 2
     assert f"--out: expected a folder that can be written, found {tmp_path}, whose " \
            "yield.json is a folder" in err
+
+
+# --------------------------------------------- report --yield of another spec is refused
+
+STAIRS_YIELD = PROBLEMS / "stairs_yield.toml"
+
+
+def _yield_file(tmp_path, spec, name="y", builds=40):
+    code, out, err = run("yield", spec, "--builds", builds, "--out", tmp_path / name)
+    assert code == 0, err
+    return tmp_path / name / "yield.json"
+
+
+def test_a_yield_names_its_spec_by_schema_digest_and_design(tmp_path):
+    import tomllib
+
+    from pdm_design.spec.loader import content_digest
+
+    doc = json.loads(_yield_file(tmp_path, STAIRS_YIELD).read_text())
+    data = tomllib.loads(STAIRS_YIELD.read_text())
+    assert doc["schema"] == "pdm-design/yield/1" and doc["scene"] == "stairs"
+    assert doc["spec"] == str(STAIRS_YIELD) and doc["name"] == data["name"]
+    assert doc["spec_sha256"] == content_digest(data)
+    assert doc["design"]["restitution"] == data["design"]["restitution"]
+
+
+def test_report_refuses_a_yield_of_a_stairs_spec_for_a_manipulator_row(tmp_path):
+    saved = _yield_file(tmp_path, STAIRS_YIELD)
+    target = PROBLEMS / "paper_manipulators.toml"
+    code, out, err = run("report", target, "--yield", saved, "--out", tmp_path / "r")
+    assert code == 2 and out == ""
+    assert err.startswith(f"error: {saved}: spec_sha256: expected the digest of {target}")
+    assert "a yield of a stairs scene, this report's is manipulators" in err
+    assert f"run on '{STAIRS_YIELD}'" in err
+    assert not (tmp_path / "r").exists()
+
+
+def test_report_refuses_a_yield_of_its_spec_before_the_spec_changed(tmp_path):
+    spec = tmp_path / "stairs.toml"
+    spec.write_text(STAIRS_YIELD.read_text())
+    saved = _yield_file(tmp_path, spec)
+    spec.write_text(STAIRS_YIELD.read_text().replace("restitution = 0.8", "restitution = 0.79"))
+    code, out, err = run("report", spec, "--yield", saved, "--out", tmp_path / "r")
+    assert code == 2
+    assert f"{saved}: spec_sha256: expected the digest of {spec} as it is now" in err
+    assert "scene" not in err.split("found")[1]  # the same kind and the same file: only content
+
+
+def test_report_shows_a_yield_of_its_own_spec_and_refuses_one_without_schema(tmp_path):
+    saved = _yield_file(tmp_path, STAIRS_YIELD)
+    code, out, err = run("report", STAIRS_YIELD, "--yield", saved, "--out", tmp_path / "r")
+    assert code == 0, err
+    doc = json.loads(saved.read_text())
+    assert f"{100 * doc['yield']['estimate']:.2f} %" in (tmp_path / "r" / "report.html").read_text()
+    old = {k: v for k, v in doc.items() if k not in ("schema", "spec_sha256")}
+    saved.write_text(json.dumps(old))
+    code, out, err = run("report", STAIRS_YIELD, "--yield", saved, "--out", tmp_path / "r")
+    assert code == 2 and err.startswith(f"error: {saved}: schema: expected 'pdm-design/yield/1'")

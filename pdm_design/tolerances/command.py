@@ -3,6 +3,7 @@ report (text, JSON, plots). Also the `simulate --build SEED:INDEX` reproduction 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 from ..errors import PdmError, SpecError
@@ -96,8 +97,22 @@ def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accurac
     seed = tolerances.seed if seed is None else seed
     acc = resolve(accuracy or spec.verification.accuracy)
     kwargs = {} if scales is None else {"scales": scales}
-    return yield_of(spec.scene, point, tolerances, builds=builds, stages=stages, seed=seed,
-                    confirm=tolerances.confirm, accuracy=acc, source=source, **kwargs)
+    result = yield_of(spec.scene, point, tolerances, builds=builds, stages=stages, seed=seed,
+                      confirm=tolerances.confirm, accuracy=acc, source=source, **kwargs)
+    return dataclasses.replace(result, identity=yield_identity(spec, source, point))
+
+
+YIELD_SCHEMA = "pdm-design/yield/1"
+
+
+def yield_identity(spec, source: str, point) -> dict:
+    """What a yield run was made from, for its JSON document (docs/json-schema.md): the
+    schema, the spec's path and digest (spec.loader.content_digest), name and scene kind,
+    and the design the builds were drawn around (every variable, SI; null for one the
+    scene derives)."""
+    return {"schema": YIELD_SCHEMA, "spec": source, "spec_sha256": spec.digest or None,
+            "name": spec.name, "scene": spec.kind,
+            "design": {v: getattr(point, v) for v in point.VARIABLES}}  # null: derived
 
 
 def unmet_min_yield(outcome) -> list[str]:
