@@ -297,13 +297,17 @@ def _out_folder(out: str | None, source: str, command: str) -> str:
 @click.option("--build", default=None, metavar="SEED:INDEX",
               help="Run build INDEX of `pdm-design yield --seed SEED` (its parts as drawn from "
               "the spec's [tolerances]; give the same --stages).")
+@click.option("--from", "saved", default=None, metavar="FILE",
+              help="Take the design from FILE instead of solving: a `pdm-design yield` run's "
+              "yield.json or --out folder (with --build: also its tolerances and stages) or a "
+              "saved `optimize --format json`; it must be of SPEC as it is now.")
 @ACCURACY
 @FORMAT
 @_guarded
-def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
-    """Run the event simulator on SPEC's design (optimised first if it has free variables;
-    when no design meets every requirement, its least-violation design is run, with a warning,
-    and the exit code is 1)."""
+def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, saved):
+    """Run the event simulator on SPEC's design (optimised first if it has free variables,
+    unless --from gives it; when no design meets every requirement, its least-violation design
+    is run, with a warning, and the exit code is 1)."""
     from .api import design
     from .errors import PdmError, SpecError
     from .report.simulation import simulation_text
@@ -315,6 +319,12 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
     if plot is not None:
         _check_plot_path(plot)
     loaded = load_spec(spec)
+    if saved is not None:
+        from .saved import read_saved_design
+
+        saved = read_saved_design(saved, loaded, spec)
+        if stages is None and build is not None and saved.stages is not None:
+            stages = saved.stages  # the yield run's: the build as it drew it
     # Each option is refused, not ignored, on the other scene kind: a run without the offsets
     # the user asked for would look like their answer.
     for option, given, kind, other in (("--offset", offsets, "manipulators", "--step-error"),
@@ -337,11 +347,16 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
                  _parse_pairs(step_errors, "--step-error", "K:DRISE,DTREAD", row)}
         kwargs["step_errors"] = _with_spec_items(loaded.verification.step_errors, given, "step",
                                                  "verification.step_errors", row, spec)
-    point, found = loaded.design_at(), None
-    if loaded.free_variables:
+    point, answered = loaded.design_at(), True
+    if saved is not None:
+        point, answered = saved.point, saved.success
+        if not answered:
+            click.echo(f"warning: {saved.source}: its design does not meet every requirement "
+                       f"(status {saved.status}); simulating it", err=True)
+    elif loaded.free_variables:
         found = design(loaded, verify=False)
-        point = loaded.design_at(found.analysis.design)
-        if not found.status.is_success:  # the run below is of no answer: say so, and exit 1
+        point, answered = loaded.design_at(found.analysis.design), found.status.is_success
+        if not answered:  # the run below is of no answer: say so, and exit 1
             click.echo(f"warning: {spec}: the optimizer found no design that meets every "
                        f"requirement (status {found.status.value}); simulating its "
                        "least-violation design", err=True)
@@ -352,8 +367,10 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
         if build is not None:
             from .tolerances.command import simulate_build_of_spec
 
-            result = simulate_build_of_spec(loaded, spec, point, build, row, accuracy=accuracy,
-                                            record_trajectory=plot is not None)
+            result = simulate_build_of_spec(
+                loaded, spec, point, build, row, accuracy=accuracy,
+                record_trajectory=plot is not None,
+                tolerances=saved.tolerances if saved is not None else None)
             if plot is not None and result.events and result.events[0].kind == "invalid_part":
                 click.echo("no figures: the build has a part that cannot be made", err=True)
                 plot = None
@@ -375,7 +392,6 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
         click.echo(simulation_text(loaded, result), nl=False)
     if plot is not None:  # stdout stays one JSON document with --format json
         click.echo(f"figures written to {plot}", err=fmt == "json")
-    answered = found is None or found.status.is_success
     return EXIT_OK if result.outcome.completed and answered else EXIT_FAILED
 
 
@@ -496,12 +512,14 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
     Sobol' indices, each failing build as one `simulate --build` command; the event simulator
     confirms a sample."""
     from .spec import load_spec
-    from .tolerances.command import run_yield, write_outputs, yield_json, yield_text
+    from .tolerances.command import commands_from, run_yield, write_outputs, yield_json, yield_text
 
     if out is not None:
         out = _out_folder(out, spec, "yield")
     loaded = load_spec(spec)
     result = run_yield(loaded, spec, builds=builds, stages=stages, seed=seed, accuracy=accuracy)
+    if out:  # its failing builds rerun with the design saved there (simulate --from)
+        result = commands_from(result, out)
     files = write_outputs(result, out) if out else []
     click.echo(yield_json(result) if fmt == "json" else
                yield_text(result, loaded.name or spec) + "".join(f"  {f}\n" for f in files),

@@ -143,3 +143,105 @@ def test_report_shows_a_yield_of_its_own_spec_and_refuses_one_without_schema(tmp
     saved.write_text(json.dumps(old))
     code, out, err = run("report", STAIRS_YIELD, "--yield", saved, "--out", tmp_path / "r")
     assert code == 2 and err.startswith(f"error: {saved}: schema: expected 'pdm-design/yield/1'")
+
+
+# ------------------------------------- simulate --build --from: the yield's design, no solve
+
+TOLERANCES = """
+[tolerances]
+builds = 400
+seed = 3
+confirm = 5
+pivot_x = { value = 0.2, applies_to = "each" }
+pivot_y = { value = 0.2, applies_to = "each" }
+friction = { value = 0.1, applies_to = "lot" }
+"""
+
+
+def _no_solve(monkeypatch):
+    def solve(*args, **kwargs):
+        raise AssertionError("solved again")
+
+    import importlib
+
+    import pdm_design.solve
+
+    for target in ("pdm_design.api.design", "pdm_design.tolerances.command.sized_tolerances"):
+        monkeypatch.setattr(target, solve)
+    monkeypatch.setattr(pdm_design.solve, "optimize", solve)  # the IPOPT solve itself
+    monkeypatch.setattr(importlib.import_module("pdm_design.solve.optimize"), "optimize", solve)
+
+
+@pytest.fixture(scope="module")
+def robust_yield(tmp_path_factory):
+    """A spec with free alpha and beta and pivots +-200 mm (builds tip), its yield's folder."""
+    folder = tmp_path_factory.mktemp("robust")
+    spec = folder / "robust.toml"
+    spec.write_text((PROBLEMS / "manipulators_robust.toml").read_text() + TOLERANCES)
+    code, out, err = run("yield", spec, "--out", folder / "y")
+    assert code == 0, err
+    return spec, folder / "y", json.loads((folder / "y" / "yield.json").read_text())
+
+
+def test_simulate_build_from_the_yield_folder_solves_nothing_and_runs_the_drawn_build(
+        robust_yield, monkeypatch):
+    import pdm_design.tolerances.yield_ as yield_module
+
+    spec, folder, doc = robust_yield
+    failing = doc["failing_builds"]
+    assert len(failing) >= 3
+    solved = {}  # the solving path (the spec's design found again): the second method
+    for build in failing[:3]:
+        code, out, _ = run("simulate", spec, "--build", f"3:{build['index']}", "--stages", 6,
+                           "--format", "json")
+        solved[build["index"]] = json.loads(out)["outcome"]
+    _no_solve(monkeypatch)
+    seen = []
+    original = yield_module.simulate_one
+    monkeypatch.setattr(yield_module, "simulate_one",
+                        lambda *a, **k: seen.append(a) or original(*a, **k))
+    for build in failing[:3]:
+        assert build["command"].endswith(f"--build 3:{build['index']} --stages 6 --from {folder}")
+        code, out, err = run("simulate", spec, "--build", f"3:{build['index']}", "--from",
+                             folder, "--format", "json")
+        outcome, again = json.loads(out)["outcome"], solved[build["index"]]
+        assert code == 1 and outcome["stages_passed"] == again["stages_passed"]
+        # a solve again lands within IPOPT's tolerance of the yield's design, not on it
+        assert outcome["failure"]["time"] == pytest.approx(again["failure"]["time"], rel=1e-6)
+        assert outcome["stages_passed"] == build["stages_passed"]
+        assert outcome["failure"]["event"] == build["failure"]
+    scene, design, tolerances, seed, index, stages = seen[-1]
+    assert (seed, index, stages) == (3, failing[2]["index"], 6)
+    assert {v: getattr(design, v) for v in design.VARIABLES} == doc["design"]
+    assert [t.value for t in tolerances] == [t["value"] for t in doc["tolerances"]]
+
+
+def test_simulate_from_a_saved_optimize_document_solves_nothing(robust_yield, tmp_path,
+                                                                 monkeypatch):
+    spec, _, _ = robust_yield
+    code, out, _ = run("optimize", spec, "--format", "json", "--no-verify")
+    saved = tmp_path / "design.json"
+    saved.write_text(out)
+    code, solved, _ = run("simulate", spec, "--build", "3:0", "--stages", 6, "--format", "json")
+    _no_solve(monkeypatch)
+    monkeypatch.setattr("pdm_design.tolerances.command.sized_tolerances",
+                        lambda spec, source, point, stages: spec.tolerances)  # none to size
+    code, out, err = run("simulate", spec, "--build", "3:0", "--stages", 6, "--from", saved,
+                         "--format", "json")
+    assert code == 0, err
+    assert json.loads(out)["outcome"] == json.loads(solved)["outcome"]
+    code, out, err = run("simulate", spec, "--from", saved, "--stages", 6)
+    assert code == 0 and "stage" in out
+
+
+def test_simulate_from_a_yield_of_another_spec_is_bad_input(robust_yield, tmp_path,
+                                                              monkeypatch):
+    _, folder, _ = robust_yield
+    _no_solve(monkeypatch)
+    other = tmp_path / "other.toml"
+    other.write_text((PROBLEMS / "manipulators_robust.toml").read_text().replace(
+        "stages = 6", "stages = 5") + TOLERANCES)
+    code, out, err = run("simulate", other, "--build", "3:0", "--from", folder)
+    assert code == 2 and out == ""
+    assert err.startswith(f"error: {folder / 'yield.json'}: spec_sha256: expected the digest "
+                          f"of {other} as it is now")

@@ -137,14 +137,16 @@ def unmet_min_yield(outcome) -> list[str]:
 
 
 def simulate_build_of_spec(spec, source, design, build: str, stages, *, accuracy,
-                           record_trajectory=False):
-    """`simulate --build SEED:INDEX`: build INDEX of a yield run with SEED and `stages`."""
+                           record_trajectory=False, tolerances=None):
+    """`simulate --build SEED:INDEX`: build INDEX of a yield run with SEED and `stages`;
+    tolerances: those the run drew with (its yield.json's), else the spec's, sized."""
     from ..accuracy import accuracy as resolve
     from .yield_ import simulate_one
 
     seed, index = parse_build(build)
     accuracy = resolve(accuracy or spec.verification.accuracy)
-    tolerances = sized_tolerances(spec, source, design, stages)
+    if tolerances is None:
+        tolerances = sized_tolerances(spec, source, design, stages)
     return simulate_one(spec.scene, design, tolerances, seed, index, stages,
                         accuracy=accuracy, record_trajectory=record_trajectory)
 
@@ -258,6 +260,16 @@ def yield_figures(result: YieldResult) -> dict[str, bytes]:
                                  f"(smallest margin over {r.stages} stages)")
         out["sensitivity.png"] = render_figure(fig, "png")
     return out
+
+
+def commands_from(result: YieldResult, folder: str) -> YieldResult:
+    """The result with each failing build's command taking the design from `folder` (the
+    run's --out: `simulate --from`), so that rerunning a build solves nothing again."""
+    import shlex
+
+    failing = tuple({**f, "command": f"{f['command']} --from {shlex.quote(str(folder))}"}
+                    for f in result.failing)
+    return dataclasses.replace(result, failing=failing)
 
 
 def write_outputs(result: YieldResult, folder: str) -> list[str]:
