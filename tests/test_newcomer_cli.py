@@ -245,3 +245,34 @@ def test_simulate_from_a_yield_of_another_spec_is_bad_input(robust_yield, tmp_pa
     assert code == 2 and out == ""
     assert err.startswith(f"error: {folder / 'yield.json'}: spec_sha256: expected the digest "
                           f"of {other} as it is now")
+
+
+# ------------------------------------- limited_by of a quantity sized by its weight's share
+
+SHARE = """
+[tolerances]
+pivot_x = { allocate = true, weight = 1 }
+pivot_y = { allocate = true, weight = 1 }
+palm_mass = { allocate = true, weight = 10 }
+"""
+
+
+def test_json_says_a_tolerance_is_held_by_its_weights_share_as_the_text_does(tmp_path):
+    spec = tmp_path / "share.toml"
+    spec.write_text((PROBLEMS / "manipulators_robust.toml").read_text().split("[expect]")[0]
+                    + SHARE)
+    code, out, err = run("optimize", spec, "--format", "json", "--no-verify")
+    assert code == 0, err
+    entries = {e["quantity"]: e for e in json.loads(out)["tolerances"]}
+    # t_q = s w_min / w_q (docs/tolerances.md): the palm mass gets a tenth of the pivots' scale
+    assert entries["palm_mass"]["value"] == pytest.approx(entries["pivot_x"]["value"] / 10,
+                                                          rel=1e-12)
+    assert entries["palm_mass"]["limited_by"] == [
+        {"condition": "weight_share", "where": "", "share": None}]
+    assert all(r["condition"] != "weight_share" for q in ("pivot_x", "pivot_y")
+               for r in entries[q]["limited_by"]) and entries["pivot_x"]["limited_by"]
+    code, text, _ = run("optimize", spec, "--no-verify")
+    line = next(li for li in text.splitlines()
+                if li.strip().startswith("palm_mass") and "limited by" in li)
+    assert line.endswith("limited by: its weight's share of the others' (no binding row "
+                         "involves it)")
