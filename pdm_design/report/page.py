@@ -111,17 +111,15 @@ def check_yield_made_for(data: dict, path, source) -> None:
     if wanted is None or data.get("spec_sha256") == wanted[1]:
         return
     spec, digest, kind = wanted
-    differs = [f"{data.get('scene')} scene, this report's is {kind}"
-               if data.get("scene") != kind else "",
-               f"run on {data.get('spec')!r}" + (f", this report's spec is {spec!r}"
-                                                  if data.get("spec") != spec else "")]
+    what = f"a yield of {data.get('spec')!r}"
+    if data.get("scene") != kind:
+        what += f" (a {data.get('scene')} scene; this report's is {kind})"
+    what += " as it was then" if data.get("spec") == spec else \
+        f"; this report's spec is {spec!r}"
     raise SpecError(str(path), "spec_sha256", f"the digest of {spec} as it is now, "
-                    f"{digest[:12]}... "
-                    "(the yield of another spec, or of this one before it changed: run "
-                    f"`pdm-design yield {spec} --out DIR` again)",
-                    f"{str(data.get('spec_sha256'))[:12]}...: a yield of a "
-                    + "; ".join(d for d in differs if d))
-
+                    f"{digest[:12]}... (the yield of another spec, or of this one before it "
+                    f"changed: run `pdm-design yield {spec} --out DIR` again)",
+                    f"{str(data.get('spec_sha256'))[:12]}...: {what}")
 
 def _source_spec(source) -> tuple[str, str, str] | None:
     """(spec path, digest, scene kind) of the report's source: a spec, or the spec a saved
