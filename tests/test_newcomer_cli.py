@@ -275,3 +275,33 @@ def test_json_says_a_tolerance_is_held_by_its_weights_share_as_the_text_does(tmp
                 if li.strip().startswith("palm_mass") and "limited by" in li)
     assert line.endswith("limited by: its weight's share of the others' (no binding row "
                          "involves it)")
+
+
+# ---------------------------------- two tolerances on one bracket: which one to build to
+
+def test_sheet_and_report_say_which_of_two_pivot_tolerances_the_workshop_builds_to(
+        robust_yield, tmp_path):
+    from pdm_design.sheet import sheet_for
+    from pdm_design.sheet.drawing import _notes
+
+    spec, _, _ = robust_yield  # pivots +-200 mm in its [tolerances], alpha and beta free
+    code, out, _ = run("optimize", spec, "--format", "json", "--no-verify")
+    box = json.loads(out)["tolerance"]  # the worst-case box, a second command's answer
+    wanted = (f"Build to the spec's tolerances (spec): pivot x +-200 mm, pivot y +-200 mm; "
+              "the yield (pdm-design yield) is the fraction of such builds that work. The "
+              f"worst-case box (box), pivot x +-{1000 * box['dx']:.4g} mm, pivot y "
+              f"+-{1000 * box['dy']:.4g} mm, is narrower")
+    code, out, err = run("sheet", spec, "--out", tmp_path / "s", "--no-drawing")
+    assert code == 0, err
+    assert wanted in (tmp_path / "s" / "sheet.md").read_text()
+    code, out, err = run("report", spec, "--out", tmp_path / "r", "--no-yield")
+    assert code == 0, err
+    assert wanted in (tmp_path / "r" / "report.html").read_text()
+    assert wanted.split(";")[0] in " ".join(_notes(sheet_for(str(spec))))  # under the drawing
+
+
+def test_no_word_on_building_to_when_the_sheet_has_one_pivot_tolerance(tmp_path):
+    code, out, err = run("sheet", PROBLEMS / "manipulators_robust.toml", "--out", tmp_path,
+                         "--no-drawing")
+    assert code == 0 and "(box)" in (tmp_path / "sheet.md").read_text()
+    assert "Build to" not in (tmp_path / "sheet.md").read_text()
