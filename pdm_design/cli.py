@@ -44,7 +44,8 @@ def _guarded(command):
         except Exception as error:
             if os.environ.get("PDM_DESIGN_DEBUG"):
                 raise
-            click.echo(f"internal error ({type(error).__name__}): {error}. "
+            said = str(error).rstrip().rstrip(".")  # one full stop before the request
+            click.echo(f"internal error ({type(error).__name__}): {said}. "
                        "Please report it with the spec that caused it.", err=True)
             sys.exit(EXIT_FAILED)
         sys.exit(code or EXIT_OK)
@@ -271,13 +272,35 @@ OUTPUT_FILES = {
 def _out_folder(out: str | None, source: str, command: str) -> str:
     """The output folder of `command` (--out, else the default named after the source),
     refused before any work when it cannot be written (exit 2)."""
-    from pathlib import Path
-
     from .io import check_output
 
-    folder = out if out is not None else f"{Path(source).stem}-{command}"
+    folder = out if out is not None else f"{_default_name(source)}-{command}"
     check_output(folder, "--out", folder=True, names=OUTPUT_FILES[command])
     return folder
+
+
+def _default_name(source: str) -> str:
+    """What a default output folder is named after: the spec's `name` when it gives one that
+    is a plain file name (letters, digits, '.', '_', '-'), else the file's name without its
+    extension. A saved optimize JSON gives its spec's name; a source that cannot be read is
+    named by its file (the command then says what is wrong with it)."""
+    import re
+    from pathlib import Path
+
+    from .errors import SpecError
+
+    try:
+        if Path(source).suffix.lower() == ".json":
+            doc = json.loads(Path(source).read_text(encoding="utf-8"))
+            name = doc.get("name") if isinstance(doc, dict) else ""
+        else:
+            from .spec import load_spec
+
+            name = load_spec(source).name
+    except (OSError, ValueError, SpecError):  # the command says what is wrong with it
+        name = ""
+    plain = isinstance(name, str) and re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]*", name)
+    return name if plain else Path(source).stem
 
 
 @main.command()
@@ -291,7 +314,7 @@ def _out_folder(out: str | None, source: str, command: str) -> str:
 @click.option("--step-error", "step_errors", multiple=True, metavar="K:DRISE,DTREAD",
               help="Add DRISE, DTREAD metres to step K's rise and tread, in place of the spec's "
               "error for K; the spec's others stay. Repeatable.")
-@click.option("--plot", type=str, default=None,
+@click.option("--plot", type=str, default=None, metavar="FILE",
               help="Write figures like the paper's to this file; its extension picks the "
               "format (png, svg, pdf, ...).")
 @click.option("--build", default=None, metavar="SEED:INDEX",
@@ -403,8 +426,9 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
               "friction, or dotted path, e.g. scene.body.width) over COUNT evenly spaced values "
               "from START to STOP. Repeat for a grid.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Folder for table.csv, table.md and the plots (default: SPEC's name "
-              "followed by -table).")
+              help="Folder for table.csv, table.md, sweep.json and the plots, PNG and SVG "
+              "(default: the "
+              "spec's name, else its file's, followed by -table).")
 @click.option("--resume", is_flag=True,
               help="Keep the rows an interrupted run left in --out and solve only the rest.")
 @click.option("--workers", type=_Count(1, 4096), default=None,
@@ -454,8 +478,9 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
 @main.command()
 @click.argument("source", metavar="SPEC_OR_JSON", type=str)
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Folder for sheet.md, sheet.csv, the drawing (sheet.png, .svg, .pdf) and "
-              "sheet.dxf (default: the source's name followed by -sheet).")
+              help="Folder for sheet.md, sheet.csv, the drawing (sheet.png, sheet.svg, sheet.pdf), "
+              "sheet.dxf and its rendering sheet_dxf.png (default: the spec's name, else the "
+              "source file's, followed by -sheet).")
 @click.option("--count", type=_Count(1, 10_000_000), default=None,
               help="Manipulators or steps listed (default: the spec's verification.stages; the "
               "tolerance covers only the first verification.stages of them).")
@@ -530,7 +555,8 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
 @main.command()
 @click.argument("source", metavar="SPEC_OR_JSON", type=str)
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Folder for report.html (default: the source's name followed by -report).")
+              help="Folder for report.html (default: the spec's name, else the source file's, "
+              "followed by -report).")
 @click.option("--count", type=_Count(1, 10_000_000), default=None,
               help="Manipulators or steps on the drawing (default: verification.stages).")
 @click.option("--no-tolerance", is_flag=True, help="Do not solve for the tolerance.")
@@ -552,7 +578,8 @@ def report(source, out, count, no_tolerance, yield_path, no_yield):
 
 
 @main.command()
-@click.argument("targets", nargs=-1, required=True, type=click.Path(path_type=str))
+@click.argument("targets", nargs=-1, required=True, type=click.Path(path_type=str),
+                metavar="SPEC_OR_DIR...")
 @click.option("--junit", type=click.Path(dir_okay=False), default=None,
               help="Also write a JUnit XML report to this file (not one of the specs checked).")
 @_guarded

@@ -305,3 +305,110 @@ def test_no_word_on_building_to_when_the_sheet_has_one_pivot_tolerance(tmp_path)
                          "--no-drawing")
     assert code == 0 and "(box)" in (tmp_path / "sheet.md").read_text()
     assert "Build to" not in (tmp_path / "sheet.md").read_text()
+
+
+# ------------------------------------------------------------- the docs against --help
+
+COMMANDS = ("init", "optimize", "simulate", "table", "sheet", "yield", "report", "check")
+
+
+def _readme_rows() -> dict[str, str]:
+    """The README's command table: command -> its first cell (usage), backslashes dropped."""
+    import re
+
+    rows = {}
+    for line in (ROOT / "README.md").read_text().splitlines():
+        found = re.match(r"\| `pdm-design (\w+)(.*?)` \|", line)
+        if found and found.group(1) in COMMANDS:
+            rows[found.group(1)] = found.group(2).replace("\\|", "|")
+    return rows
+
+
+def _help(command) -> tuple[set[str], list[str]]:
+    """(every option of `command --help` but --help, the arguments of its usage line)."""
+    import re
+
+    code, out, _ = run(command, "--help")
+    assert code == 0
+    usage = out.splitlines()[0].split("[OPTIONS]")[1].split()
+    listed = out.split("\nOptions:\n")[1]
+    options = set(re.findall(r"^  (?:-\w, )?(--[a-z][a-z-]*)", listed, flags=re.M)) - {"--help"}
+    return options, usage
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_the_readme_command_table_lists_every_option_and_argument_help_gives(command):
+    import re
+
+    row = _readme_rows()[command]
+    options, arguments = _help(command)
+    assert set(re.findall(r"--[a-z][a-z-]*", row)) == options
+    shown = re.sub(r"\[[^\]]*\]", " ", row).split()
+    assert [a.strip("{}") for a in arguments] == [shown[0]]
+
+
+def test_the_readme_example_is_what_optimize_prints():
+    text = (ROOT / "README.md").read_text()
+    block = text.split("$ pdm-design optimize problems/paper_manipulators.toml\n")[1]
+    shown = block.split("  ...\n")[0].splitlines()
+    assert "  effective_mass  0.1 kg" in shown  # M (1 + 0): massless links, docs/physics.md
+    code, out, _ = run("optimize", PROBLEMS / "paper_manipulators.toml")
+    assert out.splitlines()[: len(shown)] == shown
+
+
+def test_help_names_every_file_sheet_and_table_write(tmp_path):
+    code, _, err = run("sheet", STAIRS, "--out", tmp_path / "s")
+    assert code == 0, err
+    _, sheet_help, _ = run("sheet", "--help")
+    for written in (tmp_path / "s").iterdir():
+        assert written.name in " ".join(sheet_help.split()), written.name
+    code, _, err = run("table", STAIRS, "--sweep", "restitution=0.7:0.8:2", "--workers", 1,
+                       "--out", tmp_path / "t")
+    assert code == 0, err
+    _, table_help, _ = run("table", "--help")
+    for written in (tmp_path / "t").iterdir():
+        named = "plots, PNG and SVG" if written.suffix in (".png", ".svg") else written.name
+        assert named in " ".join(table_help.split()), written.name
+    _, simulate_help, _ = run("simulate", "--help")
+    assert "--plot FILE" in simulate_help and "TEXT" not in simulate_help
+
+
+def test_default_folders_are_named_after_the_specs_name(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    spec = tmp_path / "draft-3.toml"
+    spec.write_text(STAIRS.read_text())  # name = "paper_stairs_frictionless"
+    code, out, err = run("sheet", spec, "--no-drawing")
+    assert code == 0, err
+    assert (tmp_path / "paper_stairs_frictionless-sheet" / "sheet.md").is_file()
+    spec.write_text(STAIRS.read_text().replace('name = "paper_stairs_frictionless"',
+                                               'name = "my stairs / v2"'))
+    code, out, err = run("sheet", spec, "--no-drawing")
+    assert code == 0 and (tmp_path / "draft-3-sheet" / "sheet.md").is_file()  # not a file name
+
+
+def test_one_build_is_one_build_in_words(tmp_path):
+    code, out, err = run("yield", PROBLEMS / "stairs_yield.toml", "--builds", 1)
+    assert code == 0, err
+    assert "stairs_yield (stairs): 1 build of 100 stages, seed 0" in out
+    assert "1 builds" not in out and "of 1 random build agrees" in out
+
+
+def test_an_internal_error_message_ends_in_one_full_stop(monkeypatch):
+    def broken(*args, **kwargs):
+        raise RuntimeError("the design could not be evaluated while sampling.")
+
+    monkeypatch.setattr("pdm_design.api.design", broken)
+    code, out, err = run("optimize", PROBLEMS / "paper_manipulators.toml")
+    assert code == 1
+    assert err == ("internal error (RuntimeError): the design could not be evaluated while "
+                   "sampling. Please report it with the spec that caused it.\n")
+
+
+def test_the_linearised_ellipsoid_is_named_by_its_smallest_semi_axis():
+    code, out, err = run("optimize", PROBLEMS / "manipulators_robust.toml", "--linearised",
+                         "--no-verify", "--format", "json")
+    semi = json.loads(out)["tolerance"]["linearised"]["ellipsoid"]["min_semi_axis"]
+    code, out, err = run("optimize", PROBLEMS / "manipulators_robust.toml", "--linearised",
+                         "--no-verify")
+    assert f"ellipsoid with its smallest semi-axis {semi * 1e3:.2f} mm" in out
+    assert "and up" not in out

@@ -186,7 +186,10 @@ def _index_text(row: dict) -> str:
 
 def yield_text(result: YieldResult, name: str) -> str:
     r = result
-    lines = [f"{name} ({r.kind}): {r.builds} builds of {r.stages} stages, seed {r.seed}",
+    from ..units import counted
+
+    lines = [f"{name} ({r.kind}): {counted(r.builds, 'build')} of {counted(r.stages, 'stage')}, "
+             f"seed {r.seed}",
              f"yield: {_pct(r.estimate)} pass all {r.stages} stages "
              f"(95 % interval {_pct(r.ci_low)} to {_pct(r.ci_high)})",
              f"mean stages before failure: {r.mean_stages_before_failure:.4g} of {r.stages}"]
@@ -203,9 +206,10 @@ def yield_text(result: YieldResult, name: str) -> str:
         lines.append(f"  {t['quantity']:<14} {size:<16} {t['applies_to']:<5} {t['distribution']}")
     c = r.confirmed
     curve = sum(p["simulated"] for p in r.scale_curve if p["scale"] != 1.0)
-    lines.append(f"event simulator: {c['agreed']} of {c['random']} random builds agree with "
-                 f"the closed forms; {c['left_closed_form']} builds outside the closed forms "
-                 f"simulated; {c['simulated'] + curve} builds simulated in all"
+    lines.append(f"event simulator: {c['agreed']} of {counted(c['random'], 'random build')} "
+                 f"agree{'s' if c['agreed'] == 1 else ''} with the closed forms; "
+                 f"{counted(c['left_closed_form'], 'build')} outside the closed forms "
+                 f"simulated; {counted(c['simulated'] + curve, 'build')} simulated in all"
                  + (f" ({curve} of them for the yield against tolerance scale)" if curve else ""))
     if r.sensitivity:
         lines.append("sensitivity (Sobol' total index of the smallest margin): " + ", ".join(

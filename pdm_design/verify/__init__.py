@@ -14,6 +14,7 @@ from ..analysis import Analysis
 from ..physics import manipulators as phys
 from ..sim.core import SimulationRefused
 from ..spec.model import Spec
+from ..units import counted
 
 
 def simulate_spec(spec: Spec, design, *, stages=None, offsets=None, step_errors=None,
@@ -59,7 +60,8 @@ def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> 
     if not outcome.completed:
         where = outcome.failure
         what = f"{where.kind} at stage {where.stage}: {where.detail}" if where else "incomplete"
-        failures.append(f"nominal run stopped after {outcome.stages_passed} stages ({what})")
+        failures.append(f"nominal run stopped after {counted(outcome.stages_passed, 'stage')} "
+                        f"({what})")
     exact_build = not spec.verification.offsets and not spec.verification.step_errors
     # after a lift-off the object flies (the run is judged by its outcome); the closed forms,
     # which keep it on its palm, describe neither that flight nor the stages after it
@@ -68,7 +70,7 @@ def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> 
     if agreement is not None and not agreement["relative_error"] <= acc.agreement:
         failures.append(f"simulator and closed form disagree on {agreement['quantity']}: "
                         f"relative error {agreement['relative_error']:.2e}{_why_apart(spec)}")
-    summary = (f"{outcome.stages_passed} stages simulated from the initial state"
+    summary = (f"{counted(outcome.stages_passed, 'stage')} simulated from the initial state"
                + (", closed forms confirmed" if agreement and not failures else "")
                + (f"; the object lifted off palm {lifted.stage} and flew on (closed forms not "
                   "compared)" if lifted else ""))
