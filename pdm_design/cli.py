@@ -259,23 +259,24 @@ def _check_plot_path(plot: str) -> None:
     check_output(plot, "--plot")
 
 
-# The files each command writes into its output folder (checked before any work: io.check_output)
+# The files each command always writes into its output folder (checked before any work:
+# io.check_output); the sheet's drawing files unless --no-drawing
 OUTPUT_FILES = {
     "table": ("table.csv", "table.md", "sweep.json"),
-    "sheet": ("sheet.md", "sheet.csv", "sheet.png", "sheet.svg", "sheet.pdf", "sheet.dxf",
-              "sheet_dxf.png"),
+    "sheet": ("sheet.md", "sheet.csv"),
     "report": ("report.html",),
-    "yield": ("yield.json", "survival.png", "yield_scale.png", "sensitivity.png"),
+    "yield": ("yield.json", "survival.png"),
 }
+DRAWING_FILES = ("sheet.png", "sheet.svg", "sheet.pdf", "sheet.dxf", "sheet_dxf.png")
 
 
-def _out_folder(out: str | None, source: str, command: str) -> str:
+def _out_folder(out: str | None, source: str, command: str, more: tuple[str, ...] = ()) -> str:
     """The output folder of `command` (--out, else the default named after the source),
     refused before any work when it cannot be written (exit 2)."""
     from .io import check_output
 
     folder = out if out is not None else f"{_default_name(source)}-{command}"
-    check_output(folder, "--out", folder=True, names=OUTPUT_FILES[command])
+    check_output(folder, "--out", folder=True, names=OUTPUT_FILES[command] + more)
     return folder
 
 
@@ -497,7 +498,7 @@ def sheet(source, out, count, no_tolerance, no_drawing):
     drawing. Exit 1 (sheet still written) when the design does not work."""
     from .sheet import sheet_for, write_sheet
 
-    folder = _out_folder(out, source, "sheet")
+    folder = _out_folder(out, source, "sheet", () if no_drawing else DRAWING_FILES)
     built = sheet_for(source, count=count, tolerance=not no_tolerance)
     files = write_sheet(built, folder, drawing=not no_drawing)
     what = "manipulators" if built.kind == "manipulators" else "steps"
