@@ -207,8 +207,11 @@ def _verify_with_box(spec, point, analysis, tolerance, accuracy, samples,
     failures = nominal["failures"] + [
         f"tolerance refuted: {f['build']} fails ({f['failure']})" for f in box["failures"]]
     summary = nominal["summary"] if nominal["passed"] else "; ".join(nominal["failures"])
-    summary += (f"; tolerance box confirmed by {box['samples']} simulated builds"
-                if box["passed"] else f"; {len(box['failures'])} of {box['samples']} builds "
+    from .units import counted
+
+    summary += (f"; tolerance box confirmed by {counted(box['samples'], 'simulated build')}"
+                if box["passed"] else f"; {len(box['failures'])} of "
+                f"{counted(box['samples'], 'build')} "
                 "inside the claimed tolerance box fail")
     return nominal | {"passed": not failures, "summary": summary, "failures": failures,
                       "samples": 1 + box["samples"], "tolerance_failures": box["failures"]}

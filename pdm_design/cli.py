@@ -44,7 +44,8 @@ def _guarded(command):
         except Exception as error:
             if os.environ.get("PDM_DESIGN_DEBUG"):
                 raise
-            click.echo(f"internal error ({type(error).__name__}): {error}. "
+            said = str(error).rstrip().rstrip(".")  # one full stop before the request
+            click.echo(f"internal error ({type(error).__name__}): {said}. "
                        "Please report it with the spec that caused it.", err=True)
             sys.exit(EXIT_FAILED)
         sys.exit(code or EXIT_OK)
@@ -154,7 +155,8 @@ class _KindType(click.ParamType):
 @main.command()
 @click.argument("kind", type=_KindType())
 @click.option("--out", default=None, metavar="FILE",
-              help="Write the spec to FILE (not over an existing file) instead of stdout.")
+              help="Write the spec to FILE (not over an existing file; in an existing "
+              "folder) instead of stdout.")
 @_guarded
 def init(kind, out):
     """A commented spec to start from for the installed scene KIND (manipulators: the object's
@@ -168,11 +170,12 @@ def init(kind, out):
     from pathlib import Path
 
     from .errors import SpecError
-    from .io import write_atomic
+    from .io import check_output, write_atomic
 
     if Path(out).exists() or not out:
         raise SpecError("command line", "--out", "the name of a file that does not exist yet "
                         "(init does not overwrite)", repr(out))
+    check_output(out, "--out", new_folders=False)
     write_atomic(out, text)
     click.echo(f"wrote {out}: a {kind} spec; next: pdm-design optimize {out}")
     return EXIT_OK
@@ -267,6 +270,54 @@ def _check_plot_path(plot: str) -> None:
                         repr(plot))
     if Path(plot).is_dir():
         raise SpecError("command line", "--plot", "a file name", f"{plot!r}, a directory")
+    from .io import check_output
+
+    check_output(plot, "--plot")
+
+
+# The files each command always writes into its output folder (checked before any work:
+# io.check_output); the sheet's drawing files unless --no-drawing
+OUTPUT_FILES = {
+    "table": ("table.csv", "table.md", "sweep.json"),
+    "sheet": ("sheet.md", "sheet.csv"),
+    "report": ("report.html",),
+    "yield": ("yield.json", "survival.png"),
+}
+DRAWING_FILES = ("sheet.png", "sheet.svg", "sheet.pdf", "sheet.dxf", "sheet_dxf.png")
+
+
+def _out_folder(out: str | None, source: str, command: str, more: tuple[str, ...] = ()) -> str:
+    """The output folder of `command` (--out, else the default named after the source),
+    refused before any work when it cannot be written (exit 2)."""
+    from .io import check_output
+
+    folder = out if out is not None else f"{_default_name(source)}-{command}"
+    check_output(folder, "--out", folder=True, names=OUTPUT_FILES[command] + more)
+    return folder
+
+
+def _default_name(source: str) -> str:
+    """What a default output folder is named after: the spec's `name` when it gives one that
+    is a plain file name (letters, digits, '.', '_', '-'), else the file's name without its
+    extension. A saved optimize JSON gives its spec's name; a source that cannot be read is
+    named by its file (the command then says what is wrong with it)."""
+    import re
+    from pathlib import Path
+
+    from .errors import SpecError
+
+    try:
+        if Path(source).suffix.lower() == ".json":
+            doc = json.loads(Path(source).read_text(encoding="utf-8"))
+            name = doc.get("name") if isinstance(doc, dict) else ""
+        else:
+            from .spec import load_spec
+
+            name = load_spec(source).name
+    except (OSError, ValueError, SpecError):  # the command says what is wrong with it
+        name = ""
+    plain = isinstance(name, str) and re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]*", name)
+    return name if plain else Path(source).stem
 
 
 def _refuse_other_stage_errors(scene, given: dict) -> None:
@@ -298,19 +349,23 @@ def _refuse_other_stage_errors(scene, given: dict) -> None:
 @click.option("--step-error", "step_errors", multiple=True, metavar="K:DRISE,DTREAD",
               help="Add DRISE, DTREAD metres to step K's rise and tread, in place of the spec's "
               "error for K; the spec's others stay. Repeatable.")
-@click.option("--plot", type=str, default=None,
+@click.option("--plot", type=str, default=None, metavar="FILE",
               help="Write figures like the paper's to this file; its extension picks the "
               "format (png, svg, pdf, ...).")
 @click.option("--build", default=None, metavar="SEED:INDEX",
               help="Run build INDEX of `pdm-design yield --seed SEED` (its parts as drawn from "
               "the spec's [tolerances]; give the same --stages).")
+@click.option("--from", "saved", default=None, metavar="FILE",
+              help="Take the design from FILE instead of solving: a `pdm-design yield` run's "
+              "yield.json or --out folder (with --build: also its tolerances and stages) or a "
+              "saved `optimize --format json`; it must be of SPEC as it is now.")
 @ACCURACY
 @FORMAT
 @_guarded
-def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
-    """Run the event simulator on SPEC's design (optimised first if it has free variables;
-    when no design meets every requirement, its least-violation design is run, with a warning,
-    and the exit code is 1)."""
+def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, saved):
+    """Run the event simulator on SPEC's design (optimised first if it has free variables,
+    unless --from gives it; when no design meets every requirement, its least-violation design
+    is run, with a warning, and the exit code is 1)."""
     from .api import design
     from .errors import PdmError, SpecError
     from .report.simulation import simulation_text
@@ -322,6 +377,12 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
     if plot is not None:
         _check_plot_path(plot)
     loaded = load_spec(spec)
+    if saved is not None:
+        from .saved import read_saved_design
+
+        saved = read_saved_design(saved, loaded, spec)
+        if stages is None and build is not None and saved.stages is not None:
+            stages = saved.stages  # the yield run's: the build as it drew it
     scene = of(loaded)
     _refuse_other_stage_errors(scene, {"--offset": offsets, "--step-error": step_errors})
     most, why = scene.stage_limit(False)
@@ -338,11 +399,16 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
         kwargs[errors.key] = _with_spec_items(getattr(loaded.verification, errors.key), given,
                                               errors.index, f"verification.{errors.key}", row,
                                               spec)
-    point, found = loaded.design_at(), None
-    if loaded.free_variables:
+    point, answered = loaded.design_at(), True
+    if saved is not None:
+        point, answered = saved.point, saved.success
+        if not answered:
+            click.echo(f"warning: {saved.source}: its design does not meet every requirement "
+                       f"(status {saved.status}); simulating it", err=True)
+    elif loaded.free_variables:
         found = design(loaded, verify=False)
-        point = loaded.design_at(found.analysis.design)
-        if not found.status.is_success:  # the run below is of no answer: say so, and exit 1
+        point, answered = loaded.design_at(found.analysis.design), found.status.is_success
+        if not answered:  # the run below is of no answer: say so, and exit 1
             click.echo(f"warning: {spec}: the optimizer found no design that meets every "
                        f"requirement (status {found.status.value}); simulating its "
                        "least-violation design", err=True)
@@ -353,8 +419,10 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
         if build is not None:
             from .commands.yield_ import simulate_build_of_spec
 
-            result = simulate_build_of_spec(loaded, spec, point, build, row, accuracy=accuracy,
-                                            record_trajectory=plot is not None)
+            result = simulate_build_of_spec(
+                loaded, spec, point, build, row, accuracy=accuracy,
+                record_trajectory=plot is not None,
+                tolerances=saved.tolerances if saved is not None else None)
             if plot is not None and result.events and result.events[0].kind == "invalid_part":
                 click.echo("no figures: the build has a part that cannot be made", err=True)
                 plot = None
@@ -376,7 +444,6 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
         click.echo(simulation_text(loaded, result), nl=False)
     if plot is not None:  # stdout stays one JSON document with --format json
         click.echo(f"figures written to {plot}", err=fmt == "json")
-    answered = found is None or found.status.is_success
     return EXIT_OK if result.outcome.completed and answered else EXIT_FAILED
 
 
@@ -388,8 +455,9 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
               "friction, or dotted path, e.g. scene.body.width) over COUNT evenly spaced values "
               "from START to STOP. Repeat for a grid.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Folder for table.csv, table.md and the plots (default: SPEC's name "
-              "followed by -table).")
+              help="Folder for table.csv, table.md, sweep.json and the plots, PNG and SVG "
+              "(default: the "
+              "spec's name, else its file's, followed by -table).")
 @click.option("--resume", is_flag=True,
               help="Keep the rows an interrupted run left in --out and solve only the rest.")
 @click.option("--workers", type=_Count(1, 4096), default=None,
@@ -409,7 +477,7 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
 
     from .sweep.run import run_sweep
 
-    folder = out or f"{Path(spec).stem}-table"
+    folder = _out_folder(out, spec, "table")
     try:
         result = run_sweep(spec, sweeps, folder, workers=workers, scheduler=scheduler,
                            resume=resume, chain=chain, plots=not no_plots)
@@ -439,8 +507,9 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
 @main.command()
 @click.argument("source", metavar="SPEC_OR_JSON", type=str)
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Folder for sheet.md, sheet.csv, the drawing (sheet.png, .svg, .pdf) and "
-              "sheet.dxf (default: the source's name followed by -sheet).")
+              help="Folder for sheet.md, sheet.csv, the drawing (sheet.png, sheet.svg, sheet.pdf), "
+              "sheet.dxf and its rendering sheet_dxf.png (default: the spec's name, else the "
+              "source file's, followed by -sheet).")
 @click.option("--count", type=_Count(1, 10_000_000), default=None,
               help="Manipulators or steps listed (default: the spec's verification.stages; the "
               "tolerance covers only the first verification.stages of them).")
@@ -460,7 +529,7 @@ def sheet(source, out, count, no_tolerance, no_drawing):
     from .plugin import of
     from .sheet import sheet_for, write_sheet
 
-    folder = out or f"{Path(source).stem}-sheet"
+    folder = _out_folder(out, source, "sheet", () if no_drawing else DRAWING_FILES)
     built = sheet_for(source, count=count, tolerance=not no_tolerance)
     files = write_sheet(built, folder, drawing=not no_drawing)
     what = of(built.spec).stage_noun[1]
@@ -500,10 +569,14 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
     Sobol' indices, each failing build as one `simulate --build` command; the event simulator
     confirms a sample."""
     from .spec import load_spec
-    from .commands.yield_ import run_yield, write_outputs, yield_json, yield_text
+    from .commands.yield_ import commands_from, run_yield, write_outputs, yield_json, yield_text
 
+    if out is not None:
+        out = _out_folder(out, spec, "yield")
     loaded = load_spec(spec)
     result = run_yield(loaded, spec, builds=builds, stages=stages, seed=seed, accuracy=accuracy)
+    if out:  # its failing builds rerun with the design saved there (simulate --from)
+        result = commands_from(result, out)
     files = write_outputs(result, out) if out else []
     click.echo(yield_json(result) if fmt == "json" else
                yield_text(result, loaded.name or spec) + "".join(f"  {f}\n" for f in files),
@@ -514,7 +587,8 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
 @main.command()
 @click.argument("source", metavar="SPEC_OR_JSON", type=str)
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Folder for report.html (default: the source's name followed by -report).")
+              help="Folder for report.html (default: the spec's name, else the source file's, "
+              "followed by -report).")
 @click.option("--count", type=_Count(1, 10_000_000), default=None,
               help="Manipulators or steps on the drawing (default: verification.stages).")
 @click.option("--no-tolerance", is_flag=True, help="Do not solve for the tolerance.")
@@ -529,13 +603,15 @@ def report(source, out, count, no_tolerance, yield_path, no_yield):
     design does not work."""
     from .report.page import report_command
 
+    out = _out_folder(out, source, "report")
     works = report_command(source, out, count, no_tolerance, click.echo, yield_path,
                            no_yield)
     return EXIT_OK if works else EXIT_FAILED
 
 
 @main.command()
-@click.argument("targets", nargs=-1, required=True, type=click.Path(path_type=str))
+@click.argument("targets", nargs=-1, required=True, type=click.Path(path_type=str),
+                metavar="SPEC_OR_DIR...")
 @click.option("--junit", type=click.Path(dir_okay=False), default=None,
               help="Also write a JUnit XML report to this file (not one of the specs checked).")
 @_guarded
@@ -551,6 +627,10 @@ def check(targets, junit):
 
     if junit is not None and not junit:  # else the report the user asked for is silently lost
         raise SpecError("command line", "--junit", "a file name", "''")
+    if junit is not None:
+        from .io import check_output
+
+        check_output(junit, "--junit")
     paths = spec_paths(list(targets))
     if junit and Path(junit).resolve() in {p.resolve() for p in paths}:
         raise SpecError("command line", "--junit", "a file that is not one of the specs checked",

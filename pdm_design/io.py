@@ -102,3 +102,39 @@ def _publish(tmp: str, path: Path) -> None:
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)
     os.replace(tmp, path)
+
+
+def check_output(path: str | os.PathLike, option: str, *, folder: bool = False,
+                 names: tuple[str, ...] = (), new_folders: bool = True) -> None:
+    """Refuse an output path that cannot be written, before any work is done: SpecError
+    ("command line", option, ...; exit 2). `folder`: the path is a folder the command writes
+    `names` into (made if missing); else a file. new_folders=False: the folder a file goes in
+    must exist already (no folders are made for it). Nothing is created here."""
+    from .errors import SpecError
+
+    path = Path(path)
+    what = "a folder" if folder else "a file"
+    if not str(path):
+        raise SpecError("command line", option, f"the name of {what}", "''")
+    if _is_special(path):  # /dev/null, a pipe: written into directly
+        return
+    if path.exists() and path.is_dir() != folder:
+        raise SpecError("command line", option, f"{what} that can be written",
+                        f"{path}, {'a file' if folder else 'a folder'}")
+    parent = path if folder else path.parent
+    for name in names if folder else ():
+        if (parent / name).is_dir():
+            raise SpecError("command line", option, f"{what} that can be written",
+                            f"{path}, whose {name} is a folder")
+    nearest = parent
+    while not nearest.exists() and nearest != nearest.parent:
+        nearest = nearest.parent
+    if nearest != parent and not new_folders:
+        raise SpecError("command line", option, f"{what} in an existing folder (no folders "
+                        "are made for it)", f"{path}: no folder {parent}")
+    if not nearest.is_dir():
+        raise SpecError("command line", option, f"{what} that can be written",
+                        f"{path}: {nearest} is a file, not a folder")
+    if not os.access(nearest, os.W_OK | os.X_OK):
+        raise SpecError("command line", option, f"{what} that can be written",
+                        f"{path}: {nearest} is a folder this user cannot write in")

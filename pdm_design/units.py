@@ -20,3 +20,8 @@ def workshop(value: float, unit: str) -> tuple[float, str]:
     N m -> N mm; others as given."""
     to, factor = WORKSHOP.get(unit, (unit, 1.0))
     return value * factor, to
+
+
+def counted(count: int, noun: str) -> str:
+    """'1 build', '2 builds', '0 builds': a count with its noun, plural unless it is 1."""
+    return f"{count} {noun}" if count == 1 else f"{count} {noun}s"

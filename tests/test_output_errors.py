@@ -26,7 +26,8 @@ def test_plot_under_a_file_is_bad_input_naming_the_path(tmp_path):
     target = blocker / "run.png"
     code, err = simulate_with_plot(target)
     assert code == 2
-    assert f"cannot write {target}" in err and "is a file, not a folder" in err
+    assert f"--plot: expected a file that can be written, found {target}" in err
+    assert "is a file, not a folder" in err
     assert "Traceback" not in err and "internal error" not in err
 
 

@@ -233,7 +233,7 @@ def test_the_yield_commands_document_goes_on_the_page_whole(tmp_path):
     doc["failures"] = {"tip": 7, "stall": 2}  # as the yield command lists them
     saved = tmp_path / "y.json"
     saved.write_text(json.dumps(doc))
-    result = CliRunner().invoke(main, ["report", str(MANIP), "--out", str(tmp_path / "out"),
+    result = CliRunner().invoke(main, ["report", str(spec), "--out", str(tmp_path / "out"),
                                        "--no-tolerance", "--yield", str(saved)])
     assert result.exit_code == 0, result.output
     page = (tmp_path / "out" / "report.html").read_text()

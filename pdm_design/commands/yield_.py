@@ -3,6 +3,7 @@ report (text, JSON, plots). Also the `simulate --build SEED:INDEX` reproduction 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 from ..errors import PdmError, SpecError
@@ -80,8 +81,22 @@ def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accurac
     seed = tolerances.seed if seed is None else seed
     acc = resolve(accuracy or spec.verification.accuracy)
     kwargs = {} if scales is None else {"scales": scales}
-    return yield_of(spec.scene, point, tolerances, builds=builds, stages=stages, seed=seed,
-                    confirm=tolerances.confirm, accuracy=acc, source=source, **kwargs)
+    result = yield_of(spec.scene, point, tolerances, builds=builds, stages=stages, seed=seed,
+                      confirm=tolerances.confirm, accuracy=acc, source=source, **kwargs)
+    return dataclasses.replace(result, identity=yield_identity(spec, source, point))
+
+
+YIELD_SCHEMA = "pdm-design/yield/1"
+
+
+def yield_identity(spec, source: str, point) -> dict:
+    """What a yield run was made from, for its JSON document (docs/json-schema.md): the
+    schema, the spec's path and digest (spec.loader.content_digest), name and scene kind,
+    and the design the builds were drawn around (every variable, SI; null for one the
+    scene derives)."""
+    return {"schema": YIELD_SCHEMA, "spec": source, "spec_sha256": spec.digest or None,
+            "name": spec.name, "scene": spec.kind,
+            "design": {v: getattr(point, v) for v in point.VARIABLES}}  # null: derived
 
 
 def unmet_min_yield(outcome) -> list[str]:
@@ -106,14 +121,16 @@ def unmet_min_yield(outcome) -> list[str]:
 
 
 def simulate_build_of_spec(spec, source, design, build: str, stages, *, accuracy,
-                           record_trajectory=False):
-    """`simulate --build SEED:INDEX`: build INDEX of a yield run with SEED and `stages`."""
+                           record_trajectory=False, tolerances=None):
+    """`simulate --build SEED:INDEX`: build INDEX of a yield run with SEED and `stages`;
+    tolerances: those the run drew with (its yield.json's), else the spec's, sized."""
     from ..accuracy import accuracy as resolve
     from ..tolerances.yield_ import simulate_one
 
     seed, index = parse_build(build)
     accuracy = resolve(accuracy or spec.verification.accuracy)
-    tolerances = sized_tolerances(spec, source, design, stages)
+    if tolerances is None:
+        tolerances = sized_tolerances(spec, source, design, stages)
     return simulate_one(spec.scene, design, tolerances, seed, index, stages,
                         accuracy=accuracy, record_trajectory=record_trajectory)
 
@@ -153,7 +170,10 @@ def _index_text(row: dict) -> str:
 
 def yield_text(result: YieldResult, name: str) -> str:
     r = result
-    lines = [f"{name} ({r.kind}): {r.builds} builds of {r.stages} stages, seed {r.seed}",
+    from ..units import counted
+
+    lines = [f"{name} ({r.kind}): {counted(r.builds, 'build')} of {counted(r.stages, 'stage')}, "
+             f"seed {r.seed}",
              f"yield: {_pct(r.estimate)} pass all {r.stages} stages "
              f"(95 % interval {_pct(r.ci_low)} to {_pct(r.ci_high)})",
              f"mean stages before failure: {r.mean_stages_before_failure:.4g} of {r.stages}"]
@@ -170,9 +190,10 @@ def yield_text(result: YieldResult, name: str) -> str:
         lines.append(f"  {t['quantity']:<14} {size:<16} {t['applies_to']:<5} {t['distribution']}")
     c = r.confirmed
     curve = sum(p["simulated"] for p in r.scale_curve if p["scale"] != 1.0)
-    lines.append(f"event simulator: {c['agreed']} of {c['random']} random builds agree with "
-                 f"the closed forms; {c['left_closed_form']} builds outside the closed forms "
-                 f"simulated; {c['simulated'] + curve} builds simulated in all"
+    lines.append(f"event simulator: {c['agreed']} of {counted(c['random'], 'random build')} "
+                 f"agree{'s' if c['agreed'] == 1 else ''} with the closed forms; "
+                 f"{counted(c['left_closed_form'], 'build')} outside the closed forms "
+                 f"simulated; {counted(c['simulated'] + curve, 'build')} simulated in all"
                  + (f" ({curve} of them for the yield against tolerance scale)" if curve else ""))
     if r.sensitivity:
         lines.append("sensitivity (Sobol' total index of the smallest margin): " + ", ".join(
@@ -227,6 +248,16 @@ def yield_figures(result: YieldResult) -> dict[str, bytes]:
                                  f"(smallest margin over {r.stages} stages)")
         out["sensitivity.png"] = render_figure(fig, "png")
     return out
+
+
+def commands_from(result: YieldResult, folder: str) -> YieldResult:
+    """The result with each failing build's command taking the design from `folder` (the
+    run's --out: `simulate --from`), so that rerunning a build solves nothing again."""
+    import shlex
+
+    failing = tuple({**f, "command": f"{f['command']} --from {shlex.quote(str(folder))}"}
+                    for f in result.failing)
+    return dataclasses.replace(result, failing=failing)
 
 
 def write_outputs(result: YieldResult, folder: str) -> list[str]:

@@ -142,6 +142,11 @@ def _parts(sheet) -> str:
              "box the optimizer computed.</p><table><tr><th>tolerance</th><th>applies to</th><th>value</th>"
              "<th>what it is</th></tr>" + "".join(rows) + "</table>" if rows else
              f"<p>No tolerance: {html.escape(sheet.tolerance_note)}.</p>")
+    from ..sheet.build_to import build_to_sentence  # which of two tolerances on a part
+
+    sentence = build_to_sentence(sheet)
+    if sentence:
+        table += f"<p class=note>{html.escape(sentence, quote=False)}</p>"
     parts, _ = parts_list(sheet)
     listed = "".join(
         f"<tr><td>{p.quantity}</td><td>{html.escape(p.name)}</td><td>{html.escape(p.dimensions)}"

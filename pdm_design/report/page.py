@@ -82,9 +82,64 @@ def report_command(source, out, count, no_tolerance, echo, yield_path=None,
     (else its failures go to stderr: the page is written with them at its top)."""
     folder = out or f"{Path(source).stem}-report"
     analysis = read_yield(yield_path) if yield_path else None
+    if analysis is not None:
+        check_yield_made_for(analysis, yield_path, source)
     path, sheet = write_report(source, folder, count=count, tolerance=not no_tolerance,
                                yield_result=analysis, compute_yield=not no_yield)
     echo(f"report of {sheet.spec.name or source} (status {sheet.status}): {path}")
     for failure in sheet.failures:
         echo(f"warning: {failure}", err=True)
     return not sheet.failures
+
+
+def check_yield_made_for(data: dict, path, source) -> None:
+    """Refuse (exit 2, naming the file and what differs) a `pdm-design yield` document made
+    for another spec than the report's source (a spec, or a saved optimize JSON naming one):
+    its schema and spec_sha256 (spec.loader.content_digest) must be those of the source's
+    spec. A table that is not a yield document (curves, numbers) is shown as it is."""
+    from ..errors import SpecError
+    from ..commands.yield_ import YIELD_SCHEMA
+    from .yield_section import is_yield_document
+
+    if not is_yield_document(data):
+        return
+    if data.get("schema") != YIELD_SCHEMA:
+        raise SpecError(str(path), "schema", f"'{YIELD_SCHEMA}' (a yield saved by `pdm-design "
+                        "yield --format json` or --out, which names the spec it was run on: "
+                        "run it again)", repr(data.get("schema")))
+    wanted = _source_spec(source)
+    if wanted is None or data.get("spec_sha256") == wanted[1]:
+        return
+    spec, digest, kind = wanted
+    what = f"a yield of {data.get('spec')!r}"
+    if data.get("scene") != kind:
+        what += f" (a {data.get('scene')} scene; this report's is {kind})"
+    what += " as it was then" if data.get("spec") == spec else \
+        f"; this report's spec is {spec!r}"
+    raise SpecError(str(path), "spec_sha256", f"the digest of {spec} as it is now, "
+                    f"{digest[:12]}... (the yield of another spec, or of this one before it "
+                    f"changed: run `pdm-design yield {spec} --out DIR` again)",
+                    f"{str(data.get('spec_sha256'))[:12]}...: {what}")
+
+def _source_spec(source) -> tuple[str, str, str] | None:
+    """(spec path, digest, scene kind) of the report's source: a spec, or the spec a saved
+    optimize JSON names (its spec_sha256: the sheet refuses one whose spec has changed);
+    None when the source cannot be read (the sheet then says why)."""
+    import json
+
+    from ..errors import SpecError
+    from ..spec import load_spec
+
+    if Path(source).suffix.lower() == ".json":
+        try:
+            doc = json.loads(Path(source).read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, ValueError):
+            return None
+        if not isinstance(doc, dict) or not isinstance(doc.get("spec_sha256"), str):
+            return None
+        return str(doc.get("spec")), doc["spec_sha256"], str(doc.get("scene"))
+    try:
+        spec = load_spec(source)
+    except SpecError:
+        return None
+    return str(source), spec.digest, spec.kind

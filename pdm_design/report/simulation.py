@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..plugin import of
+from ..units import counted
 
 _SHOWN_STAGES = 20
 
@@ -21,7 +22,8 @@ def simulation_text(spec, result) -> str:
     outcome = result.outcome
     verdict = "completed" if outcome.completed else "FAILED"
     lines = [f"{spec.name or spec.source} ({spec.kind}): {verdict}, "
-             f"{outcome.stages_passed} stages passed (accuracy {result.accuracy.describe()})"]
+             f"{counted(outcome.stages_passed, 'stage')} passed "
+             f"(accuracy {result.accuracy.describe()})"]
     if outcome.failure is not None:
         f = outcome.failure
         lines.append(f"failure: {f.kind} at stage {f.stage}, t = {f.time:.6g} s: {f.detail}")

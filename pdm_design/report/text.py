@@ -36,8 +36,8 @@ def _tolerance_rows(tolerance: dict) -> list[str]:
             parts.append("widest box " + ", ".join(f"{k} +-{v * 1e3:.2f} mm"
                                                    for k, v in linear["box"].items()))
         if "min_semi_axis" in linear["ellipsoid"]:
-            parts.append(f"ellipsoid semi-axes {linear['ellipsoid']['min_semi_axis'] * 1e3:.2f} "
-                         "mm and up")
+            parts.append("ellipsoid with its smallest semi-axis "
+                         f"{linear['ellipsoid']['min_semi_axis'] * 1e3:.2f} mm")
         if linear["status"] != "optimal":
             parts.append(linear["status"])
         lines.append("  linearised safe set (cvxpy): " + "; ".join(parts))

@@ -129,6 +129,9 @@ def _notes(sheet) -> list[str]:
                                NOTE_WIDTH, subsequent_indent="    ")
     if other:
         lines.append("(tolerances above that name no part of the list apply as stated)")
+    from .build_to import build_to_sentence  # which of two tolerances on a part
+
+    lines += textwrap.wrap(build_to_sentence(sheet), NOTE_WIDTH)
     return lines
 
 

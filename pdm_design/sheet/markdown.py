@@ -87,6 +87,10 @@ def _parts_markdown(sheet: BuildSheet) -> list[str]:
                   "|---|---|---|---|"]
         lines += [f"| {e.quantity} | {e.applies_to} | {e.shown()} | {e.limited_by} |"
                   for e in entries]
+        from .build_to import build_to_sentence  # which of two tolerances on a part
+
+        sentence = build_to_sentence(sheet)
+        lines += ["", sentence] if sentence else []
     return lines
 
 

@@ -95,17 +95,22 @@ def limits_of_quantities(spec, solution, entries) -> list[dict]:
         q = entry["quantity"]
         mine = [r for r in limits if r["condition"] == "bound"
                 or q in uses.get((r["condition"], r["where"]), ())] if entry["allocated"] else []
+        if entry["allocated"] and not mine:  # held back by the others, through its weight
+            mine = [dict(WEIGHT_SHARE)]
         out.append({k: v for k, v in entry.items()} | {"limited_by": mine})
     return out
 
 
 # an allocated quantity no binding row involves: only the weights' proportion holds it back
 SHARED = "its weight's share of the others' (no binding row involves it)"
+# ... and its limited_by entry in JSON (docs/json-schema.md)
+WEIGHT_SHARE = {"condition": "weight_share", "where": "", "share": None}
 
 
 def in_words(limits: list[dict]) -> str:
     """A limited_by list in one line: 'lift_off (at the handover) 58 %; alpha at its min 0'."""
     return "; ".join(
+        SHARED if e["condition"] == WEIGHT_SHARE["condition"] else
         (e["where"] if e["condition"] == "bound" else
          e["condition"] + (f" ({e['where']})" if e["where"] else ""))
         + (f" {100 * e['share']:.0f} %" if e.get("share") is not None else "") for e in limits)

@@ -16,7 +16,7 @@ survival curve). The sensitivity is the Sobol' indices of the builds' smallest m
 from __future__ import annotations
 
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -71,9 +71,13 @@ class YieldResult:
     sensitivity_note: str = ""
     scale_curve: tuple[dict, ...] = ()
     source: str = ""
+    # what the run was made from (schema, spec, spec_sha256, name, scene, design: the yield
+    # command's, commands.yield_.yield_identity), first in the JSON document
+    identity: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return {
+            **self.identity,
             "yield": {"estimate": self.estimate, "ci_low": self.ci_low, "ci_high": self.ci_high,
                       "builds": self.builds, "stages": self.stages, "seed": self.seed},
             "survival": list(self.survival),

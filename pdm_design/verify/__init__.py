@@ -12,6 +12,7 @@ from ..analysis import Analysis
 from ..sim.core import SimulationRefused
 from ..plugin import of
 from ..spec.model import Spec
+from ..units import counted
 
 
 def simulate_spec(spec: Spec, design, *, stages=None, offsets=None, step_errors=None,
@@ -49,7 +50,8 @@ def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> 
     if not outcome.completed:
         where = outcome.failure
         what = f"{where.kind} at stage {where.stage}: {where.detail}" if where else "incomplete"
-        failures.append(f"nominal run stopped after {outcome.stages_passed} stages ({what})")
+        failures.append(f"nominal run stopped after {counted(outcome.stages_passed, 'stage')} "
+                        f"({what})")
     exact_build = not spec.verification.offsets and not spec.verification.step_errors
     # a run that left the closed forms' regime (an object that lifted off and flew) is judged
     # by its outcome: the closed forms describe neither that nor the stages after it
@@ -60,7 +62,7 @@ def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> 
         failures.append(f"simulator and closed form disagree on {agreement['quantity']}: "
                         f"relative error {agreement['relative_error']:.2e}"
                         f"{of(spec).disagreement_note(spec)}")
-    summary = (f"{outcome.stages_passed} stages simulated from the initial state"
+    summary = (f"{counted(outcome.stages_passed, 'stage')} simulated from the initial state"
                + (", closed forms confirmed" if agreement and not failures else "")
                + left)
     return {
