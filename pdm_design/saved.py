@@ -87,7 +87,7 @@ def _tolerances(doc: dict, spec, source: str):
     yield target included), in the spec's order, with the spec's other settings."""
     from dataclasses import replace
 
-    from .tolerances.model import Tolerance
+    from .tolerance_model import Tolerance
 
     entries = doc.get("tolerances")
     given = {e.get("quantity"): e for e in entries if isinstance(e, dict)} \
