@@ -362,3 +362,69 @@ def test_option_errors_all_come_in_the_tools_format(args, words):
     code, out, err = run(*args)
     assert code == 2 and out == ""
     assert err.startswith(f"error: command line: {words}") and "Usage:" not in err
+
+
+# ------------------------------------------------------------------ one toleranced quantity
+
+def _each_additive(weights):
+    """Output sum_q w_q * (sum of q's deviations): quantity q's variance share is
+    w_q^2 Var(q) / sum of them (parts of one quantity are independent)."""
+    from pdm_design.tolerances.outcome import BuildOutcome
+    import numpy as np
+
+    def run(deviations, stages):
+        y = sum(w * deviations[q].sum(axis=1) for q, w in weights.items())
+        n = len(y)
+        return BuildOutcome(np.zeros(n, dtype=int), np.full(n, "", dtype=object), y,
+                            np.ones(n, dtype=bool))
+
+    return run
+
+
+@pytest.mark.parametrize("count", [1, 2, 3])
+def test_any_number_of_per_part_quantities_gets_its_variance_share(count):
+    from pdm_design.tolerances.sensitivity import sobol_indices
+
+    names = ("rise", "tread", "pivot_y")[:count]
+    weights = dict(zip(names, (3.0, 2.0, 1.0)))
+    tolerances = [(q, "each", 0.3, "normal") for q in names]
+    rows = sobol_indices(_each_additive(weights), tolerances, stages=4, samples=2048, seed=1)
+    total = sum(w * w for w in weights.values())  # equal tolerances: shares are w^2 / sum w^2
+    assert [r["quantity"] for r in rows] == list(names)
+    for r in rows:
+        share = weights[r["quantity"]] ** 2 / total
+        assert abs(r["index"] - share) <= max(r["confidence"], 1e-12)
+    if count == 1:  # one quantity explains all the variance: both indices are 1 exactly
+        assert (rows[0]["index"], rows[0]["first"], rows[0]["confidence"]) == (1.0, 1.0, 0.0)
+
+
+def _one_tolerance_spec(tmp_path, problem, tolerances, stages=3):
+    data = tomllib.loads((PROBLEMS / problem).read_text())
+    data["tolerances"] = {"builds": 64, "seed": 0, "confirm": 2, **tolerances}
+    data["verification"]["stages"] = stages
+    data.pop("expect", None)
+    return write(tmp_path, data)
+
+
+ONE_TOLERANCE = [("manipulators_long_row_yield.toml", "pivot_y", 0.1),
+                 ("stairs_yield.toml", "rise", 0.005)]
+
+
+@pytest.mark.parametrize("problem, quantity, value", ONE_TOLERANCE)
+def test_yield_with_one_per_part_tolerance_gives_it_index_1(tmp_path, problem, quantity,
+                                                                value):
+    spec = _one_tolerance_spec(tmp_path, problem,
+                               {quantity: {"value": value, "applies_to": "each"}})
+    code, out, err = run("yield", spec, "--format", "json")
+    assert code == 0, err
+    rows = json.loads(out)["sensitivity"]
+    assert [(r["quantity"], r["index"]) for r in rows] == [(quantity, 1.0)]
+
+
+@pytest.mark.parametrize("problem, quantity, value", ONE_TOLERANCE)
+def test_report_with_one_per_part_tolerance_writes_its_page(tmp_path, problem, quantity, value):
+    spec = _one_tolerance_spec(tmp_path, problem,
+                               {quantity: {"value": value, "applies_to": "each"}})
+    code, out, err = run("report", spec, "--out", tmp_path / "page", "--no-tolerance")
+    assert code == 0, err
+    assert "<h2>Yield</h2>" in (tmp_path / "page" / "report.html").read_text()
