@@ -428,3 +428,65 @@ def test_report_with_one_per_part_tolerance_writes_its_page(tmp_path, problem, q
     code, out, err = run("report", spec, "--out", tmp_path / "page", "--no-tolerance")
     assert code == 0, err
     assert "<h2>Yield</h2>" in (tmp_path / "page" / "report.html").read_text()
+
+
+# ------------------------------------------------------------------ tolerances sized for a yield
+
+def _unfilled_boxes(figure):
+    from matplotlib.patches import Rectangle
+
+    return [p for p in figure.axes[0].patches
+            if isinstance(p, Rectangle) and not p.get_fill() and p.get_edgecolor()[0] > 0.5]
+
+
+def _sized_sheet(tmp_path, kind):
+    from test_yield_target_stairs import sized_text
+
+    if kind == "stairs":  # the stairs_design optimum fixed, rise and tread to size, 10 bounces
+        text = sized_text()
+    else:  # the row with its design free, 5 stages
+        text = (PROBLEMS / "manipulators_yield_target.toml").read_text()
+        text = text.replace("stages = 20", "stages = 5").replace("min_yield = 0.9973", "")
+    path = tmp_path / f"{kind}.toml"
+    path.write_text(text)
+    from pdm_design.sheet import sheet_for
+
+    return sheet_for(path, tolerance=False)
+
+
+@pytest.mark.parametrize("kind, axes, columns", [
+    ("manipulators", ("pivot_x", "pivot_y"), ("pivot_x_tolerance_m", "pivot_y_tolerance_m")),
+    ("stairs", ("rise", "tread"), ("rise_tolerance_m", "tread_tolerance_m"))])
+def test_a_sheet_sized_for_a_yield_shows_the_placement_tolerance_everywhere(tmp_path, kind, axes,
+                                                                           columns):
+    import dataclasses
+
+    from pdm_design.sheet import sheet_csv
+    from pdm_design.sheet.drawing import _table_rows, draw
+    from pdm_design.sheet.parts import tolerance_entries
+    from pdm_design.solve.yield_allocation import linearised_yield_function
+
+    sheet = _sized_sheet(tmp_path, kind)
+    spec, stages = sheet.spec, sheet.spec.verification.stages
+    t = sheet.items[0][columns[0]]
+    # the value meets the target: the linearised yield at it (and at 1e-3 more) brackets it
+    sized = dataclasses.replace(spec.tolerances, items=tuple(
+        dataclasses.replace(q, value=t) if q.quantity in axes else q
+        for q in spec.tolerances))
+    bigger = dataclasses.replace(sized, items=tuple(
+        dataclasses.replace(q, value=1.001 * t) if q.quantity in axes else q for q in sized))
+    at = linearised_yield_function(spec.scene)
+    assert at(spec.scene, spec.design_at(), sized, stages)["yield"] >= 0.9973 - 1e-9
+    assert at(spec.scene, spec.design_at(), bigger, stages)["yield"] < 0.9973
+    assert all(item[c] == t for item in sheet.items for c in columns)  # every row, both axes
+    assert sorted(row[3] for row in sheet.summary if row[3] is not None) == [t, t]
+    assert f"{t:.12g}"[:8] in sheet_csv(sheet).splitlines()[1]
+    table = "\n".join(_table_rows(sheet))  # the PDF's coordinate pages
+    assert table.count(f"+-{t * 1e3:.3g}") == 2 * stages
+    entries = {e.quantity: e.value for e in tolerance_entries(sheet)}
+    assert [entries[q.replace("_", " ")] for q in axes] == [t, t]  # once each, no box beside
+    assert not any("(box)" in q for q in entries)
+    if kind == "manipulators":  # the legend's red boxes, one per pivot, 2 t wide
+        boxes = _unfilled_boxes(draw(sheet))
+        assert len(boxes) == stages
+        assert all(b.get_width() == pytest.approx(2e3 * t) for b in boxes)

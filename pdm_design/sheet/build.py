@@ -61,6 +61,7 @@ class BuildSheet:
     violations: tuple[str, ...] = field(default=())
     verification: dict | None = None
     tolerances: tuple = field(default=())  # further ToleranceEntry (sheet/parts.py), by part
+    statistical: bool = False  # tolerance: the placement's statistical tolerances, not a box
 
     @property
     def kind(self) -> str:
@@ -112,15 +113,17 @@ def sheet_for(path: str | Path, *, count: int | None = None,
         status, tol = outcome.status.value, outcome.tolerance
         violations, verification = tuple(outcome.violations), outcome.verification
         target = _yield_target(spec)
-        extra = (allocated_entries(outcome.tolerances, target=target)
-                 if outcome.tolerances else spec_entries(spec))
+        sized = outcome.tolerances
+        if target is not None and not sized and _is_success(status):  # a fixed design
+            sized = _sized_at(spec, spec.design_at(values), str(path))
+        extra = allocated_entries(sized, target=target) if sized else spec_entries(spec)
     fixed = fixed_spec(spec, values, source=str(path))
     if verification is None and _is_success(status):  # saved with --no-verify: simulate it now
         verification = _verify_now(fixed)
     if target is not None:  # statistical tolerances, listed below: no box
-        tol, note = None, (f"no worst-case box: the tolerances are sized for a linearised yield "
-                           f"of {100 * target:.4g} % (listed below; check it with "
-                           "`pdm-design yield`)")
+        tol, note = _placement(spec.kind, sized), (
+            f"no worst-case box: the tolerances are sized for a linearised yield of "
+            f"{100 * target:.4g} % (listed below; check it with `pdm-design yield`)")
     elif _is_success(status) or tol:
         tol, note = _tolerance(fixed, tol, tolerance)
     else:  # a box around a design that does not work is no build tolerance
@@ -131,7 +134,40 @@ def sheet_for(path: str | Path, *, count: int | None = None,
                            violations=violations, verification=verification)
     except ValueError as exc:  # e.g. a staircase that cannot be built from this design
         raise PdmError(f"{path}: no build sheet: {exc}") from None
+    if target is not None:
+        sheet = dataclasses.replace(sheet, statistical=True)
     return dataclasses.replace(sheet, tolerances=(*sheet.tolerances, *extra)) if extra else sheet
+
+
+# the quantities of the sheet's placement tolerance (TOLERANCE_AXES), by scene
+PLACEMENT = {"manipulators": ("pivot_x", "pivot_y"), "stairs": ("rise", "tread")}
+
+
+def _placement(kind: str, entries) -> dict[str, float] | None:
+    """The placement tolerance by axis (TOLERANCE_AXES) of statistical tolerance entries: 0
+    on an axis they leave untoleranced; None when they tolerance neither."""
+    values = {e["quantity"]: e["value"] for e in entries or ()}
+    if not any(q in values for q in PLACEMENT[kind]):
+        return None
+    return {axis: float(values.get(q) or 0.0)
+            for axis, q in zip(TOLERANCE_AXES[kind], PLACEMENT[kind])}
+
+
+def _sized_at(spec, point, source: str) -> tuple:
+    """optimize's tolerance list (`allocated_entries`' input) of a fixed design whose
+    tolerances to allocate are sized for the spec's yield target: the sizes `pdm-design yield`
+    builds with, each allocated one limited by the union bound's dominant rows."""
+    from ..solve.yield_allocation import dominant_rows
+    from ..tolerances.command import sized_tolerances
+
+    stages = spec.verification.stages
+    sized = sized_tolerances(spec, source, point, stages)
+    limits = dominant_rows(spec.scene, point, sized, stages)
+    to_allocate = {t.quantity for t in spec.tolerances if t.allocate}
+    return tuple(t.to_json(spec.kind) | {"allocated": t.quantity in to_allocate,
+                                         "limited_by": limits if t.quantity in to_allocate
+                                         else []}
+                 for t in sized)
 
 
 # the part each allocated quantity is built on, in the words sheet/parts.py puts on a part

@@ -108,7 +108,7 @@ def tolerance_entries(sheet) -> tuple[ToleranceEntry, ...]:
     it was given (BuildSheet.tolerances)."""
     own = []
     tol = sheet.tolerance
-    if tol:
+    if tol and not getattr(sheet, "statistical", False):  # statistical: among the others
         covers = sheet.tolerance_covers
         why = f"{BOX_WORDS}: {sheet.tolerance_note}"
         if sheet.kind == "manipulators":
