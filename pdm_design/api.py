@@ -114,7 +114,7 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
     (solve/tiebreak.py). continued: a neighbour's local optima (`DesignOutcome.optima`) to
     solve from instead of the starts (solve.optimize)."""
     from .solve import optimize as solve
-    from .solve.words import bounds_hint, summarise
+    from .solve.words import bounds_hint, flat_floor, summarise
 
     accuracy = resolve_accuracy(accuracy or spec.verification.accuracy)
     preset = SOLVE_PRESETS[accuracy.base]
@@ -129,6 +129,8 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
     advice = bounds_hint(result.at_bounds)
     violations = (tuple(analysis.problems) + tuple(summarise(result.violations))
                   + ((advice,) if advice else ()))
+    if result.status is Status.INFEASIBLE and (flat := flat_floor(spec, analysis.design)):
+        violations = (flat, *violations)
     verification = None
     if verify and result.status.is_success:
         samples = round(spec.verification.samples * preset["sample_factor"])

@@ -490,3 +490,37 @@ def test_a_sheet_sized_for_a_yield_shows_the_placement_tolerance_everywhere(tmp_
         boxes = _unfilled_boxes(draw(sheet))
         assert len(boxes) == stages
         assert all(b.get_width() == pytest.approx(2e3 * t) for b in boxes)
+
+
+# ------------------------------------------------------------------ restitution 1
+
+def _stairs_at_restitution_1(tmp_path, objective):
+    data = tomllib.loads((PROBLEMS / "stairs_design.toml").read_text())
+    data["design"]["restitution"] = 1.0
+    data.pop("expect")
+    data["objective"] = objective
+    return write(tmp_path, data)
+
+
+@pytest.mark.parametrize("objective", [{}, {"max_min_margin": 1.0}])
+def test_restitution_1_with_a_free_variable_solves_to_the_flat_floor(tmp_path, objective):
+    code, out, err = run("optimize", _stairs_at_restitution_1(tmp_path, objective),
+                         "--format", "json")
+    doc = json.loads(out)
+    assert code == 0 and doc["status"] == "optimal", (doc["status"], doc["violations"])
+    # periodic orbit at eps = 1: rise (1 - eps^2) h0 = 0, tread vx (1 + eps) V / g with the
+    # vertical speed V = sqrt(2 g h0) of the drop (docs: the paper's periodic orbit)
+    v0, g = doc["design"]["launch_speed"], 9.81
+    assert doc["design"]["rise"] == 0.0
+    assert doc["design"]["tread"] == pytest.approx(2.0 * v0 * math.sqrt(2.0 * g * 1.0) / g,
+                                                   rel=1e-9)
+    assert doc["verification"]["passed"]
+
+
+def test_restitution_1_under_a_tolerance_box_says_the_floor_is_flat(tmp_path):
+    code, out, err = run("optimize", _stairs_at_restitution_1(
+        tmp_path, {"max_offset_tolerance": 1.0}), "--format", "json", "--no-verify")
+    doc = json.loads(out)
+    assert code == 1 and doc["status"] == "infeasible"
+    assert any(v.startswith("restitution 1 gives a periodic rise (1 - restitution^2) h0 = 0")
+               and "no tolerance box exists" in v for v in doc["violations"])

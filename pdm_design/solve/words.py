@@ -55,6 +55,19 @@ CONDITIONS = {
 }
 
 
+def flat_floor(spec, design: dict) -> str | None:
+    """Why a staircase sized for a tolerance box cannot be built at restitution 1 (None
+    otherwise): its periodic rise (1 - eps^2) h0 is 0, a flat floor, and a rise error of any
+    size makes a step go up (the step_down row holds the box below the rise)."""
+    if (spec.kind != "stairs" or not float(design.get("restitution") or 0.0) >= 1.0
+            or not float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0):
+        return None
+    return ("restitution 1 gives a periodic rise (1 - restitution^2) h0 = 0: the steps are a "
+            "flat floor, where a rise error of any size makes a step go up, so no tolerance box "
+            "exists (objective max_offset_tolerance): give a restitution below 1, or drop that "
+            "objective")
+
+
 # The way to move a nose_clearance row's landing depends on the phase of the flight its `where`
 # names (formulation/stairs/__init__.py NOSE_ENDS): landing_offset is measured from the back of the
 # tread, so a smaller one takes off further behind the nose ahead, a larger one nearer to it.
