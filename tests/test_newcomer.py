@@ -524,3 +524,22 @@ def test_restitution_1_under_a_tolerance_box_says_the_floor_is_flat(tmp_path):
     assert code == 1 and doc["status"] == "infeasible"
     assert any(v.startswith("restitution 1 gives a periodic rise (1 - restitution^2) h0 = 0")
                and "no tolerance box exists" in v for v in doc["violations"])
+
+
+# ------------------------------------------------------------------ beta not beyond alpha
+
+@pytest.mark.parametrize("alpha, beta, keys", [
+    (0.5, 0.4, ("design.alpha", "design.beta")),
+    (0.5, 0.5, ("design.alpha", "design.beta")),      # beta = alpha: no descent either
+    ({"min": 0.5, "max": 0.6}, {"min": 0.2, "max": 0.4}, ("design.alpha.min", "design.beta.max")),
+])
+def test_beta_never_beyond_alpha_with_a_free_variable_is_bad_input_naming_both(tmp_path, alpha,
+                                                                              beta, keys):
+    # a periodic handover needs beta > alpha (docs/spec.md); with link_length free the
+    # optimizer can move neither angle: no design it may choose has one
+    data = robust_data(alpha=alpha, beta=beta, link_length={"min": 1.0, "max": 3.0})
+    data.pop("expect", None)
+    code, out, err = run("optimize", write(tmp_path, data))
+    assert code == 2 and out == "" and "Traceback" not in err
+    assert err.startswith(f"error: {tmp_path / 'spec.toml'}: {keys[0]} and {keys[1]}: expected "
+                          "a handover angle beta above the back-stop angle alpha")

@@ -39,6 +39,7 @@ from .model import (
     Verification,
     Weight,
 )
+from .handover import no_handover
 from .start import unreachable_start
 
 MAX_FILE_BYTES = 8 * 2**20
@@ -159,7 +160,7 @@ def _parse(data: Any, source: str) -> Spec:
     verification = _verification(_table(data, "verification"), kind)
     _check_stages(verification, kind, design)
     if scene.kind == "manipulators":  # a start below palm 1 whatever the design (spec/start.py)
-        problem = unreachable_start(scene.initial.position[1], design)
+        problem = no_handover(design) or unreachable_start(scene.initial.position[1], design)
         if problem:
             raise _Invalid(*problem)
     expect_table = _table(data, "expect")
