@@ -543,3 +543,25 @@ def test_beta_never_beyond_alpha_with_a_free_variable_is_bad_input_naming_both(t
     assert code == 2 and out == "" and "Traceback" not in err
     assert err.startswith(f"error: {tmp_path / 'spec.toml'}: {keys[0]} and {keys[1]}: expected "
                           "a handover angle beta above the back-stop angle alpha")
+
+
+# ------------------------------------------------------------------ friction on the stairs
+
+def test_a_staircases_friction_tolerance_is_on_its_treads_and_the_step(tmp_path):
+    from pdm_design.sheet import sheet_for
+    from pdm_design.sheet.build import allocated_entries
+    from pdm_design.sheet.parts import parts_list, tolerance_entries
+
+    data = tomllib.loads((PROBLEMS / "paper_stairs_friction.toml").read_text())
+    data["tolerances"] = {"friction": {"value": 0.02, "applies_to": "lot"}}
+    sheet = sheet_for(write(tmp_path, data), tolerance=False)
+    (entry,) = [e for e in tolerance_entries(sheet) if e.quantity.startswith("friction")]
+    assert "palm" not in entry.applies_to and entry.applies_to.startswith("every tread's surface")
+    parts, other = parts_list(sheet)
+    step = next(p for p in parts if p.name == "step")
+    assert [e.quantity for e in step.tolerances] == ["friction (spec)"] and other == ()
+    # an allocated friction (optimize's tolerance list) is on the treads too, a palm's on a row
+    allocated = {"quantity": "friction", "applies_to": "lot", "value": 0.02, "unit": "1",
+                 "allocated": True, "limited_by": []}
+    assert allocated_entries([allocated], kind="stairs")[0].applies_to.startswith("every tread's")
+    assert allocated_entries([allocated])[0].applies_to.startswith("every palm's surface")

@@ -116,7 +116,8 @@ def sheet_for(path: str | Path, *, count: int | None = None,
         sized = outcome.tolerances
         if target is not None and not sized and _is_success(status):  # a fixed design
             sized = _sized_at(spec, spec.design_at(values), str(path))
-        extra = allocated_entries(sized, target=target) if sized else spec_entries(spec)
+        extra = (allocated_entries(sized, target=target, kind=spec.kind) if sized
+                 else spec_entries(spec))
     fixed = fixed_spec(spec, values, source=str(path))
     if verification is None and _is_success(status):  # saved with --no-verify: simulate it now
         verification = _verify_now(fixed)
@@ -180,10 +181,18 @@ ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot brac
                   "pivot_friction": "every pivot bracket's joints", "rise": "every step",
                   "tread": "every step", "restitution": "every step's surface (the ball's "
                   "bounce)", "launch_speed": "the launcher (launch speed)"}
+# where a quantity's words differ by scene: the ball meets the treads, not palms
+SCENE_PART = {("stairs", "friction"): "every tread's surface (the ball's grip)"}
 SPEC_WORDS = "the spec's statistical tolerance"
 
 
-def allocated_entries(entries, target: float | None = None) -> tuple:
+def part_words(kind: str, quantity: str) -> str:
+    """The part a tolerance of `quantity` is built on, in the words of sheet/parts.py."""
+    return SCENE_PART.get((kind, quantity), ALLOCATED_PART.get(quantity, quantity))
+
+
+def allocated_entries(entries, target: float | None = None,
+                      kind: str = "manipulators") -> tuple:
     """ToleranceEntry of every allocated or given tolerance of an optimize answer other than
     the pivots' (the sheet's own box lists those), on its part, with what limits it; with a
     yield `target` (tolerances sized for it, formulation/manipulators/yield_target.py: no box) the
@@ -200,8 +209,8 @@ def allocated_entries(entries, target: float | None = None) -> tuple:
         why = (f"allocated{sized}; limited by " + (in_words(e["limited_by"]) or SHARED)
                if e["allocated"] else "given in the spec")
         out.append(ToleranceEntry(e["quantity"].replace("_", " "),
-                                  ALLOCATED_PART.get(e["quantity"], e["quantity"]) + lot,
-                                  e["value"], "" if e["unit"] == "1" else e["unit"], why))
+                                  part_words(kind, e["quantity"]) + lot, e["value"],
+                                  "" if e["unit"] == "1" else e["unit"], why))
     return tuple(out)
 
 
@@ -228,7 +237,7 @@ def spec_entries(spec) -> tuple:
                   else "uniform over +-t")
         lot = " (one lot)" if t.applies_to == "lot" else ""
         out.append(ToleranceEntry(t.quantity.replace("_", " ") + " (spec)",
-                                  ALLOCATED_PART.get(t.quantity, t.quantity) + lot, t.value,
+                                  part_words(spec.kind, t.quantity) + lot, t.value,
                                   "" if unit == "1" else unit,
                                   f"{SPEC_WORDS} ({spread})"))
     return tuple(out)
