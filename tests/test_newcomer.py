@@ -565,3 +565,29 @@ def test_a_staircases_friction_tolerance_is_on_its_treads_and_the_step(tmp_path)
                  "allocated": True, "limited_by": []}
     assert allocated_entries([allocated], kind="stairs")[0].applies_to.startswith("every tread's")
     assert allocated_entries([allocated])[0].applies_to.startswith("every palm's surface")
+
+
+# ------------------------------------------------------------------ the sensitivity line
+
+def test_the_sensitivity_line_is_sorted_with_its_intervals_and_says_what_is_not_resolved(
+        tmp_path):
+    import dataclasses
+
+    from pdm_design.spec import load_spec
+    from pdm_design.tolerances.command import yield_text
+    from pdm_design.tolerances.yield_ import yield_of
+
+    spec = load_spec(_one_tolerance_spec(tmp_path, "stairs_yield.toml",
+                                         {"rise": {"value": 0.005, "applies_to": "each"}}))
+    result = yield_of(spec.scene, spec.design_at(), spec.tolerances, builds=16, stages=2,
+                      confirm=1, scales=(), sensitivity_samples=0)
+    rows = ({"quantity": "tread", "index": 0.10, "first": 0.02, "confidence": 0.15},   # 0 inside
+            {"quantity": "launch_speed", "index": 0.62, "first": 0.5, "confidence": 0.2},
+            {"quantity": "restitution", "index": 0.004, "first": 0.0, "confidence": 0.001},
+            {"quantity": "rise", "index": 0.25, "first": 0.2, "confidence": 0.25})     # = width
+    text = yield_text(dataclasses.replace(result, sensitivity=rows), "stairs")
+    (line,) = [s for s in text.splitlines() if s.startswith("sensitivity")]
+    body = line.split(": ", 1)[1]
+    unresolved = " (not resolved by the builds drawn: its 95 % interval includes 0)"
+    assert body == ("launch_speed 0.62 +- 0.2, rise 0.25 +- 0.25" + unresolved
+                    + ", tread 0.1 +- 0.15" + unresolved + ", restitution 0.004 +- 0.001")
