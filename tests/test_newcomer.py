@@ -591,3 +591,47 @@ def test_the_sensitivity_line_is_sorted_with_its_intervals_and_says_what_is_not_
     unresolved = " (not resolved by the builds drawn: its 95 % interval includes 0)"
     assert body == ("launch_speed 0.62 +- 0.2, rise 0.25 +- 0.25" + unresolved
                     + ", tread 0.1 +- 0.15" + unresolved + ", restitution 0.004 +- 0.001")
+
+
+# ------------------------------------------------------------------ labels inside the page
+
+LONG_PALM = (("palm mass (spec)", "every palm", 0.002, "kg", "the spec's statistical tolerance"),
+             ("friction (spec)", "every palm's surface (one lot)", 0.05, "",
+              "the spec's statistical tolerance"),
+             ("link length (spec)", "every link", 0.0005, "m", "the spec's"))
+
+
+def _outside_the_page(figure):
+    """The drawn texts whose extents (the figure's renderer) leave the page, with them."""
+    from matplotlib.text import Text
+
+    from pdm_design.sheet.labels import figure_texts
+
+    figure.draw_without_rendering()  # the positions of this page as drawn, at its dpi
+    renderer, page = figure.canvas.get_renderer(), figure.bbox
+    out = []
+    for text in figure_texts(figure):
+        box = Text.get_window_extent(text, renderer)
+        if box.x0 < page.x0 or box.y0 < page.y0 or box.x1 > page.x1 or box.y1 > page.y1:
+            out.append((text.get_text(), round(box.x0), round(box.x1)))
+    return out
+
+
+@pytest.mark.parametrize("tol", [None, {"dx": 0.08, "dy": 0.08}])
+def test_every_label_of_every_pdf_page_of_a_30_row_is_inside_the_page(tol):
+    import dataclasses
+
+    from pdm_design.sheet import make_sheet
+    from pdm_design.sheet.drawing import PAGE_ITEMS, draw
+    from pdm_design.sheet.labels import overlapping_texts
+    from pdm_design.sheet.parts import ToleranceEntry
+    from pdm_design.spec import load_spec
+
+    spec = load_spec(PROBLEMS / "paper_manipulators.toml")
+    sheet = dataclasses.replace(make_sheet(spec, "evaluated", tol, "given here", 30),
+                                tolerances=tuple(ToleranceEntry(*e) for e in LONG_PALM))
+    pages = [draw(sheet)] + [draw(sheet, first, min(first + PAGE_ITEMS - 1, 30), notes=False)
+                             for first in range(1, 31, PAGE_ITEMS)]  # the PDF's pages
+    for number, page in enumerate(pages, start=1):
+        assert _outside_the_page(page) == [], number
+        assert overlapping_texts(page) == [], number
