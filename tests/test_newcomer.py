@@ -545,6 +545,19 @@ def test_beta_never_beyond_alpha_with_a_free_variable_is_bad_input_naming_both(t
                           "a handover angle beta above the back-stop angle alpha")
 
 
+
+def test_a_guess_with_beta_below_a_fixed_alpha_is_no_solver_error(tmp_path):
+    # beta's guess, the middle of [0.2, 0.55], is below alpha = 0.5: no closed form is defined
+    # there, and every start moved toward it ended IPOPT at once (Invalid_Number_Detected)
+    data = robust_data(alpha=0.5, beta={"min": 0.2, "max": 0.55},
+                       link_length={"min": 1.0, "max": 3.0})
+    data.pop("expect", None)
+    code, out, err = run("optimize", write(tmp_path, data), "--format", "json", "--no-verify")
+    doc = json.loads(out)
+    assert doc["status"] == "infeasible" and code == 1 and doc["violations"]
+    assert doc["design"]["beta"] > 0.5  # the least-violation design has a handover
+
+
 # ------------------------------------------------------------------ friction on the stairs
 
 def test_a_staircases_friction_tolerance_is_on_its_treads_and_the_step(tmp_path):
