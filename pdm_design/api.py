@@ -133,6 +133,7 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
     (solve/tiebreak.py). continued: a neighbour's local optima (`DesignOutcome.optima`) to
     solve from instead of the starts (solve.optimize)."""
     from .solve import optimize as solve
+    from .plugin import of
     from .solve.words import bounds_hint, summarise
 
     accuracy = resolve_accuracy(accuracy or spec.verification.accuracy)
@@ -148,6 +149,9 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
     advice = bounds_hint(result.at_bounds)
     violations = (tuple(analysis.problems) + tuple(summarise(result.violations))
                   + ((advice,) if advice else ()))
+    if result.status is Status.INFEASIBLE and (
+            cause := of(spec).infeasible_cause(spec, analysis.design)):
+        violations = (cause, *violations)
     verification = None
     if verify and result.status.is_success:
         samples = round(spec.verification.samples * preset["sample_factor"])

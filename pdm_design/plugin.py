@@ -278,6 +278,10 @@ class Scene:
 
         return box_tolerances(self, sheet, why)
 
+    quantity_parts: dict[str, str] = {}
+    """{toleranced quantity: the part it is built on, in words} where the scene's words differ
+    from the shared ones (sheet/build.py ALLOCATED_PART): a ball's grip is on the treads."""
+
     part_words: dict[str, tuple[str, ...]] = {}
     """{part name: words of a ToleranceEntry.applies_to that put it on that part}, first
     match wins; a tolerance matching none is listed under "other tolerances"."""
@@ -363,6 +367,11 @@ class Scene:
     """The analysis' geometry a design table shows, by name (Analysis.geometry keys)."""
     table_periodic: tuple[str, ...] = ()
     """The analysis' periodic orbit a design table shows, by name (Analysis.periodic keys)."""
+
+    def infeasible_cause(self, spec, design: dict) -> str | None:
+        """A cause of an infeasible answer the rows' violations do not name (listed first among
+        them), from the spec and the least-violation `design`; None by default."""
+        return None
 
     stage_errors: StageErrors | None = None
     """The per-stage build errors `simulate` takes (None: the scene takes none); they reach

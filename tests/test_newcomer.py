@@ -362,3 +362,289 @@ def test_option_errors_all_come_in_the_tools_format(args, words):
     code, out, err = run(*args)
     assert code == 2 and out == ""
     assert err.startswith(f"error: command line: {words}") and "Usage:" not in err
+
+
+# ------------------------------------------------------------------ one toleranced quantity
+
+def _each_additive(weights):
+    """Output sum_q w_q * (sum of q's deviations): quantity q's variance share is
+    w_q^2 Var(q) / sum of them (parts of one quantity are independent)."""
+    from pdm_design.tolerances.outcome import BuildOutcome
+    import numpy as np
+
+    def run(deviations, stages):
+        y = sum(w * deviations[q].sum(axis=1) for q, w in weights.items())
+        n = len(y)
+        return BuildOutcome(np.zeros(n, dtype=int), np.full(n, "", dtype=object), y,
+                            np.ones(n, dtype=bool))
+
+    return run
+
+
+@pytest.mark.parametrize("count", [1, 2, 3])
+def test_any_number_of_per_part_quantities_gets_its_variance_share(count):
+    from pdm_design.tolerances.sensitivity import sobol_indices
+
+    names = ("rise", "tread", "pivot_y")[:count]
+    weights = dict(zip(names, (3.0, 2.0, 1.0)))
+    tolerances = [(q, "each", 0.3, "normal") for q in names]
+    rows = sobol_indices(_each_additive(weights), tolerances, stages=4, samples=2048, seed=1)
+    total = sum(w * w for w in weights.values())  # equal tolerances: shares are w^2 / sum w^2
+    assert [r["quantity"] for r in rows] == list(names)
+    for r in rows:
+        share = weights[r["quantity"]] ** 2 / total
+        assert abs(r["index"] - share) <= max(r["confidence"], 1e-12)
+    if count == 1:  # one quantity explains all the variance: both indices are 1 exactly
+        assert (rows[0]["index"], rows[0]["first"], rows[0]["confidence"]) == (1.0, 1.0, 0.0)
+
+
+def _one_tolerance_spec(tmp_path, problem, tolerances, stages=3):
+    data = tomllib.loads((PROBLEMS / problem).read_text())
+    data["tolerances"] = {"builds": 64, "seed": 0, "confirm": 2, **tolerances}
+    data["verification"]["stages"] = stages
+    data.pop("expect", None)
+    return write(tmp_path, data)
+
+
+ONE_TOLERANCE = [("manipulators_long_row_yield.toml", "pivot_y", 0.1),
+                 ("stairs_yield.toml", "rise", 0.005)]
+
+
+@pytest.mark.parametrize("problem, quantity, value", ONE_TOLERANCE)
+def test_yield_with_one_per_part_tolerance_gives_it_index_1(tmp_path, problem, quantity,
+                                                                value):
+    spec = _one_tolerance_spec(tmp_path, problem,
+                               {quantity: {"value": value, "applies_to": "each"}})
+    code, out, err = run("yield", spec, "--format", "json")
+    assert code == 0, err
+    rows = json.loads(out)["sensitivity"]
+    assert [(r["quantity"], r["index"]) for r in rows] == [(quantity, 1.0)]
+
+
+@pytest.mark.parametrize("problem, quantity, value", ONE_TOLERANCE)
+def test_report_with_one_per_part_tolerance_writes_its_page(tmp_path, problem, quantity, value):
+    spec = _one_tolerance_spec(tmp_path, problem,
+                               {quantity: {"value": value, "applies_to": "each"}})
+    code, out, err = run("report", spec, "--out", tmp_path / "page", "--no-tolerance")
+    assert code == 0, err
+    assert "<h2>Yield</h2>" in (tmp_path / "page" / "report.html").read_text()
+
+
+# ------------------------------------------------------------------ tolerances sized for a yield
+
+def _unfilled_boxes(figure):
+    from matplotlib.patches import Rectangle
+
+    return [p for p in figure.axes[0].patches
+            if isinstance(p, Rectangle) and not p.get_fill() and p.get_edgecolor()[0] > 0.5]
+
+
+def _sized_sheet(tmp_path, kind):
+    from test_yield_target_stairs import sized_text
+
+    if kind == "stairs":  # the stairs_design optimum fixed, rise and tread to size, 10 bounces
+        text = sized_text()
+    else:  # the row with its design free, 5 stages
+        text = (PROBLEMS / "manipulators_yield_target.toml").read_text()
+        text = text.replace("stages = 20", "stages = 5").replace("min_yield = 0.9973", "")
+    path = tmp_path / f"{kind}.toml"
+    path.write_text(text)
+    from pdm_design.sheet import sheet_for
+
+    return sheet_for(path, tolerance=False)
+
+
+@pytest.mark.parametrize("kind, axes, columns", [
+    ("manipulators", ("pivot_x", "pivot_y"), ("pivot_x_tolerance_m", "pivot_y_tolerance_m")),
+    ("stairs", ("rise", "tread"), ("rise_tolerance_m", "tread_tolerance_m"))])
+def test_a_sheet_sized_for_a_yield_shows_the_placement_tolerance_everywhere(tmp_path, kind, axes,
+                                                                           columns):
+    import dataclasses
+
+    from pdm_design.sheet import sheet_csv
+    from pdm_design.sheet.drawing import _table_rows, draw
+    from pdm_design.sheet.parts import tolerance_entries
+    from pdm_design.solve.yield_allocation import linearised_yield_function
+
+    sheet = _sized_sheet(tmp_path, kind)
+    spec, stages = sheet.spec, sheet.spec.verification.stages
+    t = sheet.items[0][columns[0]]
+    # the value meets the target: the linearised yield at it (and at 1e-3 more) brackets it
+    sized = dataclasses.replace(spec.tolerances, items=tuple(
+        dataclasses.replace(q, value=t) if q.quantity in axes else q
+        for q in spec.tolerances))
+    bigger = dataclasses.replace(sized, items=tuple(
+        dataclasses.replace(q, value=1.001 * t) if q.quantity in axes else q for q in sized))
+    at = linearised_yield_function(spec.scene)
+    assert at(spec.scene, spec.design_at(), sized, stages)["yield"] >= 0.9973 - 1e-9
+    assert at(spec.scene, spec.design_at(), bigger, stages)["yield"] < 0.9973
+    assert all(item[c] == t for item in sheet.items for c in columns)  # every row, both axes
+    assert sorted(row[3] for row in sheet.summary if row[3] is not None) == [t, t]
+    assert f"{t:.12g}"[:8] in sheet_csv(sheet).splitlines()[1]
+    table = "\n".join(_table_rows(sheet))  # the PDF's coordinate pages
+    assert table.count(f"+-{t * 1e3:.3g}") == 2 * stages
+    entries = {e.quantity: e.value for e in tolerance_entries(sheet)}
+    assert [entries[q.replace("_", " ")] for q in axes] == [t, t]  # once each, no box beside
+    assert not any("(box)" in q for q in entries)
+    if kind == "manipulators":  # the legend's red boxes, one per pivot, 2 t wide
+        boxes = _unfilled_boxes(draw(sheet))
+        assert len(boxes) == stages
+        assert all(b.get_width() == pytest.approx(2e3 * t) for b in boxes)
+
+
+# ------------------------------------------------------------------ restitution 1
+
+def _stairs_at_restitution_1(tmp_path, objective):
+    data = tomllib.loads((PROBLEMS / "stairs_design.toml").read_text())
+    data["design"]["restitution"] = 1.0
+    data.pop("expect")
+    data["objective"] = objective
+    return write(tmp_path, data)
+
+
+@pytest.mark.parametrize("objective", [{}, {"max_min_margin": 1.0}])
+def test_restitution_1_with_a_free_variable_solves_to_the_flat_floor(tmp_path, objective):
+    code, out, err = run("optimize", _stairs_at_restitution_1(tmp_path, objective),
+                         "--format", "json")
+    doc = json.loads(out)
+    assert code == 0 and doc["status"] == "optimal", (doc["status"], doc["violations"])
+    # periodic orbit at eps = 1: rise (1 - eps^2) h0 = 0, tread vx (1 + eps) V / g with the
+    # vertical speed V = sqrt(2 g h0) of the drop (docs: the paper's periodic orbit)
+    v0, g = doc["design"]["launch_speed"], 9.81
+    assert doc["design"]["rise"] == 0.0
+    assert doc["design"]["tread"] == pytest.approx(2.0 * v0 * math.sqrt(2.0 * g * 1.0) / g,
+                                                   rel=1e-9)
+    assert doc["verification"]["passed"]
+
+
+def test_restitution_1_under_a_tolerance_box_says_the_floor_is_flat(tmp_path):
+    code, out, err = run("optimize", _stairs_at_restitution_1(
+        tmp_path, {"max_offset_tolerance": 1.0}), "--format", "json", "--no-verify")
+    doc = json.loads(out)
+    assert code == 1 and doc["status"] == "infeasible"
+    assert any(v.startswith("restitution 1 gives a periodic rise (1 - restitution^2) h0 = 0")
+               and "no tolerance box exists" in v for v in doc["violations"])
+
+
+# ------------------------------------------------------------------ beta not beyond alpha
+
+@pytest.mark.parametrize("alpha, beta, keys", [
+    (0.5, 0.4, ("design.alpha", "design.beta")),
+    (0.5, 0.5, ("design.alpha", "design.beta")),      # beta = alpha: no descent either
+    ({"min": 0.5, "max": 0.6}, {"min": 0.2, "max": 0.4}, ("design.alpha.min", "design.beta.max")),
+])
+def test_beta_never_beyond_alpha_with_a_free_variable_is_bad_input_naming_both(tmp_path, alpha,
+                                                                              beta, keys):
+    # a periodic handover needs beta > alpha (docs/spec.md); with link_length free the
+    # optimizer can move neither angle: no design it may choose has one
+    data = robust_data(alpha=alpha, beta=beta, link_length={"min": 1.0, "max": 3.0})
+    data.pop("expect", None)
+    code, out, err = run("optimize", write(tmp_path, data))
+    assert code == 2 and out == "" and "Traceback" not in err
+    assert err.startswith(f"error: {tmp_path / 'spec.toml'}: {keys[0]} and {keys[1]}: expected "
+                          "a handover angle beta above the back-stop angle alpha")
+
+
+
+def test_a_guess_with_beta_below_a_fixed_alpha_is_no_solver_error(tmp_path):
+    # beta's guess, the middle of [0.2, 0.55], is below alpha = 0.5: no closed form is defined
+    # there, and every start moved toward it ended IPOPT at once (Invalid_Number_Detected)
+    data = robust_data(alpha=0.5, beta={"min": 0.2, "max": 0.55},
+                       link_length={"min": 1.0, "max": 3.0})
+    data.pop("expect", None)
+    code, out, err = run("optimize", write(tmp_path, data), "--format", "json", "--no-verify")
+    doc = json.loads(out)
+    assert doc["status"] == "infeasible" and code == 1 and doc["violations"]
+    assert doc["design"]["beta"] > 0.5  # the least-violation design has a handover
+
+
+# ------------------------------------------------------------------ friction on the stairs
+
+def test_a_staircases_friction_tolerance_is_on_its_treads_and_the_step(tmp_path):
+    from pdm_design.sheet import sheet_for
+    from pdm_design.sheet.build import allocated_entries
+    from pdm_design.sheet.parts import parts_list, tolerance_entries
+
+    data = tomllib.loads((PROBLEMS / "paper_stairs_friction.toml").read_text())
+    data["tolerances"] = {"friction": {"value": 0.02, "applies_to": "lot"}}
+    sheet = sheet_for(write(tmp_path, data), tolerance=False)
+    (entry,) = [e for e in tolerance_entries(sheet) if e.quantity.startswith("friction")]
+    assert "palm" not in entry.applies_to and entry.applies_to.startswith("every tread's surface")
+    parts, other = parts_list(sheet)
+    step = next(p for p in parts if p.name == "step")
+    assert [e.quantity for e in step.tolerances] == ["friction (spec)"] and other == ()
+    # an allocated friction (optimize's tolerance list) is on the treads too, a palm's on a row
+    allocated = {"quantity": "friction", "applies_to": "lot", "value": 0.02, "unit": "1",
+                 "allocated": True, "limited_by": []}
+    assert allocated_entries([allocated], kind="stairs")[0].applies_to.startswith("every tread's")
+    assert allocated_entries([allocated], kind="manipulators")[0].applies_to.startswith("every palm's surface")
+
+
+# ------------------------------------------------------------------ the sensitivity line
+
+def test_the_sensitivity_line_is_sorted_with_its_intervals_and_says_what_is_not_resolved(
+        tmp_path):
+    import dataclasses
+
+    from pdm_design.spec import load_spec
+    from pdm_design.tolerances.command import yield_text
+    from pdm_design.tolerances.yield_ import yield_of
+
+    spec = load_spec(_one_tolerance_spec(tmp_path, "stairs_yield.toml",
+                                         {"rise": {"value": 0.005, "applies_to": "each"}}))
+    result = yield_of(spec.scene, spec.design_at(), spec.tolerances, builds=16, stages=2,
+                      confirm=1, scales=(), sensitivity_samples=0)
+    rows = ({"quantity": "tread", "index": 0.10, "first": 0.02, "confidence": 0.15},   # 0 inside
+            {"quantity": "launch_speed", "index": 0.62, "first": 0.5, "confidence": 0.2},
+            {"quantity": "restitution", "index": 0.004, "first": 0.0, "confidence": 0.001},
+            {"quantity": "rise", "index": 0.25, "first": 0.2, "confidence": 0.25})     # = width
+    text = yield_text(dataclasses.replace(result, sensitivity=rows), "stairs")
+    (line,) = [s for s in text.splitlines() if s.startswith("sensitivity")]
+    body = line.split(": ", 1)[1]
+    unresolved = " (not resolved by the builds drawn: its 95 % interval includes 0)"
+    assert body == ("launch_speed 0.62 +- 0.2, rise 0.25 +- 0.25" + unresolved
+                    + ", tread 0.1 +- 0.15" + unresolved + ", restitution 0.004 +- 0.001")
+
+
+# ------------------------------------------------------------------ labels inside the page
+
+LONG_PALM = (("palm mass (spec)", "every palm", 0.002, "kg", "the spec's statistical tolerance"),
+             ("friction (spec)", "every palm's surface (one lot)", 0.05, "",
+              "the spec's statistical tolerance"),
+             ("link length (spec)", "every link", 0.0005, "m", "the spec's"))
+
+
+def _outside_the_page(figure):
+    """The drawn texts whose extents (the figure's renderer) leave the page, with them."""
+    from matplotlib.text import Text
+
+    from pdm_design.sheet.labels import figure_texts
+
+    figure.draw_without_rendering()  # the positions of this page as drawn, at its dpi
+    renderer, page = figure.canvas.get_renderer(), figure.bbox
+    out = []
+    for text in figure_texts(figure):
+        box = Text.get_window_extent(text, renderer)
+        if box.x0 < page.x0 or box.y0 < page.y0 or box.x1 > page.x1 or box.y1 > page.y1:
+            out.append((text.get_text(), round(box.x0), round(box.x1)))
+    return out
+
+
+@pytest.mark.parametrize("tol", [None, {"dx": 0.08, "dy": 0.08}])
+def test_every_label_of_every_pdf_page_of_a_30_row_is_inside_the_page(tol):
+    import dataclasses
+
+    from pdm_design.sheet import make_sheet
+    from pdm_design.sheet.drawing import PAGE_ITEMS, draw
+    from pdm_design.sheet.labels import overlapping_texts
+    from pdm_design.sheet.parts import ToleranceEntry
+    from pdm_design.spec import load_spec
+
+    spec = load_spec(PROBLEMS / "paper_manipulators.toml")
+    sheet = dataclasses.replace(make_sheet(spec, "evaluated", tol, "given here", 30),
+                                tolerances=tuple(ToleranceEntry(*e) for e in LONG_PALM))
+    pages = [draw(sheet)] + [draw(sheet, first, min(first + PAGE_ITEMS - 1, 30), notes=False)
+                             for first in range(1, 31, PAGE_ITEMS)]  # the PDF's pages
+    for number, page in enumerate(pages, start=1):
+        assert _outside_the_page(page) == [], number
+        assert overlapping_texts(page) == [], number

@@ -195,7 +195,9 @@ def test_the_text_shows_noise_indices_as_zero_and_no_unit_for_a_coefficient(tmp_
              {"scale": 1.0, "simulated": 0, "builds": 20, "estimate": 1.0, "ci_low": 0.8,
               "ci_high": 1.0})
     text = yield_text(dataclasses.replace(r, sensitivity=rows, scale_curve=curve), "row")
-    assert "pivot_y 0.6, pivot_x ~0, friction ~0" in text and "e-30" not in text
+    assert "pivot_y 0.6 +- 0.2, pivot_x 0.05 +- 0.1 (not resolved" in text
+    assert "its 95 % interval includes 0), friction 0\n" in text
+    assert "e-30" not in text
     (line,) = [s for s in text.splitlines() if s.strip().startswith("friction")]
     assert line.split()[:3] == ["friction", "+-0.1", "lot"]
     assert f"{r.confirmed['simulated'] + 4} builds simulated in all" in text

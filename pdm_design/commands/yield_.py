@@ -156,16 +156,28 @@ def _pct(x: float) -> str:
     return f"{100.0 * x:.2f} %"
 
 
-NEGLIGIBLE_INDEX = 1e-3  # a Sobol' index below this, or below its confidence, prints as ~0
+NEGLIGIBLE_INDEX = 1e-3  # a Sobol' index below this with no interval (noise, 5e-30) prints as 0
+UNRESOLVED = "not resolved by the builds drawn: its 95 % interval includes 0"
 
 
 def _index_text(row: dict) -> str:
-    """A Sobol' total index as text: "~0" where it cannot be told from 0 (below its 95 %
-    confidence half width or below NEGLIGIBLE_INDEX: sampling and rounding noise)."""
-    index = row["index"]
-    if not index >= max(NEGLIGIBLE_INDEX, row.get("confidence", 0.0) or 0.0):
-        return "~0"
-    return f"{index:.3g}"
+    """A Sobol' total index as text: the index and its 95 % confidence half width, and in words
+    when the builds drawn do not resolve it (the half width as large as the index: its interval
+    includes 0); 0 for an index below NEGLIGIBLE_INDEX with no interval (rounding noise), the
+    index alone where it has no interval (one quantity: 1 by definition)."""
+    index, half = row["index"], row.get("confidence", 0.0) or 0.0
+    if not half > 0.0:
+        return "0" if not index >= NEGLIGIBLE_INDEX else f"{index:.3g}"
+    shown = f"{index:.2g} +- {half:.2g}"
+    return shown if index > half else f"{shown} ({UNRESOLVED})"
+
+
+def _sensitivity_line(rows) -> str:
+    """The text report's sensitivity line: every quantity, largest total index first."""
+    ordered = sorted(rows, key=lambda row: -row["index"])
+    return ("sensitivity (Sobol' total index of the smallest margin, largest first, +- its 95 % "
+            "confidence half width): " + ", ".join(f"{s['quantity']} {_index_text(s)}"
+                                                   for s in ordered))
 
 
 def yield_text(result: YieldResult, name: str) -> str:
@@ -196,8 +208,7 @@ def yield_text(result: YieldResult, name: str) -> str:
                  f"simulated; {counted(c['simulated'] + curve, 'build')} simulated in all"
                  + (f" ({curve} of them for the yield against tolerance scale)" if curve else ""))
     if r.sensitivity:
-        lines.append("sensitivity (Sobol' total index of the smallest margin): " + ", ".join(
-            f"{s['quantity']} {_index_text(s)}" for s in r.sensitivity))
+        lines.append(_sensitivity_line(r.sensitivity))
     elif r.sensitivity_note:
         lines.append(f"sensitivity: {r.sensitivity_note}")
     if r.failing:

@@ -269,6 +269,20 @@ class Formulation:
             lo, hi = (mid, hi) if defined(_between(anchor, design, mid))[1] else (lo, mid)
         return self.start_vector(_between(anchor, design, lo / 2))
 
+    def defined_anchor(self, anchor: dict[str, float], candidates, p) -> dict[str, float]:
+        """`anchor` where every row is a number there, else the first of `candidates` (a
+        callable giving designs, drawn only then) where they are: the spec's guess may lie
+        where a closed form is undefined (beta below a fixed alpha), and starts moved toward
+        it stay there. The anchor itself when no candidate is defined either."""
+        def defined(values):
+            rows, _, terms, _ = self.evaluate(self.start_vector(values), p)
+            return bool(np.isfinite(np.asarray(rows)).all()
+                        and np.isfinite(np.asarray(terms)).all())
+
+        if defined(anchor):
+            return anchor
+        return next((d for d in candidates() if defined(d)), anchor)
+
     def defined_starts(self, designs: list[dict[str, float]], anchor: dict[str, float],
                        p) -> list[np.ndarray]:
         """defined_start of each design; those already defined are found in one evaluation

@@ -57,6 +57,7 @@ class BuildSheet:
     violations: tuple[str, ...] = field(default=())
     verification: dict | None = None
     tolerances: tuple = field(default=())  # further ToleranceEntry (sheet/parts.py), by part
+    statistical: bool = False  # tolerance: the placement's statistical tolerances, not a box
 
     @property
     def kind(self) -> str:
@@ -108,15 +109,18 @@ def sheet_for(path: str | Path, *, count: int | None = None,
         status, tol = outcome.status.value, outcome.tolerance
         violations, verification = tuple(outcome.violations), outcome.verification
         target = _yield_target(spec)
-        extra = (allocated_entries(outcome.tolerances, target=target)
-                 if outcome.tolerances else spec_entries(spec))
+        sized = outcome.tolerances
+        if target is not None and not sized and _is_success(status):  # a fixed design
+            sized = _sized_at(spec, spec.design_at(values), str(path))
+        extra = (allocated_entries(sized, target=target, kind=spec.kind) if sized
+                 else spec_entries(spec))
     fixed = fixed_spec(spec, values, source=str(path))
     if verification is None and _is_success(status):  # saved with --no-verify: simulate it now
         verification = _verify_now(fixed)
     if target is not None:  # statistical tolerances, listed below: no box
-        tol, note = None, (f"no worst-case box: the tolerances are sized for a linearised yield "
-                           f"of {100 * target:.4g} % (listed below; check it with "
-                           "`pdm-design yield`)")
+        tol, note = _placement(spec.kind, sized), (
+            f"no worst-case box: the tolerances are sized for a linearised yield of "
+            f"{100 * target:.4g} % (listed below; check it with `pdm-design yield`)")
     elif _is_success(status) or tol:
         tol, note = _tolerance(fixed, tol, tolerance)
     else:  # a box around a design that does not work is no build tolerance
@@ -127,7 +131,39 @@ def sheet_for(path: str | Path, *, count: int | None = None,
                            violations=violations, verification=verification)
     except ValueError as exc:  # e.g. a staircase that cannot be built from this design
         raise PdmError(f"{path}: no build sheet: {exc}") from None
+    if target is not None:
+        sheet = dataclasses.replace(sheet, statistical=True)
     return dataclasses.replace(sheet, tolerances=(*sheet.tolerances, *extra)) if extra else sheet
+
+
+def _placement(kind: str, entries) -> dict[str, float] | None:
+    """The placement tolerance by axis (the scene's box axes) of statistical tolerance
+    entries: 0 on an axis they leave untoleranced; None when they tolerance neither (or the
+    scene has no per-stage box)."""
+    from ..plugin import scene_kind
+
+    box = scene_kind(kind).box_axes
+    values = {e["quantity"]: e["value"] for e in entries or ()}
+    if box is None or not any(q in values for q in box.quantities):
+        return None
+    return {axis: float(values.get(q) or 0.0) for axis, q in box.axes}
+
+
+def _sized_at(spec, point, source: str) -> tuple:
+    """optimize's tolerance list (`allocated_entries`' input) of a fixed design whose
+    tolerances to allocate are sized for the spec's yield target: the sizes `pdm-design yield`
+    builds with, each allocated one limited by the union bound's dominant rows."""
+    from ..solve.yield_allocation import dominant_rows
+    from ..commands.yield_ import sized_tolerances
+
+    stages = spec.verification.stages
+    sized = sized_tolerances(spec, source, point, stages)
+    limits = dominant_rows(spec.scene, point, sized, stages)
+    to_allocate = {t.quantity for t in spec.tolerances if t.allocate}
+    return tuple(t.to_json(spec.kind) | {"allocated": t.quantity in to_allocate,
+                                         "limited_by": limits if t.quantity in to_allocate
+                                         else []}
+                 for t in sized)
 
 
 # the part each allocated quantity is built on, in the words sheet/parts.py puts on a part
@@ -143,7 +179,16 @@ ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot brac
 SPEC_WORDS = "the spec's statistical tolerance"
 
 
-def allocated_entries(entries, target: float | None = None) -> tuple:
+def part_words(kind: str, quantity: str) -> str:
+    """The part a tolerance of `quantity` is built on, in the words of sheet/parts.py (the
+    scene's own where they differ: Scene.quantity_parts)."""
+    from ..plugin import scene_kind
+
+    own = scene_kind(kind).quantity_parts if kind else {}
+    return own.get(quantity, ALLOCATED_PART.get(quantity, quantity))
+
+
+def allocated_entries(entries, target: float | None = None, kind: str = "") -> tuple:
     """ToleranceEntry of every allocated or given tolerance of an optimize answer other than
     the pivots' (the sheet's own box lists those), on its part, with what limits it; with a
     yield `target` (tolerances sized for it, formulation/manipulators/yield_target.py: no box) the
@@ -160,8 +205,8 @@ def allocated_entries(entries, target: float | None = None) -> tuple:
         why = (f"allocated{sized}; limited by " + (in_words(e["limited_by"]) or SHARED)
                if e["allocated"] else "given in the spec")
         out.append(ToleranceEntry(e["quantity"].replace("_", " "),
-                                  ALLOCATED_PART.get(e["quantity"], e["quantity"]) + lot,
-                                  e["value"], "" if e["unit"] == "1" else e["unit"], why))
+                                  part_words(kind, e["quantity"]) + lot, e["value"],
+                                  "" if e["unit"] == "1" else e["unit"], why))
     return tuple(out)
 
 
@@ -188,7 +233,7 @@ def spec_entries(spec) -> tuple:
                   else "uniform over +-t")
         lot = " (one lot)" if t.applies_to == "lot" else ""
         out.append(ToleranceEntry(t.quantity.replace("_", " ") + " (spec)",
-                                  ALLOCATED_PART.get(t.quantity, t.quantity) + lot, t.value,
+                                  part_words(spec.kind, t.quantity) + lot, t.value,
                                   "" if unit == "1" else unit,
                                   f"{SPEC_WORDS} ({spread})"))
     return tuple(out)

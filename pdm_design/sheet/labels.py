@@ -64,12 +64,13 @@ class Labels:
                 placed.append(box)
                 continue
             if spot is None and not optional:
-                spot = self._free_spot(note, renderer, placed, frame)
+                spot = (self._free_spot(note, renderer, placed, frame)
+                        or _nearest_free(note, renderer, placed, frame))
             if spot is None:
                 if optional:
                     note.set_visible(False)
                     continue
-                note.xyann = note.xyann  # kept where it was: the test will say so
+                _within(note, renderer, frame)  # kept near where it was, on the page
             else:
                 _leader(note)
             placed.append(_extent(note, renderer))
@@ -84,13 +85,46 @@ class Labels:
                 angle = math.pi / 2 + k * math.pi / 4
                 note.xyann = (x0 + ring * step * 2.5 * math.cos(angle),
                               y0 + ring * step * math.sin(angle))
-                box = _extent(note, renderer)
+                box = _within(note, renderer, frame)
                 if (not _hits(box, placed, -GAP) and _inside(box, frame)
                         and (lines is None or not _text_crosses(note, box, lines))
                         and not _leader_crosses(note, box, placed)):
                     return note.xyann
         note.xyann = (x0, y0)
         return None
+
+
+def _nearest_free(note, renderer, placed, frame, steps: int = 24):
+    """The nearest place on the page, on a grid of steps x steps offsets, where the label
+    runs into no text placed (lines and its leader not minded: a last resort before a label
+    off the page); None when there is none."""
+    x0, y0 = note.xyann
+    points = 72.0 / note.figure.dpi
+    dx, dy = frame.width * points / steps, frame.height * points / steps
+    offsets = sorted(((i * dx, j * dy) for i in range(-steps, steps + 1)
+                      for j in range(-steps, steps + 1)), key=lambda o: math.hypot(*o))
+    for ox, oy in offsets:
+        note.xyann = (x0 + ox, y0 + oy)
+        box = _extent(note, renderer)
+        if _inside(box, frame) and not _hits(box, placed, -GAP):
+            return note.xyann
+    note.xyann = (x0, y0)
+    return None
+
+
+def _within(note, renderer, frame):
+    """The label's extent, the label first moved the least that brings it inside the page
+    (`frame`, GAP in) where its place runs over an edge: a long label beside the page's edge
+    has a place near its point there too. (A label wider or taller than the page stays put.)"""
+    box = _extent(note, renderer)
+    dx = max(frame.x0 + GAP - box.x0, 0.0) - max(box.x1 - frame.x1 + GAP, 0.0)
+    dy = max(frame.y0 + GAP - box.y0, 0.0) - max(box.y1 - frame.y1 + GAP, 0.0)
+    if (dx or dy) and box.width + 2 * GAP <= frame.width and box.height + 2 * GAP <= frame.height:
+        points = 72.0 / note.figure.dpi  # xyann is in points
+        x, y = note.xyann
+        note.xyann = (x + dx * points, y + dy * points)
+        box = _extent(note, renderer)
+    return box
 
 
 def _leader_crosses(note, box, placed) -> bool:

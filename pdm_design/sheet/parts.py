@@ -92,7 +92,8 @@ def tolerance_entries(sheet) -> tuple[ToleranceEntry, ...]:
     from ..plugin import of
 
     own = ()
-    if sheet.tolerance:
+    if sheet.tolerance and not getattr(sheet, "statistical", False):  # statistical: among
+        # the others
         own = of(sheet.spec).box_tolerances(sheet, f"{BOX_WORDS}: {sheet.tolerance_note}")
     return (*own, *getattr(sheet, "tolerances", ()))
 

@@ -135,6 +135,10 @@ def _check_options(spec, requirements, starts, max_iter, tol) -> None:
                          "max_iter >= 1")
 
 
+# designs drawn to find a start where the closed forms are defined when the guess is not one
+ANCHOR_CANDIDATES = 64
+
+
 def _start_points(spec, form, p, starts, seed, start_from):
     """(the spec's guess by name, the lower and upper bounds, the NLP's start points): the
     `start_from` design first, then the guess and scrambled-Sobol points."""
@@ -145,7 +149,9 @@ def _start_points(spec, form, p, starts, seed, start_from):
     designs = start_designs(names, lows, highs, guess, max(starts, 1), seed)
     if start_from:  # first, so that it is tried even with one start
         designs = [{n: float(start_from.get(n, guess[n])) for n in names}] + designs
-    return guess, lows, highs, form.defined_starts(designs, guess, p)
+    anchor = form.defined_anchor(guess, lambda: designs + start_designs(
+        names, lows, highs, guess, ANCHOR_CANDIDATES, seed + 1), p)
+    return guess, lows, highs, form.defined_starts(designs, anchor, p)
 
 
 def _stacks(form, was_cached: bool) -> bool:

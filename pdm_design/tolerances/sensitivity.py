@@ -58,6 +58,10 @@ def sobol_indices(run: Callable, tolerances: Iterable, *, stages: int, parts: in
 
     base = 1 << max(1, math.ceil(math.log2(samples)))
     x = sample.sample(problem, base, calc_second_order=False, seed=seed)
+    if len(active) == 1:
+        # one quantity explains all the variance there is: S1 = ST = 1 by definition (SALib
+        # reads one group as none and its analysis expects another sample's size)
+        x = x[:3 * base]
     outcome = run(_deviations(x, active, parts), stages)
     y = np.asarray(outcome.min_margin if output == "min_margin" else outcome.passed,
                    dtype=float)
@@ -65,6 +69,8 @@ def sobol_indices(run: Callable, tolerances: Iterable, *, stages: int, parts: in
         raise ValueError("the build map returned a non-finite output: no variance to split")
     if np.ptp(y) == 0.0:
         return _table(zero)
+    if len(active) == 1:
+        return _table({**zero, active[0][0]: (1.0, 1.0, 0.0)})
     # SALib's analysis seeds its bootstrap only with a true seed (0 would leave it unseeded)
     si = analyze.analyze(problem, y, calc_second_order=False, num_resamples=resamples,
                          seed=seed + 1)

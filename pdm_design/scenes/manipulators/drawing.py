@@ -100,7 +100,7 @@ def _first_dimensions(ax, labels, sheet, item):
                color="tab:red" if placed else "black")
     cx, cy = (x + l * math.sin(-a)) * MM, (y + l * math.cos(-a)) * MM
     mass = sheet.spec.scene.body.mass / d["mass_ratio"]
-    more = f", {tol['palm']}" if tol.get("palm") else ""
+    more = f",\n{tol['palm']}" if tol.get("palm") else ""  # a line of its own: a narrower label
     labels.add(ax, f"palm {palm.width * MM:.0f} x {palm.thickness * MM:.0f} mm, "
                f"{mass:.4g} kg{more}", (cx - palm.width * MM / 2, cy), (-10, 10), ha="right",
                line=True)

@@ -39,10 +39,12 @@ class Manipulators(Scene):
         return ManipulatorsDesign
 
     def check_spec(self, scene, design):
-        """A start below palm 1 whatever the design (start.py)."""
+        """No periodic handover in the design's bounds (handover.py), or a start below palm 1
+        whatever the design (start.py)."""
+        from .handover import no_handover
         from .start import unreachable_start
 
-        return unreachable_start(scene.initial.position[1], design)
+        return no_handover(design) or unreachable_start(scene.initial.position[1], design)
 
     def stage_limit(self, free):
         if free:

@@ -141,6 +141,7 @@ class Stairs(Scene):
     tolerance_axes = ("rise", "tread")
     dxf_layers = {"STEPS": 7}  # scenes/stairs/dxf.py
     stage_columns = ("step", "impact_time", "landing_x", "impact_speed", "vx", "spin_after")
+    quantity_parts = {"friction": "every tread's surface (the ball's grip)"}
 
     @property
     def part_words(self):
@@ -204,6 +205,11 @@ class Stairs(Scene):
 
 
     # ------------------------------------------------------------------ command line, tables, API
+    def infeasible_cause(self, spec, design):
+        from .words import flat_floor
+
+        return flat_floor(spec, design)
+
     table_geometry = ("nose_clearance",)
     table_periodic = ("impact_speed", "vertical_impact_speed", "horizontal_speed",
                       "spin", "flight_time", "drift_per_bounce")

@@ -29,3 +29,16 @@ PHASE_HINTS = {
         ("comes down", f"{_FORWARD}: it comes down on the nose ahead"),
     ),
 }
+
+
+def flat_floor(spec, design: dict) -> str | None:
+    """Why a staircase sized for a tolerance box cannot be built at restitution 1 (None
+    otherwise): its periodic rise (1 - eps^2) h0 is 0, a flat floor, and a rise error of any
+    size makes a step go up (the step_down row holds the box below the rise)."""
+    if (not float(design.get("restitution") or 0.0) >= 1.0
+            or not float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0):
+        return None
+    return ("restitution 1 gives a periodic rise (1 - restitution^2) h0 = 0: the steps are a "
+            "flat floor, where a rise error of any size makes a step go up, so no tolerance box "
+            "exists (objective max_offset_tolerance): give a restitution below 1, or drop that "
+            "objective")
