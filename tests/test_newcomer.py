@@ -462,7 +462,8 @@ def test_a_sheet_sized_for_a_yield_shows_the_placement_tolerance_everywhere(tmp_
     import dataclasses
 
     from pdm_design.sheet import sheet_csv
-    from pdm_design.sheet.drawing import _table_rows, draw
+    from pdm_design.plugin import of
+    from pdm_design.sheet.drawing import draw
     from pdm_design.sheet.parts import tolerance_entries
     from pdm_design.solve.yield_allocation import linearised_yield_function
 
@@ -481,7 +482,7 @@ def test_a_sheet_sized_for_a_yield_shows_the_placement_tolerance_everywhere(tmp_
     assert all(item[c] == t for item in sheet.items for c in columns)  # every row, both axes
     assert sorted(row[3] for row in sheet.summary if row[3] is not None) == [t, t]
     assert f"{t:.12g}"[:8] in sheet_csv(sheet).splitlines()[1]
-    table = "\n".join(_table_rows(sheet))  # the PDF's coordinate pages
+    table = "\n".join(of(sheet.spec).table_rows(sheet))  # the PDF's coordinate pages
     assert table.count(f"+-{t * 1e3:.3g}") == 2 * stages
     entries = {e.quantity: e.value for e in tolerance_entries(sheet)}
     assert [entries[q.replace("_", " ")] for q in axes] == [t, t]  # once each, no box beside
@@ -587,7 +588,7 @@ def test_the_sensitivity_line_is_sorted_with_its_intervals_and_says_what_is_not_
     import dataclasses
 
     from pdm_design.spec import load_spec
-    from pdm_design.tolerances.command import yield_text
+    from pdm_design.commands.yield_ import yield_text
     from pdm_design.tolerances.yield_ import yield_of
 
     spec = load_spec(_one_tolerance_spec(tmp_path, "stairs_yield.toml",
