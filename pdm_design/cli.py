@@ -326,7 +326,7 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build):
             from .tolerances.command import simulate_build_of_spec
 
             result = simulate_build_of_spec(loaded, spec, point, build, row, accuracy=accuracy,
-                                            record_trajectory=plot is not None)
+                                            record_trajectory=plot is not None, answer=found)
             if plot is not None and result.events and result.events[0].kind == "invalid_part":
                 click.echo("no figures: the build has a part that cannot be made", err=True)
                 plot = None
