@@ -9,7 +9,6 @@ from .units import UNITS as _UNITS
 from .units import built_parts as _built_parts
 
 
-
 def _rows(values: dict) -> list[str]:
     width = max((len(k) for k in values), default=0)
     out = []
@@ -131,7 +130,8 @@ def tolerances_yield_rows(r: dict) -> list[str]:
     first = r["sized_by_linearisation"]
     lines = [f"  yield target {_pct(r['target'])}: Monte Carlo {_pct(r['estimate'])} "
              f"(95 % interval {_pct(r['ci_low'])} to {_pct(r['ci_high'])}) over {r['builds']} "
-             f"builds of {r['stages']} stages, seed {r['seed']}; linearised {_pct(r['linearised'])}"]
+             f"builds of {r['stages']} stages, seed {r['seed']}; "
+             f"linearised {_pct(r['linearised'])}"]
     if r["scale"] != 1.0:
         lines.append(f"  sized by the linearised yield alone, they gave {_pct(first['estimate'])} "
                      f"({_pct(first['ci_low'])} to {_pct(first['ci_high'])}): "

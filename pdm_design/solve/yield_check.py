@@ -61,8 +61,8 @@ def check_allocation(scene, design, tolerances, allocated, *, target: float, sta
 
 
 def _check(scene, design, tolerances, allocated, target, stages, accuracy):
-    from .yield_allocation import linearised_yield_function
     from ..tolerances.yield_ import yield_of
+    from .yield_allocation import linearised_yield_function
 
     linearised = linearised_yield_function(scene)
     runs = {}
@@ -111,16 +111,20 @@ def _pct(x: float) -> str:
 
 
 def _unmet_words(tiny, target, builds, stages) -> str:
-    """Why no scale of the allocated tolerances meets the target, in words."""
+    """Why no scale of the allocated tolerances meets the target, in words: too few builds to
+    show it (the estimate at the tiny factor reaches it, its interval does not), or the design
+    with its given tolerances fails more often than the target allows."""
+    from ..tolerances.yield_ import Z95
+
     head = (f"the yield target {_pct(target)} cannot be met: with the allocated tolerances at "
             f"{TINY:g} of their linearised size, {_pct(tiny.estimate)} of {builds} builds pass "
             f"all {stages} stages (95 % interval from {_pct(tiny.ci_low)})")
-    if tiny.estimate >= 1.0:
-        return (head + f": {builds} builds cannot show {_pct(target)} even with none failing; "
-                "raise tolerances.builds")
+    if tiny.estimate >= target:
+        return (head + f": {builds} builds cannot show {_pct(target)} (with none failing the "
+                f"lower end is {_pct(builds / (builds + Z95 ** 2))}); raise tolerances.builds")
     failures = ", ".join(f"{k} {v}" for k, v in tiny.failures.items())
     return (head + f"; the design with its given tolerances fails too often ({failures}): "
-            "tighten the given tolerances, or lower the target")
+            "tighten the given tolerances, change the design, or lower the target")
 
 
 def entries_checked(entries, checked: CheckedAllocation) -> list[dict]:
