@@ -20,7 +20,7 @@ from test_yield_target_stairs import free_text, sized_text
 
 from pdm_design.cli import main
 from pdm_design.solve.yield_allocation import allocate_for_yield
-from pdm_design.solve.yield_check import STEPS, TINY
+from pdm_design.solve.yield_check import LADDER, STEPS, TINY
 from pdm_design.spec import load_spec
 from pdm_design.tolerances.yield_ import Z95, yield_of
 
@@ -90,10 +90,13 @@ def test_the_factor_is_the_largest_the_bisection_resolves_and_the_estimate_is_mo
     # common random numbers: a wider allocation fails every build a narrower one fails here
     estimates = [s["estimate"] for s in steps]
     assert estimates == sorted(estimates, reverse=True), steps
+    # the ladder's first rung meets it here, and the bisections between it and 1 end within
+    # 1/8 / 2^STEPS of the smallest failing factor above the answer
+    assert record["steps"][1]["scale"] == LADDER[0] <= record["scale"]
     failing = [s["scale"] for s in steps if s["ci_low"] < TARGET]
     above = min(f for f in failing if f > record["scale"])
-    assert above - record["scale"] <= (1.0 - TINY) / 2**STEPS + 1e-12
-    assert len(steps) == STEPS + 2  # 1, TINY and the bisections: the cost is bounded
+    assert above - record["scale"] <= (1.0 - LADDER[0]) / 2**STEPS + 1e-12
+    assert len(steps) == 2 + STEPS  # 1, the rung and the bisections: the cost is bounded
     # an independent run at the next factor up (the reported tolerances scaled to it) does
     # not show the target
     widened = reported(spec, out)

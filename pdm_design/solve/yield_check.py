@@ -8,22 +8,27 @@ simulator on every build outside it and on `confirm` random others) with the spe
 `seed` and `confirm`, so that `pdm-design yield` of the answer is the same run.
 
 Where the 95 % interval's lower end is below the target, every allocated tolerance is shrunk
-by one common factor c (the given ones kept), the design fixed: c = 1 is checked first; then a
-tiny factor (TINY: the design with its given tolerances alone, near enough), which must meet the
-target, else the target cannot be met and `words` say why; then STEPS bisections of c between
-the largest factor known to meet the target and the smallest known not to. The builds are the
-same at every c (common random numbers: build i's uniform numbers are fixed by the seed, and an
+by one common factor c (the given ones kept), the design fixed. c = 1 is checked first; then
+the factors of LADDER in turn, down to TINY (the design with its given tolerances alone, near
+enough), until one meets the target; then STEPS bisections of c between it and the factor above
+it that did not. The ladder, not a bisection from TINY, because the yield need not rise as the
+tolerances shrink: a design centred for the pivots' drift can drift the other way with the
+pivots exact (solve/yield_allocation.py), and the 100-stage row passes fewer builds with its
+pivots exact than at their linearised size. When no factor meets the target, `words` say why
+and the factor reported is the one whose lower end came nearest. The builds are the same at
+every c (common random numbers: build i's uniform numbers are fixed by the seed, and an
 allocated quantity's deviation is c times the one at c = 1), so the estimate moves with c only
 through the builds whose verdict c changes, and the bisection does not chase sampling noise.
-The answer is always a factor that was checked: its estimate is the one reported.
+The answer is always a factor that was checked: its run is the one reported.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-STEPS = 6  # bisections of the factor: the answer within 1/64 of the linearised allocation's
 TINY = 1e-3  # the factor that stands for the design with its given tolerances alone
+LADDER = (0.875, 0.75, 0.5, 0.25, TINY)  # factors tried after 1, until one meets the target
+STEPS = 4  # bisections between that factor and the one above it: 1/128 of the size near 1
 _CACHE: dict = {}  # the last few checks, by their inputs (optimize, then yield, of one spec)
 _CACHE_SIZE = 4
 
@@ -74,22 +79,32 @@ def _check(scene, design, tolerances, allocated, target, stages, accuracy):
                                 accuracy=accuracy, scales=(), sensitivity_samples=0)
         return runs[factor].ci_low >= target
 
-    if judge(1.0):
-        best, met = 1.0, True
-    elif not judge(TINY):
-        best, met = TINY, False
-    else:
-        good, bad = TINY, 1.0
-        for _ in range(STEPS):
-            mid = 0.5 * (good + bad)
-            good, bad = (mid, bad) if judge(mid) else (good, mid)
-        best, met = good, True
+    best, met = _search(judge)
+    if not met:  # the factor whose lower end came nearest the target
+        best = max(runs, key=lambda f: (runs[f].ci_low, f))
     sized = shrunk(tolerances, allocated, best)
     record = _record(runs, best, target, stages, tolerances,
                      linearised(scene, design, sized, stages)["yield"],
                      linearised(scene, design, tolerances, stages)["yield"], met)
-    words = "" if met else _unmet_words(runs[TINY], target, tolerances.builds, stages)
+    words = "" if met else _unmet_words(runs, best, target, tolerances.builds, stages)
     return CheckedAllocation(sized, best, met, record, words)
+
+
+def _search(judge) -> tuple[float, bool]:
+    """(the largest factor found that meets the target, True), or (0, False) when none of 1
+    and LADDER does: the ladder down from 1, then STEPS bisections below the rung above."""
+    above = 1.0
+    if judge(above):
+        return above, True
+    for rung in LADDER:
+        if judge(rung):
+            good, bad = rung, above
+            for _ in range(STEPS):
+                mid = 0.5 * (good + bad)
+                good, bad = (mid, bad) if judge(mid) else (good, mid)
+            return good, True
+        above = rung
+    return 0.0, False
 
 
 def _record(runs, best, target, stages, tolerances, linearised, first_linearised, met) -> dict:
@@ -110,21 +125,25 @@ def _pct(x: float) -> str:
     return f"{100.0 * x:.2f} %"
 
 
-def _unmet_words(tiny, target, builds, stages) -> str:
-    """Why no scale of the allocated tolerances meets the target, in words: too few builds to
-    show it (the estimate at the tiny factor reaches it, its interval does not), or the design
-    with its given tolerances fails more often than the target allows."""
+def _unmet_words(runs, best, target, builds, stages) -> str:
+    """Why no factor of the allocated tolerances meets the target, in words: too few builds to
+    show it (the nearest run's estimate reaches it, its interval does not), or the design with
+    its given tolerances fails more often than the target allows."""
     from ..tolerances.yield_ import Z95
 
-    head = (f"the yield target {_pct(target)} cannot be met: with the allocated tolerances at "
-            f"{TINY:g} of their linearised size, {_pct(tiny.estimate)} of {builds} builds pass "
-            f"all {stages} stages (95 % interval from {_pct(tiny.ci_low)})")
-    if tiny.estimate >= target:
-        return (head + f": {builds} builds cannot show {_pct(target)} (with none failing the "
-                f"lower end is {_pct(builds / (builds + Z95 ** 2))}); raise tolerances.builds")
+    near, tiny = runs[best], runs[TINY]
+    head = (f"the yield target {_pct(target)} cannot be met: at no common factor of the "
+            f"allocated tolerances' linearised size from 1 down to {TINY:g} does the Monte Carlo "
+            f"interval's lower end reach it (the nearest at {best:.4g}: {_pct(near.estimate)} "
+            f"of {builds} builds pass all {stages} stages, 95 % interval from "
+            f"{_pct(near.ci_low)})")
+    if near.estimate >= target:
+        return (head + f"; {builds} builds cannot show {_pct(target)} (with none failing the "
+                f"lower end is {_pct(builds / (builds + Z95 ** 2))}): raise tolerances.builds")
     failures = ", ".join(f"{k} {v}" for k, v in tiny.failures.items())
-    return (head + f"; the design with its given tolerances fails too often ({failures}): "
-            "tighten the given tolerances, change the design, or lower the target")
+    return (head + f"; the design with its given tolerances fails too often (at {TINY:g}: "
+            f"{_pct(tiny.estimate)} pass; {failures}): tighten the given tolerances, change "
+            "the design, or lower the target")
 
 
 def entries_checked(entries, checked: CheckedAllocation) -> list[dict]:
