@@ -178,3 +178,34 @@ def test_a_design_whose_given_tolerances_fail_too_often_is_refused_in_words(tmp_
     assert cli.exit_code == 1, cli.output
     assert "cannot be met" in cli.output and "fails too often" in cli.output, cli.output
     assert "Traceback" not in cli.output
+
+
+@pytest.mark.parametrize("meets, edge, gap", [
+    # the yield falls as the tolerances widen: met up to 0.6; the ladder stops at 0.5 and the
+    # bisections between 0.5 and 0.75 end within 0.25 / 2^STEPS below 0.6
+    (lambda c: c <= 0.6, 0.6, 0.25),
+    # not monotone (the 100-stage row: 99.13 % with its pivots exact, 99.96 % at 0.875 of
+    # their linearised size, 99.73 % at it): met only between 0.3 and 0.9; a bisection from
+    # 1e-3 would call the target out of reach
+    (lambda c: 0.3 <= c <= 0.9, 0.9, 0.125),
+])
+def test_the_search_finds_the_largest_factor_that_meets_the_target(meets, edge, gap):
+    from pdm_design.solve.yield_check import _search
+
+    tried = []
+
+    def judge(c):
+        tried.append(c)
+        return meets(c)
+
+    factor, met = _search(judge)
+    assert met and edge - gap / 2**STEPS <= factor <= edge
+    assert len(tried) <= 1 + len(LADDER) + STEPS
+
+
+def test_the_search_gives_up_when_no_factor_meets_the_target():
+    from pdm_design.solve.yield_check import _search
+
+    tried = []
+    assert _search(lambda c: tried.append(c) or False) == (0.0, False)
+    assert tried == [1.0, *LADDER]
