@@ -25,6 +25,10 @@ class DesignOutcome:
     # allocated and given tolerances ([tolerances] with allocate = true): {quantity,
     # applies_to, value (SI), unit, allocated, limited_by}; None otherwise
     tolerances: tuple[dict, ...] | None = None
+    # the Monte Carlo check of tolerances sized for a yield target (solve/yield_check.py):
+    # {target, linearised, estimate, ci_low, ci_high, builds, ...}; None otherwise
+    tolerances_yield: dict | None = None
+    tolerances_yield_words: str = ""
     verification: dict | None = None
     solver: dict | None = None
     accuracy: Accuracy | None = None
@@ -35,6 +39,8 @@ class DesignOutcome:
     @property
     def status_message(self) -> str:
         """The status in words; a fixed design has no bounds to widen."""
+        if self.tolerances_yield_words:
+            return self.tolerances_yield_words
         if self.status is Status.INFEASIBLE and not self.spec.free_variables:
             return ("The fixed design does not meet every requirement: relax the requirements "
                     "listed as violated, or change the design or the scene.")
@@ -169,15 +175,32 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
             from .solve.binding import limited_by
 
             tolerance["limited_by"] = limited_by(spec, result.solution)
-    tolerances = None
+    tolerances, status, checked = None, result.status, None
     if result.tolerances is not None and result.solution is not None:
         from .solve.binding import limits_of_quantities
 
-        tolerances = tuple(limits_of_quantities(spec, result.solution, result.tolerances))
-    return DesignOutcome(spec=spec, status=result.status, analysis=analysis,
+        entries = result.tolerances
+        if status.is_success and _sized_for_yield(spec):  # the Monte Carlo is the judge
+            from .solve.yield_check import check_answer, entries_checked
+
+            checked = check_answer(spec, point, entries, accuracy)
+            entries = entries_checked(entries, checked)
+            if not checked.met:
+                status, violations = Status.INFEASIBLE, violations + (checked.words,)
+        tolerances = tuple(limits_of_quantities(spec, result.solution, entries))
+    return DesignOutcome(spec=spec, status=status, analysis=analysis,
                          violations=violations, objective=objective, tolerance=tolerance,
                          tolerances=tolerances, verification=verification, solver=solver,
-                         accuracy=accuracy, optima=result.optima)
+                         accuracy=accuracy, optima=result.optima,
+                         tolerances_yield=checked.record if checked else None,
+                         tolerances_yield_words=checked.words if checked else "")
+
+
+def _sized_for_yield(spec: Spec) -> bool:
+    """Whether optimize sizes the spec's allocated tolerances for a yield target."""
+    from .formulation.yield_target import active
+
+    return active(spec)
 
 
 def _terms(spec: Spec, nlp_terms: dict, margins: dict, tolerance: dict | None) -> dict:

@@ -399,7 +399,7 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
         kwargs[errors.key] = _with_spec_items(getattr(loaded.verification, errors.key), given,
                                               errors.index, f"verification.{errors.key}", row,
                                               spec)
-    point, answered = loaded.design_at(), True
+    point, answered, found = loaded.design_at(), True, None
     if saved is not None:
         point, answered = saved.point, saved.success
         if not answered:
@@ -422,7 +422,7 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
             result = simulate_build_of_spec(
                 loaded, spec, point, build, row, accuracy=accuracy,
                 record_trajectory=plot is not None,
-                tolerances=saved.tolerances if saved is not None else None)
+                tolerances=saved.tolerances if saved is not None else None, answer=found)
             if plot is not None and result.events and result.events[0].kind == "invalid_part":
                 click.echo("no figures: the build has a part that cannot be made", err=True)
                 plot = None

@@ -42,30 +42,53 @@ def _refuse(spec, source, quantity):
 
 def design_point(spec, source: str):
     """The fixed design, or the optimizer's (exit 1 in words when it finds none)."""
+    return design_answer(spec, source)[0]
+
+
+def design_answer(spec, source: str):
+    """(the fixed design, None), or (the optimizer's design, its DesignOutcome); exit 1 in
+    words when it finds none."""
     if not spec.free_variables:
-        return spec.design_at()
+        return spec.design_at(), None
     from ..api import design
 
     found = design(spec, verify=False)
     if not found.status.is_success:
         raise PdmError(f"{source}: no design to build: the optimizer found none that meets "
-                       f"every requirement (status {found.status.value})")
-    return spec.design_at(found.analysis.design)
+                       f"every requirement (status {found.status.value}: "
+                       f"{found.status_message})")
+    return spec.design_at(found.analysis.design), found
 
 
-def sized_tolerances(spec, source, point, stages):
-    """The spec's tolerances, those to allocate sized for tolerances.yield_target by the
-    linearised yield at `point` (solve/yield_allocation.py; exit 1 in words when no size
-    meets it): the same values for the yield run, `check` and `simulate --build`."""
+def sized_tolerances(spec, source, point, stages, *, accuracy=None, answer=None):
+    """The spec's tolerances, those to allocate sized for tolerances.yield_target and checked
+    by Monte Carlo (solve/yield_check.py): optimize's own values when `answer` (its outcome at
+    `point`) has them for these stages, else the linearised yield's size at `point`
+    (solve/yield_allocation.py) shrunk until the Monte Carlo interval's lower end reaches the
+    target; exit 1 in words when no size meets it. The same values for the yield run, `check`
+    and `simulate --build`."""
     tolerances = spec_tolerances(spec, source)
     if not any(t.allocate for t in tolerances):
         return tolerances
+    from ..solve.yield_check import check_allocation, valued
+
+    if (answer is not None and answer.tolerances_yield is not None
+            and stages == spec.verification.stages):
+        return valued(spec, answer.tolerances)
+    from ..accuracy import accuracy as resolve
     from ..solve.yield_allocation import allocate_for_yield
 
     try:
-        return allocate_for_yield(spec.scene, point, tolerances, stages=stages).tolerances
+        allocation = allocate_for_yield(spec.scene, point, tolerances, stages=stages)
     except ValueError as error:
         raise PdmError(f"{source}: {error}") from None
+    checked = check_allocation(spec.scene, point, allocation.tolerances,
+                               {t.quantity for t in tolerances if t.allocate},
+                               target=allocation.target, stages=stages,
+                               accuracy=resolve(accuracy or spec.verification.accuracy))
+    if not checked.met:
+        raise PdmError(f"{source}: {checked.words}")
+    return checked.tolerances
 
 
 def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accuracy=None,
@@ -74,12 +97,12 @@ def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accurac
     from ..accuracy import accuracy as resolve
 
     spec_tolerances(spec, source)
-    point = design_point(spec, source)
+    point, answer = design_answer(spec, source)
     stages = stages or spec.verification.stages
-    tolerances = sized_tolerances(spec, source, point, stages)
+    acc = resolve(accuracy or spec.verification.accuracy)
+    tolerances = sized_tolerances(spec, source, point, stages, accuracy=acc, answer=answer)
     builds = builds or tolerances.builds
     seed = tolerances.seed if seed is None else seed
-    acc = resolve(accuracy or spec.verification.accuracy)
     kwargs = {} if scales is None else {"scales": scales}
     result = yield_of(spec.scene, point, tolerances, builds=builds, stages=stages, seed=seed,
                       confirm=tolerances.confirm, accuracy=acc, source=source, **kwargs)
@@ -107,7 +130,8 @@ def unmet_min_yield(outcome) -> list[str]:
         return [f"expected a yield of at least {_pct(wanted)}, got none (no design: status "
                 f"{outcome.status.value})"]
     point = spec.design_at(outcome.analysis.design)
-    tolerances = sized_tolerances(spec, spec.source, point, spec.verification.stages)
+    tolerances = sized_tolerances(spec, spec.source, point, spec.verification.stages,
+                                  accuracy=outcome.accuracy, answer=outcome)
     r = yield_of(spec.scene, point, tolerances, builds=tolerances.builds,
                  stages=spec.verification.stages, seed=tolerances.seed,
                  confirm=tolerances.confirm, accuracy=outcome.accuracy or "default",
@@ -121,16 +145,18 @@ def unmet_min_yield(outcome) -> list[str]:
 
 
 def simulate_build_of_spec(spec, source, design, build: str, stages, *, accuracy,
-                           record_trajectory=False, tolerances=None):
+                           record_trajectory=False, tolerances=None, answer=None):
     """`simulate --build SEED:INDEX`: build INDEX of a yield run with SEED and `stages`;
-    tolerances: those the run drew with (its yield.json's), else the spec's, sized."""
+    tolerances: those the run drew with (its yield.json's), else the spec's, sized (answer:
+    the spec's optimize outcome, when it was solved for the build)."""
     from ..accuracy import accuracy as resolve
     from ..tolerances.yield_ import simulate_one
 
     seed, index = parse_build(build)
     accuracy = resolve(accuracy or spec.verification.accuracy)
     if tolerances is None:
-        tolerances = sized_tolerances(spec, source, design, stages)
+        tolerances = sized_tolerances(spec, source, design, stages, accuracy=accuracy,
+                                      answer=answer)
     return simulate_one(spec.scene, design, tolerances, seed, index, stages,
                         accuracy=accuracy, record_trajectory=record_trajectory)
 

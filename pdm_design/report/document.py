@@ -47,6 +47,7 @@ def optimize_document(outcome: DesignOutcome) -> dict:
         "objective": _objective(outcome),
         "tolerance": outcome.tolerance,
         "tolerances": _tolerances(outcome.tolerances),
+        "tolerances_yield": outcome.tolerances_yield,
         "verification": _verification(outcome.verification),
         "solver": outcome.solver,
     })

@@ -9,7 +9,6 @@ from .units import UNITS as _UNITS
 from .units import built_parts as _built_parts
 
 
-
 def _rows(values: dict) -> list[str]:
     width = max((len(k) for k in values), default=0)
     out = []
@@ -91,6 +90,8 @@ def optimize_text(outcome: DesignOutcome) -> str:
     if outcome.tolerances:
         lines += ["", _allocation_heading(outcome.spec),
                   *allocation_rows(outcome.spec.kind, outcome.tolerances)]
+    if outcome.tolerances_yield:
+        lines += tolerances_yield_rows(outcome.tolerances_yield)
     if outcome.verification is not None:
         v = outcome.verification
         accuracy = f" (accuracy {outcome.accuracy.describe()})" if outcome.accuracy else ""
@@ -115,9 +116,28 @@ def _allocation_heading(spec) -> str:
     from ..formulation.yield_target import active
 
     if active(spec):
-        return (f"allocated tolerances (sized for a linearised yield of "
-                f"{100 * spec.tolerances.yield_target:.4g} %; check it with `pdm-design yield`):")
+        return (f"allocated tolerances (sized for a yield of "
+                f"{100 * spec.tolerances.yield_target:.4g} %, checked by Monte Carlo):")
     return "allocated tolerances (worst case: every build inside them works):"
+
+
+def _pct(x: float) -> str:
+    return f"{100.0 * x:.2f} %"
+
+
+def tolerances_yield_rows(r: dict) -> list[str]:
+    """The Monte Carlo check of tolerances sized for a yield target (solve/yield_check.py)."""
+    first = r["sized_by_linearisation"]
+    lines = [f"  yield target {_pct(r['target'])}: Monte Carlo {_pct(r['estimate'])} "
+             f"(95 % interval {_pct(r['ci_low'])} to {_pct(r['ci_high'])}) over {r['builds']} "
+             f"builds of {r['stages']} stages, seed {r['seed']}; "
+             f"linearised {_pct(r['linearised'])}"]
+    if r["scale"] != 1.0:
+        lines.append(f"  sized by the linearised yield alone, they gave {_pct(first['estimate'])} "
+                     f"({_pct(first['ci_low'])} to {_pct(first['ci_high'])}): "
+                     + (f"shrunk to {r['scale']:.4g} of that size" if r["met"] else
+                        "no size meets the target (see the status)"))
+    return lines
 
 
 def allocation_rows(kind: str, entries) -> list[str]:

@@ -1,0 +1,168 @@
+"""Tolerances sized for a yield target, checked by Monte Carlo (docs/optimizer.md section 10).
+
+The linearised yield that sizes the allocated tolerances (solve/yield_allocation.py at a fixed
+design, formulation/yield_target.py with the design) is a model: a union bound (or Hunter's
+bound) of first-order spreads with a second-order mean. The Monte Carlo yield is the judge: the
+yield engine of `pdm-design yield` (tolerances.yield_.yield_of: the closed-form map, the event
+simulator on every build outside it and on `confirm` random others) with the spec's `builds`,
+`seed` and `confirm`, so that `pdm-design yield` of the answer is the same run.
+
+Where the 95 % interval's lower end is below the target, every allocated tolerance is shrunk
+by one common factor c (the given ones kept), the design fixed. c = 1 is checked first; then
+the factors of LADDER in turn, down to TINY (the design with its given tolerances alone, near
+enough), until one meets the target; then STEPS bisections of c between it and the factor above
+it that did not. The ladder, not a bisection from TINY, because the yield need not rise as the
+tolerances shrink: a design centred for the pivots' drift can drift the other way with the
+pivots exact (solve/yield_allocation.py), and the 100-stage row passes fewer builds with its
+pivots exact than at their linearised size. When no factor meets the target, `words` say why
+and the factor reported is the one whose lower end came nearest. The builds are the same at
+every c (common random numbers: build i's uniform numbers are fixed by the seed, and an
+allocated quantity's deviation is c times the one at c = 1), so the estimate moves with c only
+through the builds whose verdict c changes, and the bisection does not chase sampling noise.
+The answer is always a factor that was checked: its run is the one reported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+TINY = 1e-3  # the factor that stands for the design with its given tolerances alone
+LADDER = (0.875, 0.75, 0.5, 0.25, TINY)  # factors tried after 1, until one meets the target
+STEPS = 4  # bisections between that factor and the one above it: 1/128 of the size near 1
+_CACHE: dict = {}  # the last few checks, by their inputs (optimize, then yield, of one spec)
+_CACHE_SIZE = 4
+
+
+@dataclass(frozen=True)
+class CheckedAllocation:
+    """The tolerances after the check (every allocated value times `factor`), whether the
+    target is met, optimize's `tolerances_yield` record and, when not met, why in words."""
+
+    tolerances: object
+    factor: float
+    met: bool
+    record: dict
+    words: str = ""
+
+
+def shrunk(tolerances, allocated, factor: float):
+    """The tolerances with every allocated quantity's value times factor."""
+    items = tuple(t.scaled(factor) if t.quantity in allocated else t for t in tolerances)
+    return replace(tolerances, items=items)
+
+
+def check_allocation(scene, design, tolerances, allocated, *, target: float, stages: int,
+                     accuracy="default") -> CheckedAllocation:
+    """Check `tolerances` (every one valued; `allocated`: the names sized for the target) by
+    Monte Carlo and shrink the allocated ones until the interval's lower end reaches the target
+    (module docstring). Cached by its inputs."""
+    key = repr((scene, design, tolerances, sorted(allocated), target, stages, accuracy))
+    if key not in _CACHE:
+        if len(_CACHE) >= _CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[key] = _check(scene, design, tolerances, frozenset(allocated), target, stages,
+                             accuracy)
+    return _CACHE[key]
+
+
+def _check(scene, design, tolerances, allocated, target, stages, accuracy):
+    from ..tolerances.yield_ import yield_of
+    from .yield_allocation import linearised_yield_function
+
+    linearised = linearised_yield_function(scene)
+    runs = {}
+
+    def judge(factor):
+        sized = shrunk(tolerances, allocated, factor)
+        runs[factor] = yield_of(scene, design, sized, builds=tolerances.builds, stages=stages,
+                                seed=tolerances.seed, confirm=tolerances.confirm,
+                                accuracy=accuracy, scales=(), sensitivity_samples=0)
+        return runs[factor].ci_low >= target
+
+    best, met = _search(judge)
+    if not met:  # the factor whose lower end came nearest the target
+        best = max(runs, key=lambda f: (runs[f].ci_low, f))
+    sized = shrunk(tolerances, allocated, best)
+    record = _record(runs, best, target, stages, tolerances,
+                     linearised(scene, design, sized, stages)["yield"],
+                     linearised(scene, design, tolerances, stages)["yield"], met)
+    words = "" if met else _unmet_words(runs, best, target, tolerances.builds, stages)
+    return CheckedAllocation(sized, best, met, record, words)
+
+
+def _search(judge) -> tuple[float, bool]:
+    """(the largest factor found that meets the target, True), or (0, False) when none of 1
+    and LADDER does: the ladder down from 1, then STEPS bisections below the rung above."""
+    above = 1.0
+    if judge(above):
+        return above, True
+    for rung in LADDER:
+        if judge(rung):
+            good, bad = rung, above
+            for _ in range(STEPS):
+                mid = 0.5 * (good + bad)
+                good, bad = (mid, bad) if judge(mid) else (good, mid)
+            return good, True
+        above = rung
+    return 0.0, False
+
+
+def _record(runs, best, target, stages, tolerances, linearised, first_linearised, met) -> dict:
+    """optimize's `tolerances_yield` (docs/json-schema.md)."""
+    final, first = runs[best], runs[1.0]
+    return {"target": target, "linearised": float(linearised), "estimate": final.estimate,
+            "ci_low": final.ci_low, "ci_high": final.ci_high, "builds": final.builds,
+            "seed": tolerances.seed, "stages": stages, "met": met, "scale": best,
+            "failures": dict(final.failures),
+            "sized_by_linearisation": {"linearised": float(first_linearised),
+                                       "estimate": first.estimate, "ci_low": first.ci_low,
+                                       "ci_high": first.ci_high},
+            "steps": [{"scale": f, "estimate": r.estimate, "ci_low": r.ci_low}
+                      for f, r in runs.items()]}
+
+
+def _pct(x: float) -> str:
+    return f"{100.0 * x:.2f} %"
+
+
+def _unmet_words(runs, best, target, builds, stages) -> str:
+    """Why no factor of the allocated tolerances meets the target, in words: too few builds to
+    show it (the nearest run's estimate reaches it, its interval does not), or the design with
+    its given tolerances fails more often than the target allows."""
+    from ..tolerances.yield_ import Z95
+
+    near, tiny = runs[best], runs[TINY]
+    head = (f"the yield target {_pct(target)} cannot be met: at no common factor of the "
+            f"allocated tolerances' linearised size from 1 down to {TINY:g} does the Monte Carlo "
+            f"interval's lower end reach it (the nearest at {best:.4g}: {_pct(near.estimate)} "
+            f"of {builds} builds pass all {stages} stages, 95 % interval from "
+            f"{_pct(near.ci_low)})")
+    if near.estimate >= target:
+        return (head + f"; {builds} builds cannot show {_pct(target)} (with none failing the "
+                f"lower end is {_pct(builds / (builds + Z95 ** 2))}): raise tolerances.builds")
+    failures = ", ".join(f"{k} {v}" for k, v in tiny.failures.items())
+    return (head + f"; the design with its given tolerances fails too often (at {TINY:g}: "
+            f"{_pct(tiny.estimate)} pass; {failures}): tighten the given tolerances, change "
+            "the design, or lower the target")
+
+
+def entries_checked(entries, checked: CheckedAllocation) -> list[dict]:
+    """optimize's tolerance entries with every allocated value times the check's factor."""
+    return [dict(e) | {"value": e["value"] * checked.factor} if e["allocated"] else dict(e)
+            for e in entries]
+
+
+def valued(spec, entries):
+    """The spec's tolerances with every allocated one at its value in `entries`."""
+    values = {e["quantity"]: e["value"] for e in entries}
+    return replace(spec.tolerances, items=tuple(
+        replace(t, value=values[t.quantity]) if t.allocate else t for t in spec.tolerances))
+
+
+def check_answer(spec, design, entries, accuracy) -> CheckedAllocation:
+    """The Monte Carlo check of optimize's allocated `entries` at `design`, the spec's
+    builds, seed, confirm and stages."""
+    allocated = {t.quantity for t in spec.tolerances if t.allocate}
+    return check_allocation(spec.scene, design, valued(spec, entries), allocated,
+                            target=spec.tolerances.yield_target,
+                            stages=spec.verification.stages, accuracy=accuracy)
