@@ -102,10 +102,34 @@ def design(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | None 
                     for v in variants]
         return max(outcomes, key=_rank)
     spec = variants[0]
+    if spec.free_variables and set(spec.objective) & set(of(spec).search_objectives):
+        return _searched(spec, verify=verify, accuracy=accuracy)
     if not spec.free_variables:
         return evaluate(spec, verify=verify, accuracy=accuracy)
     return optimize(spec, verify=verify, accuracy=accuracy, linearise=linearise,
                     start_from=start_from, continued=continued)
+
+
+def _searched(spec: Spec, *, verify: bool, accuracy) -> DesignOutcome:
+    """The design a scene's own search chooses for an objective no NLP states
+    (Scene.search_objectives: a rough ramp's mean steps before failure), evaluated and
+    verified as a fixed design."""
+    import dataclasses
+    import time
+
+    from .plugin import of
+
+    start = time.perf_counter()
+    values, value = of(spec).search(spec)
+    fixed = dataclasses.replace(spec, design={**spec.design, **values})
+    found = evaluate(fixed, verify=verify, accuracy=accuracy)
+    status = Status.OPTIMAL if found.status is Status.EVALUATED else found.status
+    name = next(n for n in spec.objective if n in of(spec).search_objectives)
+    return dataclasses.replace(
+        found, spec=spec, status=status,
+        objective={"weights": dict(spec.objective), "value": value, "terms": {name: value},
+                   "method": f"the scene's own search (Scene.search), "
+                             f"{time.perf_counter() - start:.3g} s"})
 
 
 def _rank(outcome: DesignOutcome) -> tuple:

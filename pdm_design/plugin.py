@@ -125,6 +125,15 @@ class Scene:
     # ------------------------------------------------------------------ the NLP
     objectives: tuple[str, ...] = ("max_min_margin",)
     """The `[objective]` terms the scene's NLP gives (SceneModel.objective_terms)."""
+    search_objectives: tuple[str, ...] = ()
+    """Objectives no NLP states, which the scene's own `search` optimises (a rough ramp's
+    mean steps before failure: max_mfpt)."""
+
+    def search(self, spec) -> tuple[dict, float]:
+        """(the free variables' values, the objective's value) that a search objective of the
+        spec chooses; the answer is then evaluated and verified as a fixed design."""
+        raise NotImplementedError(f"a {self.kind} scene has no search objective")
+
     objective_aliases: dict[str, str] = {}
     """The scene's own names of shared objective terms (formulation.common.OBJECTIVE_SENSE):
     a walker's max_slope_tolerance is the shared max_offset_tolerance. The loader stores the
@@ -202,6 +211,11 @@ class Scene:
         list of one per part} of the other quantities of an allocated box; the spec's own
         initial state and stages, accuracy an accuracy.Accuracy."""
         raise NotImplementedError(f"a {self.kind} scene has no explicit-offset box")
+
+    def yield_extras(self, scene, design, tolerances, stages: int) -> dict:
+        """Entries the scene adds to a yield's JSON (a rough ramp's `mfpt`: the mean steps
+        before failure by a method made for rare failures); none by default."""
+        return {}
 
     def linearised_yield(self, scene, design, tolerances, stages: int) -> dict:
         """The linearised yield of a fixed design under valued tolerances: a dict whose

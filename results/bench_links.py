@@ -40,9 +40,9 @@ sys.path.insert(0, str(ROOT))
 from pdm_design.accuracy import accuracy  # noqa: E402
 from pdm_design.scenes.manipulators.analysis import carry_terms
 from pdm_design.formulation import build  # noqa: E402
-from pdm_design.scenes.manipulators.model import formulation as form
+from pdm_design.scenes.manipulators import formulation as form
 from pdm_design.io import write_atomic  # noqa: E402
-from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators import physics as phys
 from pdm_design.scenes.manipulators.model import ManipulatorsDesign, Pivots
 from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.solve.optimize import optimize  # noqa: E402

@@ -180,7 +180,7 @@ def bench_bounces(samples=100_000, bounces=100):
 
 
 def bench_handover_map(n=1_000_000, n_loop=100_000):
-    from pdm_design.scenes.manipulators.model import physics as phys
+    from pdm_design.scenes.manipulators import physics as phys
     from pdm_design.scenes.manipulators.sim import handover_map, simulate_manipulators
     from pdm_design.spec import load_spec
 

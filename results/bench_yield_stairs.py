@@ -27,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from pdm_design.io import write_atomic  # noqa: E402
-from pdm_design.scenes.stairs.model import physics as phys
+from pdm_design.scenes.stairs import physics as phys
 from pdm_design.scenes.stairs.sim import bounce_sequence, stairs_geometry
 from pdm_design.spec import load_spec  # noqa: E402
 from pdm_design.tolerances.draw import draw as draw_builds  # noqa: E402

@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 from types import SimpleNamespace
 
-from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators import physics as phys
 from pdm_design.scenes.manipulators.model import Body
 from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.spec.loader import load_spec

@@ -12,8 +12,8 @@ import pytest
 
 from pdm_design.accuracy import AccuracyError, accuracy, accuracy_from_text
 from pdm_design.formulation import build as build_mod
-from pdm_design.scenes.manipulators.model import formulation as form
-from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators import formulation as form
+from pdm_design.scenes.manipulators import physics as phys
 from pdm_design.solve.optimize import optimize
 from pdm_design.spec.loader import load_spec
 

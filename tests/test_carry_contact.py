@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from pdm_design.scenes.manipulators.model import physics as phys
+from pdm_design.scenes.manipulators import physics as phys
 from pdm_design.scenes.manipulators.sim.phases import Swing, stuck_contact_force, swing_acceleration
 
 

@@ -294,7 +294,7 @@ def test_the_nlp_integrated_rows_agree_with_the_simulator_to_the_preset(preset):
     """With damping the NLP integrates the carry with as many steps as the accuracy asks: its
     stage map (first landing to the first handover, and the periodic fixed point) agrees with
     the simulator to the preset's agreement tolerance."""
-    from pdm_design.scenes.manipulators.model import formulation as form
+    from pdm_design.scenes.manipulators import formulation as form
 
     spec = load_spec(PAPER)
     scene = scene_with(spec, link_mass=0.3, torque=0.1, damping=0.4, mu=1.5)

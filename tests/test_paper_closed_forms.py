@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from pdm_design.scenes.manipulators.model import physics as manip
-from pdm_design.scenes.stairs.model import physics as stairs
+from pdm_design.scenes.manipulators import physics as manip
+from pdm_design.scenes.stairs import physics as stairs
 
 G = 9.81
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from pdm_design.analysis import analyse
-from pdm_design.scenes.stairs.model import physics as phys
+from pdm_design.scenes.stairs import physics as phys
 from pdm_design.scenes.stairs.model import Ball, StairsDesign, StairsInitial, StairsScene
 from pdm_design.scenes.stairs.sim import (
     bounce_sequence,

@@ -215,6 +215,10 @@ def yield_text(result: YieldResult, name: str) -> str:
              f"yield: {_pct(r.estimate)} pass all {r.stages} stages "
              f"(95 % interval {_pct(r.ci_low)} to {_pct(r.ci_high)})",
              f"mean stages before failure: {r.mean_stages_before_failure:.4g} of {r.stages}"]
+    if "mfpt" in r.extras:  # a rare-failure estimate of the scene's (Scene.yield_extras)
+        m = r.extras["mfpt"]
+        lines.append(f"mean steps before failure, unbounded: {m['estimate']:.4g} "
+                     f"({m['ci_low']:.4g} to {m['ci_high']:.4g}; {m['method']})")
     marks = sorted({1, max(1, r.stages // 4), max(1, r.stages // 2), r.stages})
     lines.append("still going after stage " + ", ".join(
         f"{k}: {_pct(r.survival[k - 1])}" for k in marks))

@@ -182,7 +182,8 @@ def _parse(data: Any, source: str) -> Spec:
 def _objective(data: dict, scene: plugin.Scene) -> dict[str, float]:
     """[objective]: weights of the scene's objectives (Scene.objectives), stored under the
     shared terms' names (Scene.objective_aliases)."""
-    weights = _named_numbers(data, "objective", scene.objectives, _WEIGHT)
+    weights = _named_numbers(data, "objective", scene.objectives + scene.search_objectives,
+                             _WEIGHT)
     return {scene.objective_aliases.get(name, name): w for name, w in weights.items()}
 
 

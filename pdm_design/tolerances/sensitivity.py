@@ -57,11 +57,14 @@ def sobol_indices(run: Callable, tolerances: Iterable, *, stages: int, parts: in
     from SALib.sample import sobol as sample
 
     base = 1 << max(1, math.ceil(math.log2(samples)))
-    x = sample.sample(problem, base, calc_second_order=False, seed=seed)
     if len(active) == 1:
-        # one quantity explains all the variance there is: S1 = ST = 1 by definition (SALib
-        # reads one group as none and its analysis expects another sample's size)
-        x = x[:3 * base]
+        # one quantity explains all the variance there is: S1 = ST = 1 by definition, once it
+        # moves the output at all (SALib reads one group as none: its sample would take every
+        # part as its own variable, and its analysis expects another sample's size); the
+        # builds of the 3-group sample's size, drawn as the yield draws them
+        x = _drawn(problem, 3 * base, seed)
+    else:
+        x = sample.sample(problem, base, calc_second_order=False, seed=seed)
     outcome = run(_deviations(x, active, parts), stages)
     y = np.asarray(outcome.min_margin if output == "min_margin" else outcome.passed,
                    dtype=float)
@@ -118,6 +121,14 @@ def _problem(active, parts) -> dict:
             dists.append("norm" if dist == "normal" else "unif")
     return {"num_vars": len(names), "names": names, "groups": groups, "bounds": bounds,
             "dists": dists}
+
+
+def _drawn(problem: dict, builds: int, seed: int) -> np.ndarray:
+    """`builds` rows of the problem's variables drawn from their distributions."""
+    rng = np.random.default_rng(seed)
+    columns = [rng.normal(a, b, builds) if d == "norm" else rng.uniform(a, b, builds)
+               for (a, b), d in zip(problem["bounds"], problem["dists"])]
+    return np.column_stack(columns)
 
 
 def _deviations(x, active, parts) -> dict[str, np.ndarray]:

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..plugin import of
 from .draw import draw
 from ..tolerance_model import Tolerances
 from .outcome import BuildOutcome
@@ -74,6 +75,7 @@ class YieldResult:
     # what the run was made from (schema, spec, spec_sha256, name, scene, design: the yield
     # command's, commands.yield_.yield_identity), first in the JSON document
     identity: dict = field(default_factory=dict)
+    extras: dict = field(default_factory=dict)  # the scene's own entries (Scene.yield_extras)
 
     def to_json(self) -> dict:
         return {
@@ -90,6 +92,7 @@ class YieldResult:
             "confirmed": dict(self.confirmed),
             "tolerances": [dict(t) for t in self.tolerances],
             "yield_against_scale": [dict(s) for s in self.scale_curve],
+            **self.extras,
         }
 
 
@@ -164,7 +167,7 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
         sensitivity=tuple(sensitivity), sensitivity_note=note,
         scale_curve=tuple(_scale_curve(scene, design, tolerances, builds, stages, seed,
                                        scales, accuracy, headline=(int(whole.sum()), confirmed))),
-        source=source)
+        source=source, extras=of(scene).yield_extras(scene, design, tolerances, stages))
 
 
 def _confirm(scene, design, tolerances, outcome, passed, failure, *, seed, stages, confirm,

@@ -85,3 +85,55 @@ def landing_threshold(scene, design) -> float:
 
 
 __all__ = ["QUANTITIES", "WheelBuilds", "landing_threshold", "run_builds", "phys"]
+
+
+def build_outcome(scene, design, deviations: dict, stages: int):
+    """The yield engine's map (Scene.run_builds): builds with `deviations` ({quantity: (builds,
+    stages) array for each step's own slope, rise or tread; (builds,) for the start_speed
+    lot}, SI) added to the nominal, on the step map. The map gives no margins: min_margin is 0
+    for a build that made every step and -1 for one that did not (the sensitivity is of the
+    pass/fail outcome); every build stays in the closed forms (the step map is exact between
+    impacts, docs/rimless_wheel.md)."""
+    from ...tolerances.outcome import BuildOutcome
+
+    wh, geo, problems = resolve(scene, design)
+    if problems:
+        raise ValueError("; ".join(problems))
+    builds = len(next(iter(deviations.values())))
+    speed = scene.initial.speed + np.asarray(deviations.get("start_speed", np.zeros(builds)))
+    stairs, shape = None, (builds, stages)
+
+    def per_step(name):  # a lot: one value for every step of a build
+        value = np.asarray(deviations.get(name, np.zeros(shape)), dtype=float)
+        return np.broadcast_to(value[:, None] if value.ndim == 1 else value, shape)
+
+    if scene.ground == "ramp":
+        betas = wh.beta + per_step("slope")
+    else:
+        rises = geo["rise"] + per_step("rise")
+        ratio = rises / wh.chord
+        unbuildable = ~((ratio >= 0.0) & (ratio < 1.0))
+        betas = np.where(unbuildable, wh.beta - 4.0 * wh.alpha,
+                         np.arcsin(np.clip(ratio, 0.0, 1.0 - 1e-15)))
+        treads = geo["tread"] + per_step("tread")
+        treads = np.concatenate([np.full((builds, 1), geo["tread"]), treads], axis=1)
+        stairs = {"tread": treads, "landing_offset": geo["landing_offset"]}
+    run = step_map(wh, speed, betas, ground=wh.ground, stairs=stairs)
+    passed = np.minimum(run.passed, stages)
+    failure = np.array(["" if p >= stages else CODES[c] for p, c in zip(passed, run.failure)],
+                       dtype=object)
+    return BuildOutcome(passed, failure, np.where(passed >= stages, 0.0, -1.0),
+                        np.ones(builds, dtype=bool))
+
+
+def step_errors_of(deviations: dict, stages: int) -> list[dict]:
+    """One build's per-step deviations (1-row arrays) as the simulator's step_errors."""
+    rows = []
+    for k in range(stages):
+        row = {"step": k + 1}
+        for name in ("slope", "rise", "tread"):
+            if name in deviations:
+                value = np.asarray(deviations[name])[0]
+                row[name] = float(value if value.ndim == 0 else value[k])
+        rows.append(row)
+    return rows

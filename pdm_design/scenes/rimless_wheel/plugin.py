@@ -63,6 +63,15 @@ class RimlessWheel(Scene):
     # ------------------------------------------------------------------ the NLP
     objectives = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence")
 
+    search_objectives = ("max_mfpt",)
+
+    def search(self, spec):
+        """The spoke count and slope of the longest mean first-passage time on the spec's rough
+        ramp (rough.longest_lasting: the Markov chain, a golden-section search per count)."""
+        from .search import longest_lasting_design
+
+        return longest_lasting_design(spec)
+
     def formulate(self, spec, parameters=None):
         from .formulation import build
 
@@ -70,6 +79,35 @@ class RimlessWheel(Scene):
         return model, bounds, None
 
     # ------------------------------------------------------------------ tolerances, yield, verification
+    def run_builds(self, scene, design, deviations, stages):
+        from .builds import build_outcome
+
+        return build_outcome(scene, design, deviations, stages)
+
+    def simulate_build(self, scene, design, deviations, stages, *, accuracy="default",
+                       record_trajectory=False):
+        import dataclasses
+
+        from .builds import step_errors_of
+        from .sim import simulate_rimless_wheel
+
+        start = float(deviations.get("start_speed", [0.0])[0])
+        scene = dataclasses.replace(scene, initial=dataclasses.replace(
+            scene.initial, speed=scene.initial.speed + start))
+        return simulate_rimless_wheel(scene, design, stages=stages, accuracy=accuracy,
+                                      step_errors=step_errors_of(deviations, stages),
+                                      record_trajectory=record_trajectory)
+
+    def yield_extras(self, scene, design, tolerances, stages):
+        """The mean steps before failure on a rough ramp by the Markov chain (rough.mfpt), when
+        the only toleranced quantity is every step's own slope."""
+        names = {t.quantity for t in tolerances}
+        if scene.ground != "ramp" or names != {"slope"}:
+            return {}
+        from .rough import mfpt
+
+        found = mfpt(scene, design, next(t.value for t in tolerances))
+        return {"mfpt": {k: found[k] for k in ("estimate", "ci_low", "ci_high", "method")}}
 
     # ------------------------------------------------------------------ sheets, drawings, reports
     dxf_layers = {"GROUND": 7, "WHEEL": 5}  # scenes/rimless_wheel/dxf.py

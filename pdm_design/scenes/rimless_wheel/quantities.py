@@ -5,10 +5,8 @@ from __future__ import annotations
 from ...tolerance_model import EACH_OR_LOT, LOT, Quantity, quantity
 
 QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
-    quantity("slope", "rad", ("each", "lot"), "every step's own slope (a ramp that is not flat)"),
+    quantity("slope", "rad", EACH_OR_LOT, "every step's own slope (a ramp that is not flat)"),
     quantity("rise", "m", EACH_OR_LOT, "a stair's rise"),
     quantity("tread", "m", EACH_OR_LOT, "a stair's tread"),
-    quantity("leg_length", "m", EACH_OR_LOT, "a spoke's length"),
     quantity("start_speed", "rad/s", LOT, "the angular speed just after the first impact"),
-    quantity("mass", "kg", LOT, "the hub's mass"),
 )}
