@@ -141,6 +141,10 @@ class _Builds:
         m, w, mu = v["object_mass"], v["object_width"], v["friction"]
         self.half_w = 0.5 * w
         self.invalid(v)
+        # a palm whose back stop is past the vertical swings forward from rest at the build
+        # (docs/manipulators_model.md, section 2.5): no closed form here, the simulator's
+        past = v["back_stop"] < 0.0
+        self.closed &= ~(past.any(axis=0) if past.ndim == 2 else past)
         self.row_boxes(w)
         cx, cy = self.rest_top(0)
         fall = self.y0 - cy

@@ -51,6 +51,8 @@ FAILURE_KINDS = {
     "slid_off": "the object's centre slid off the end of its palm",
     "stranded": "the palm reached its front stop still carrying the object (no handover)",
     "impact_jam": "an impact has no consistent sliding solution (Painleve paradox)",
+    "swinging_palm": "the object reaches a palm released past the vertical while it still swings "
+                     "from rest (not followed)",
     "timeout": "a phase ran longer than the model allows without an event",
     "too_many_events": "the run exceeded its event budget",
 }

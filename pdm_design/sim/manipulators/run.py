@@ -66,6 +66,32 @@ class Run(OdePhases, LiftOffPhases):
         self.traj = {k: [] for k in ("time", "x", "y", "vx", "vy", "theta", "manipulator")}
         self.zeno_speed = ZENO_FRACTION * math.sqrt(self.g * self.l)
         self.phase_time = PHASE_TIME * math.sqrt(self.l / self.g)
+        self.from_rest = self._release_past_vertical()
+
+    def _release_past_vertical(self):
+        """Palms whose back stop is past the vertical (alpha_k < 0: gravity pulls them forward,
+        l th'' = g sin th > 0 at -alpha_k) swing forward from rest as soon as the row is built,
+        to their front stop (or, on real links, to where pivot friction holds them; a palm
+        that friction holds at its back stop stays there). A back stop exactly vertical is taken
+        as a rest (the equilibrium, unstable: a landing pushes the palm forward). Returns the
+        palms released so."""
+        out = []
+        for k, a in enumerate(self.alphas):
+            if a >= 0.0 or (not self.plain and ph.held_by_friction(-a, self.swings_alone[k])):
+                continue
+            self._release(k, 0.0, -a, 0.0)
+            out.append(k)
+        return tuple(out)
+
+    def _swinging_from_rest(self, t, j):
+        """The object reaches palm j at time t: a palm up to j released from rest at the build
+        (_release_past_vertical) and still swinging then is one the object met or passed while
+        it moved; such contacts are not followed: the run fails (`swinging_palm`). Returns the
+        1-based palm or None."""
+        for k in self.from_rest:
+            if k <= j and self.rest_since[k] > t:
+                return k + 1
+        return None
 
     def _mechanism(self, scene, design):
         """Links and pivots, every palm its own (its link length, palm mass, link mass and
@@ -257,6 +283,11 @@ class Run(OdePhases, LiftOffPhases):
 
         log_as: "landing" (from a flight), "handover" (from the previous palm), "rebound" (onto
         the palm it bounced off), "stop" (its palm has just been stopped by the front stop)."""
+        swinging = self._swinging_from_rest(t, j) if log_as in ("landing", "handover") else None
+        if swinging is not None:
+            return self._fail(t, "swinging_palm", j + 1, before,
+                              f"the object reaches palm {j + 1} while palm {swinging}, released "
+                              "past the vertical, still swings from rest")
         imp, held = self._resolve(j, vx, vy, w, theta, self.eps, at_rest)
         gn = imp.vy + imp.w * math.sin(theta)
         bounce = self.eps > 0.0 and not imp.jam and gn > self.zeno_speed
@@ -424,6 +455,11 @@ class Run(OdePhases, LiftOffPhases):
 
     def _complete(self, t, k, theta, omega, s, sd=0.0):
         state = self._on_palm(k, theta, omega, s, sd)
+        swinging = self._swinging_from_rest(t, k)
+        if swinging is not None:
+            return self._fail(t, "swinging_palm", k + 1, state,
+                              f"palm {swinging}, released past the vertical, still swings from "
+                              "rest")
         rec = self._stage(k)
         if rec is not None:
             rec.update(handover_angle=theta)
