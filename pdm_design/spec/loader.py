@@ -60,7 +60,9 @@ class _Kind(NamedTuple):
 
 KINDS = {
     "stairs": _Kind(StairsScene, StairsDesign, STAIRS_MARGINS,
-                    {"offsets": "offsets are for manipulators scenes; stairs take step_errors"}),
+                    {"offsets": "offsets are for manipulators scenes; stairs take step_errors",
+                     "allow_skips": "allow_skips is for manipulators scenes (a palm flown "
+                                    "over)"}),
     "manipulators": _Kind(ManipulatorsScene, ManipulatorsDesign, MANIPULATOR_MARGINS,
                           {"step_errors": "step_errors are for stairs scenes; "
                                           "manipulators take offsets"}),

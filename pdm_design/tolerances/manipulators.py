@@ -519,6 +519,8 @@ def meets_another_palm(run) -> bool:
             current = palms[-1]
         elif event.kind == "blocked" and palms and palms[-1] != current + 1:
             return True
+        elif event.kind == "skipped_palm":  # it came onto a palm beyond the next
+            return True
     return False
 
 
@@ -551,7 +553,7 @@ def invalid_result(unbuilt, accuracy):
 
 
 def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="default",
-                   record_trajectory: bool = False):
+                   record_trajectory: bool = False, allow_skips: bool = False):
     """The event simulator on one build (deviations of one build: arrays of 1 row), every
     part as drawn: pivots as offsets, link lengths, back stops, palm masses, link masses and
     pivot friction torques as
@@ -594,4 +596,4 @@ def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="de
             from None
     return simulate_manipulators(built, design, stages=stages, offsets=offsets,
                                  accuracy=accuracy, record_trajectory=record_trajectory,
-                                 parts=parts)
+                                 parts=parts, allow_skips=allow_skips)

@@ -32,7 +32,8 @@ def simulate_spec(spec: Spec, design, *, stages=None, offsets=None, step_errors=
 
     offsets = verification.offsets if offsets is None else offsets
     return simulate_manipulators(spec.scene, design, stages=stages, offsets=offsets,
-                                 accuracy=accuracy, record_trajectory=record_trajectory)
+                                 accuracy=accuracy, record_trajectory=record_trajectory,
+                                 allow_skips=verification.allow_skips)
 
 
 def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> dict:

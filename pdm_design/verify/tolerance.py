@@ -145,7 +145,8 @@ def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
     for q, dev in deviations.items():  # a list: every part its own value
         built[q] = (np.broadcast_to(np.asarray(dev, float), (stages,))[None, :].copy()
                     if q in PER_PART else np.array([dev]))
-    return simulate_build(spec.scene, design, built, stages, accuracy=accuracy)
+    return simulate_build(spec.scene, design, built, stages, accuracy=accuracy,
+                          allow_skips=spec.verification.allow_skips)
 
 
 # quantities of every manipulator: a corner takes them all high or all low
