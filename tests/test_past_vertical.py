@@ -111,8 +111,7 @@ def test_the_object_reaching_a_palm_still_swinging_fails_and_a_parked_one_is_an_
     result = simulate_manipulators(scene, design, stages=STAGES,
                                    parts=Parts(back_stop=(design.alpha, -fast, design.alpha,
                                                           design.alpha)))
-    parked = [e for e in result.palm_events if e.stage == 2] if hasattr(result, "palm_events") \
-        else [e for e in result.events if e.kind == "front_stop" and e.stage == 2]
+    parked = [e for e in result.events if e.kind == "front_stop" and e.stage == 2]
     assert math.isclose(parked[0].time, t_fast, rel_tol=1e-9)
     assert all(e.after.get("palm") != 2 or e.after["theta"] == scene.palm.front_stop
                for e in result.events if e.kind in ("landing", "handover"))
