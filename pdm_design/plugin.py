@@ -200,9 +200,11 @@ class Scene:
         raise NotImplementedError(f"a {self.kind} scene has no closed-form map of its builds")
 
     def simulate_build(self, scene, design, deviations: dict, stages: int, *,
-                       accuracy="default", record_trajectory: bool = False):
+                       accuracy="default", record_trajectory: bool = False,
+                       allow_skips: bool = False):
         """The event simulator's run (sim.core.SimulationResult) of one build, deviations as
-        `run_builds` takes them for one build (1-row arrays)."""
+        `run_builds` takes them for one build (1-row arrays); allow_skips: the spec's
+        [verification] allow_skips (a run that comes onto a stage beyond the next goes on)."""
         raise NotImplementedError(f"a {self.kind} scene cannot simulate a toleranced build")
 
     def simulate_box_build(self, spec, design, errors, deviations: dict, accuracy):

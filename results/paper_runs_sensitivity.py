@@ -60,7 +60,8 @@ def main() -> None:
             palm=dataclasses.replace(base_scene.palm, width=W))
         cells = []
         for name, offsets in RUNS.items():
-            result = simulate_manipulators(scene, design, stages=STAGES, offsets=offsets)
+            result = simulate_manipulators(scene, design, stages=STAGES, offsets=offsets,
+                                           allow_skips=True)
             cells.append(cell(result))
             if (W, w, h) == (1.6, 0.4, 0.2):
                 speeds[name] = [st["handover_speed"] for st in result.stages

@@ -635,8 +635,22 @@ def test_paper_run_large_offset_lifts_off_and_flies_over_the_low_palm():
     assert lift.stage == 1 and not lift.failure
     assert math.atan(MU) < lift.before["theta"] < math.acos(math.cos(BETA) - 0.2)
     # palm 2, 0.4 m > pitch_y = 0.31 m low, sits below palm 3's top: the object flies over it
-    # and lands on palm 3, which carries it on to the end of the row (the paper's "stopped
-    # moving among manipulators" rests on sizes it does not give: docs/manipulators_model.md)
+    # and comes down on palm 3: palm 2 is skipped, a failure unless the spec allows skips
+    failure = result.outcome.failure
+    assert failure.kind == "skipped_palm" and failure.stage == 2 and "palm 2" in failure.detail
+    # where it comes down: on palm 3's top at rest (pivot 3 two pitches on), within its box
+    pitch_x = L * (math.sin(ALPHA) + math.sin(BETA))
+    pitch_y = L * (math.cos(ALPHA) - math.cos(BETA))
+    top_x = design.first_pivot_x + 2 * pitch_x - L * math.sin(ALPHA)
+    top_y = design.first_pivot_y - 2 * pitch_y + L * math.cos(ALPHA)
+    assert failure.before["y"] == pytest.approx(top_y, abs=1e-9)
+    assert abs(failure.before["x"] - top_x) < 0.5 * (scene.body.width + scene.palm.width)
+    assert not result.outcome.completed and result.outcome.stages_passed == 1
+    # allowed, it lands on palm 3, which carries it on to the end of the row (the paper's
+    # "stopped moving among manipulators" rests on sizes it does not give:
+    # docs/manipulators_model.md)
+    result = simulate_manipulators(scene, design, stages=6, offsets=[offset(2, 0.0, -0.4)],
+                                   allow_skips=True)
     landing = next(e for e in result.events if e.time > lift.time and e.kind == "landing")
     assert landing.after["palm"] == 3
     assert result.outcome.completed and result.outcome.stages_passed == 6

@@ -387,6 +387,9 @@ def test_a_feed_passing_over_a_low_palm_is_left_to_the_simulator():
     scene, design = LONG_ROW.scene, LONG_ROW.design_at()
     dev = {"pivot_x": np.array([[-0.45, -0.16, 0.0]]), "pivot_y": np.array([[-0.365, 0.49, 0.0]])}
     out = run_builds(scene, design, dev, 3)
-    run = simulate_build(scene, design, dev, 3)
+    run = simulate_build(scene, design, dev, 3, allow_skips=True)
     assert run.events[0].kind == "landing" and run.events[0].after["palm"] == 2
+    # (palm 1 flown over: by default a failure there, by name)
+    failure = simulate_build(scene, design, dev, 3).outcome.failure
+    assert failure.kind == "skipped_palm" and failure.stage == 1
     assert not out.closed_form[0]

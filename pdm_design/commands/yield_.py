@@ -105,7 +105,8 @@ def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accurac
     seed = tolerances.seed if seed is None else seed
     kwargs = {} if scales is None else {"scales": scales}
     result = yield_of(spec.scene, point, tolerances, builds=builds, stages=stages, seed=seed,
-                      confirm=tolerances.confirm, accuracy=acc, source=source, **kwargs)
+                      confirm=tolerances.confirm, accuracy=acc, source=source,
+                      allow_skips=spec.verification.allow_skips, **kwargs)
     return dataclasses.replace(result, identity=yield_identity(spec, source, point))
 
 
@@ -135,7 +136,8 @@ def unmet_min_yield(outcome) -> list[str]:
     r = yield_of(spec.scene, point, tolerances, builds=tolerances.builds,
                  stages=spec.verification.stages, seed=tolerances.seed,
                  confirm=tolerances.confirm, accuracy=outcome.accuracy or "default",
-                 source=spec.source, scales=(), sensitivity_samples=0)
+                 source=spec.source, scales=(), sensitivity_samples=0,
+                 allow_skips=spec.verification.allow_skips)
     if r.ci_low >= wanted:
         return []
     return [f"yield {_pct(r.estimate)} (95 % interval from {_pct(r.ci_low)}) over "
@@ -158,7 +160,8 @@ def simulate_build_of_spec(spec, source, design, build: str, stages, *, accuracy
         tolerances = sized_tolerances(spec, source, design, stages, accuracy=accuracy,
                                       answer=answer)
     return simulate_one(spec.scene, design, tolerances, seed, index, stages,
-                        accuracy=accuracy, record_trajectory=record_trajectory)
+                        accuracy=accuracy, record_trajectory=record_trajectory,
+                        allow_skips=spec.verification.allow_skips)
 
 
 def parse_build(text: str) -> tuple[int, int]:

@@ -89,6 +89,9 @@ class Verification:
     samples: SampleCount = 16
     offsets: tuple[ManipulatorOffset, ...] = ()
     step_errors: tuple[StepError, ...] = ()
+    # manipulators: a run whose object flies over a palm (lands on one further on) passes;
+    # by default it fails (`skipped_palm`)
+    allow_skips: Annotated[bool, Strict()] = False
 
 
 @checked(frozen=True, config=CONFIG)

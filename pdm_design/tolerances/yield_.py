@@ -107,13 +107,15 @@ def one_build(tolerances, seed: int, index: int, stages: int) -> dict:
 
 
 def simulate_one(scene, design, tolerances, seed, index, stages, *, accuracy="default",
-                 record_trajectory=False):
-    """The event simulator on build `index` of a yield run with `seed` and `stages`."""
+                 record_trajectory=False, allow_skips=False):
+    """The event simulator on build `index` of a yield run with `seed` and `stages`
+    (allow_skips: the spec's [verification] allow_skips)."""
     from ..plugin import of
 
     deviations = one_build(tolerances, seed, index, stages)
     return of(scene).simulate_build(scene, design, deviations, stages, accuracy=accuracy,
-                                    record_trajectory=record_trajectory)
+                                    record_trajectory=record_trajectory,
+                                    allow_skips=allow_skips)
 
 
 def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int) -> BuildOutcome:
@@ -133,10 +135,11 @@ def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int) -
 def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int, seed: int = 0,
              confirm: int = 20, accuracy="default", source: str = "SPEC",
              scales=SCALES, sensitivity_samples: int = SOBOL_SAMPLES,
-             progress=None) -> YieldResult:
+             progress=None, allow_skips: bool = False) -> YieldResult:
     """Yield of `design` built with `tolerances` (every one with a value), K = `stages`.
     scales: the tolerance scales of the yield curve (() for none); sensitivity_samples: the
-    Sobol' base sample (0: no sensitivity)."""
+    Sobol' base sample (0: no sensitivity); allow_skips: a manipulators spec's [verification]
+    allow_skips. A build passes iff its run completes (failure "")."""
     missing = [t.quantity for t in tolerances if t.value is None]
     if missing or not len(tolerances):
         raise ValueError("a yield needs tolerances with values" + (
@@ -145,8 +148,9 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     passed = outcome.stages_passed.copy()
     failure = outcome.failure.copy()
     confirmed = _confirm(scene, design, tolerances, outcome, passed, failure, seed=seed,
-                         stages=stages, confirm=confirm, accuracy=accuracy, progress=progress)
-    whole = passed >= stages
+                         stages=stages, confirm=confirm, accuracy=accuracy, progress=progress,
+                         allow_skips=allow_skips)
+    whole = failure == ""
     low, high = wilson(whole.sum(), builds)
     alive = np.array([(passed >= j).sum() for j in range(1, stages + 1)])
     s_low, s_high = wilson(alive, builds)
@@ -166,12 +170,13 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
         confirmed=confirmed, tolerances=tuple(t.to_json(scene.kind) for t in tolerances),
         sensitivity=tuple(sensitivity), sensitivity_note=note,
         scale_curve=tuple(_scale_curve(scene, design, tolerances, builds, stages, seed,
-                                       scales, accuracy, headline=(int(whole.sum()), confirmed))),
+                                       scales, accuracy, headline=(int(whole.sum()), confirmed),
+                                       allow_skips=allow_skips)),
         source=source, extras=of(scene).yield_extras(scene, design, tolerances, stages))
 
 
 def _confirm(scene, design, tolerances, outcome, passed, failure, *, seed, stages, confirm,
-             accuracy, progress) -> dict:
+             accuracy, progress, allow_skips=False) -> dict:
     """Simulate every build outside the closed-form regime (their verdicts replace the map's)
     and `confirm` random closed-form builds (agreement counted); passed and failure are
     updated in place."""
@@ -183,7 +188,7 @@ def _confirm(scene, design, tolerances, outcome, passed, failure, *, seed, stage
     agreed, disagreements = 0, []
     todo = [(int(i), True) for i in np.sort(sample)] + [(int(i), False) for i in open_builds]
     for i, is_sample in todo:
-        got = _simulated(scene, design, tolerances, seed, i, stages, accuracy)
+        got = _simulated(scene, design, tolerances, seed, i, stages, accuracy, allow_skips)
         if progress is not None:
             progress()
         if is_sample:
@@ -197,22 +202,26 @@ def _confirm(scene, design, tolerances, outcome, passed, failure, *, seed, stage
             "left_closed_form": len(open_builds), "disagreements": disagreements}
 
 
-def _simulated(scene, design, tolerances, seed, index, stages, accuracy) -> tuple[int, str]:
-    """(stages passed, failure name or "") of one build in the event simulator."""
+def _simulated(scene, design, tolerances, seed, index, stages, accuracy,
+               allow_skips=False) -> tuple[int, str]:
+    """(stages passed, failure name or "") of one build in the event simulator: "" exactly
+    when the run completed."""
     from ..sim.core import SimulationRefused
 
     try:
-        result = simulate_one(scene, design, tolerances, seed, index, stages, accuracy=accuracy)
+        result = simulate_one(scene, design, tolerances, seed, index, stages, accuracy=accuracy,
+                              allow_skips=allow_skips)
     except SimulationRefused:  # a build the simulator cannot hold is no part a workshop makes
         return 0, "invalid_part"
     outcome = result.outcome
     if outcome.completed:
         return outcome.stages_passed, ""
-    return outcome.stages_passed, outcome.failure.kind if outcome.failure else "incomplete"
+    return (min(outcome.stages_passed, stages - 1),
+            outcome.failure.kind if outcome.failure else "incomplete")
 
 
 def _scale_curve(scene, design, tolerances, builds, stages, seed, scales, accuracy, *,
-                 headline) -> list[dict]:
+                 headline, allow_skips=False) -> list[dict]:
     """Yield against a common scale of every tolerance, on the first SCALE_BUILDS builds (at
     most): the closed-form map, and the event simulator for every build outside its regime.
     At scale 1 the point is the headline's own (headline: builds that passed, its
@@ -231,8 +240,8 @@ def _scale_curve(scene, design, tolerances, builds, stages, seed, scales, accura
         passed, failure = o.stages_passed.copy(), o.failure.copy()
         for i in np.flatnonzero(~o.closed_form):
             passed[i], failure[i] = _simulated(scene, design, scaled, seed, int(i), stages,
-                                               accuracy)
-        ok = int((passed >= stages).sum())
+                                               accuracy, allow_skips)
+        ok = int((failure == "").sum())
         low, high = wilson(ok, count)
         out.append({"scale": scale, "estimate": ok / count, "ci_low": float(low),
                     "ci_high": float(high), "builds": count,

@@ -14,7 +14,8 @@ class CompassGait(Scene):
     stage_noun = ("step", "steps")
     margins = MARGINS
     requirement_keys = (*MARGINS, "max_spectral_radius")
-    verification_hints = {"offsets": "offsets are for manipulators scenes; a compass gait "
+    verification_hints = {"allow_skips": "allow_skips is for manipulators scenes (a palm flown over)",
+                          "offsets": "offsets are for manipulators scenes; a compass gait "
                                      "takes step_errors"}
 
     # ------------------------------------------------------------------ the spec

@@ -84,7 +84,8 @@ class Manipulators(Scene):
 
         offsets = spec.verification.offsets if errors is None else errors
         return simulate_manipulators(spec.scene, design, stages=stages, offsets=offsets,
-                                     accuracy=accuracy, record_trajectory=record_trajectory)
+                                     accuracy=accuracy, record_trajectory=record_trajectory,
+                                     allow_skips=spec.verification.allow_skips)
 
     # ------------------------------------------------------------------ the NLP
     objectives = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence",
@@ -127,11 +128,11 @@ class Manipulators(Scene):
         return float(design.get("link_length", 1.0))
 
     def simulate_build(self, scene, design, deviations, stages, *, accuracy="default",
-                       record_trajectory=False):
+                       record_trajectory=False, allow_skips=False):
         from .tolerances import simulate_build
 
         return simulate_build(scene, design, deviations, stages, accuracy=accuracy,
-                              record_trajectory=record_trajectory)
+                              record_trajectory=record_trajectory, allow_skips=allow_skips)
 
     def left_closed_forms(self, result):
         from .verification import left_closed_forms

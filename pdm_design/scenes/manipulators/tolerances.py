@@ -141,6 +141,10 @@ class _Builds:
         m, w, mu = v["object_mass"], v["object_width"], v["friction"]
         self.half_w = 0.5 * w
         self.invalid(v)
+        # a palm whose back stop is past the vertical swings forward from rest at the build
+        # (docs/manipulators_model.md, section 2.5): no closed form here, the simulator's
+        past = v["back_stop"] < 0.0
+        self.closed &= ~(past.any(axis=0) if past.ndim == 2 else past)
         self.row_boxes(w)
         cx, cy = self.rest_top(0)
         fall = self.y0 - cy
@@ -515,6 +519,8 @@ def meets_another_palm(run) -> bool:
             current = palms[-1]
         elif event.kind == "blocked" and palms and palms[-1] != current + 1:
             return True
+        elif event.kind == "skipped_palm":  # it came onto a palm beyond the next
+            return True
     return False
 
 
@@ -547,7 +553,7 @@ def invalid_result(unbuilt, accuracy):
 
 
 def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="default",
-                   record_trajectory: bool = False):
+                   record_trajectory: bool = False, allow_skips: bool = False):
     """The event simulator on one build (deviations of one build: arrays of 1 row), every
     part as drawn: pivots as offsets, link lengths, back stops, palm masses, link masses and
     pivot friction torques as
@@ -590,4 +596,4 @@ def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="de
             from None
     return simulate_manipulators(built, design, stages=stages, offsets=offsets,
                                  accuracy=accuracy, record_trajectory=record_trajectory,
-                                 parts=parts)
+                                 parts=parts, allow_skips=allow_skips)

@@ -69,4 +69,5 @@ def simulate_box_build(scene_object, spec, design, errors, deviations: dict, acc
     for q, dev in deviations.items():  # a list: every part its own value
         built[q] = (np.broadcast_to(np.asarray(dev, float), (stages,))[None, :].copy()
                     if q in per_part else np.array([dev]))
-    return simulate_build(spec.scene, design, built, stages, accuracy=accuracy)
+    return simulate_build(spec.scene, design, built, stages, accuracy=accuracy,
+                          allow_skips=spec.verification.allow_skips)

@@ -15,7 +15,8 @@ class RimlessWheel(Scene):
     title = "a rimless wheel rolling down a ramp or stairs"
     stage_noun = ("step", "steps")
     margins = MARGINS
-    verification_hints = {"offsets": "offsets are for manipulators scenes; a rimless wheel "
+    verification_hints = {"allow_skips": "allow_skips is for manipulators scenes (a palm flown over)",
+                          "offsets": "offsets are for manipulators scenes; a rimless wheel "
                                      "takes step_errors (slope on a ramp, rise and tread on "
                                      "stairs)"}
 
@@ -85,7 +86,7 @@ class RimlessWheel(Scene):
         return build_outcome(scene, design, deviations, stages)
 
     def simulate_build(self, scene, design, deviations, stages, *, accuracy="default",
-                       record_trajectory=False):
+                       record_trajectory=False, allow_skips=False):
         import dataclasses
 
         from .builds import step_errors_of

@@ -18,7 +18,9 @@ class Stairs(Scene):
     stage_noun = ("step", "steps")
     margins = MARGINS
     verification_hints = {"offsets": "offsets are for manipulators scenes; stairs take "
-                                     "step_errors"}
+                                     "step_errors",
+                          "allow_skips": "allow_skips is for manipulators scenes (a palm flown "
+                                         "over)"}
 
     # ------------------------------------------------------------------ the spec
     def scene_class(self):
@@ -94,7 +96,7 @@ class Stairs(Scene):
         return float(design.get("tread") or spec.scene.initial.drop_height)
 
     def simulate_build(self, scene, design, deviations, stages, *, accuracy="default",
-                       record_trajectory=False):
+                       record_trajectory=False, allow_skips=False):
         from .tolerances import simulate_build
 
         # one build's values: K for each step, a number for a lot

@@ -51,24 +51,32 @@ FAILURE_KINDS = {
     "slid_off": "the object's centre slid off the end of its palm",
     "stranded": "the palm reached its front stop still carrying the object (no handover)",
     "impact_jam": "an impact has no consistent sliding solution (Painleve paradox)",
+    "skipped_palm": "the object flew over a palm and came onto one further on (a spec may allow "
+                    "it: [verification] allow_skips)",
+    "swinging_palm": "the object reaches a palm released past the vertical while it still swings "
+                     "from rest (not followed)",
     "timeout": "a phase ran longer than the model allows without an event",
     "too_many_events": "the run exceeded its event budget",
 }
 
 
 def simulate_manipulators(scene, design, *, stages: int = 6, offsets=(), accuracy="default",
-                          record_trajectory: bool = False, parts=None) -> SimulationResult:
+                          record_trajectory: bool = False, parts=None,
+                          allow_skips: bool = False) -> SimulationResult:
     """Simulate the object along a row of `stages` manipulators from the scene's initial state.
 
     offsets: objects with .manipulator (1-based), .dx, .dy (m, y up) shifting that pivot.
     parts: geometry.Parts, every manipulator's own link length, back stop and palm mass.
+    allow_skips: an object that flies over a palm and comes onto one further on goes on (the
+    palms flown over count as passed); by default the run fails there (`skipped_palm`).
     Returns a SimulationResult: outcome, one record per manipulator reached (see
     docs/manipulators_model.md for the fields), the event log, and, if asked for, trajectories
     (time, x, y, vx, vy of the object's bottom centre; theta and manipulator of its carrier).
     """
     acc = resolve_accuracy(accuracy)
     check_manipulators_scales(scene, design, offsets)
-    return Run(scene, design, stages, offsets, acc, record_trajectory, parts).run()
+    return Run(scene, design, stages, offsets, acc, record_trajectory, parts,
+               allow_skips).run()
 
 
 def check_manipulators_scales(scene, design, offsets=()) -> None:

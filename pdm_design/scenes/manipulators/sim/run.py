@@ -29,7 +29,8 @@ EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chatteri
 class Run(OdePhases, LiftOffPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
-    def __init__(self, scene, design, stages, offsets, acc, record, parts=None):
+    def __init__(self, scene, design, stages, offsets, acc, record, parts=None,
+                 allow_skips=False):
         self.row = build_row(scene, design, stages, offsets, parts)
         self.acc, self.record = acc, record
         self.g, self.l = scene.gravity, design.link_length
@@ -60,12 +61,40 @@ class Run(OdePhases, LiftOffPhases):
         self.events: list[Event] = []
         self.palm_events: list[Event] = []
         self.stages: list[dict] = []
-        self.passed = 0
+        self.passed = 0  # palms that carried the object forward in order (handed it on)
+        self.at = -1  # the palm the object last came onto (-1: the feed)
+        self.allow_skips = allow_skips
         self.failure: Event | None = None
         self.completed = False
         self.traj = {k: [] for k in ("time", "x", "y", "vx", "vy", "theta", "manipulator")}
         self.zeno_speed = ZENO_FRACTION * math.sqrt(self.g * self.l)
         self.phase_time = PHASE_TIME * math.sqrt(self.l / self.g)
+        self.from_rest = self._release_past_vertical()
+
+    def _release_past_vertical(self):
+        """Palms whose back stop is past the vertical (alpha_k < 0: gravity pulls them forward,
+        l th'' = g sin th > 0 at -alpha_k) swing forward from rest as soon as the row is built,
+        to their front stop (or, on real links, to where pivot friction holds them; a palm
+        that friction holds at its back stop stays there). A back stop exactly vertical is taken
+        as a rest (the equilibrium, unstable: a landing pushes the palm forward). Returns the
+        palms released so."""
+        out = []
+        for k, a in enumerate(self.alphas):
+            if a >= 0.0 or (not self.plain and ph.held_by_friction(-a, self.swings_alone[k])):
+                continue
+            self._release(k, 0.0, -a, 0.0)
+            out.append(k)
+        return tuple(out)
+
+    def _swinging_from_rest(self, t, j):
+        """The object reaches palm j at time t: a palm up to j released from rest at the build
+        (_release_past_vertical) and still swinging then is one the object met or passed while
+        it moved; such contacts are not followed: the run fails (`swinging_palm`). Returns the
+        1-based palm or None."""
+        for k in self.from_rest:
+            if k <= j and self.rest_since[k] > t:
+                return k + 1
+        return None
 
     def _mechanism(self, scene, design):
         """Links and pivots, every palm its own (its link length, palm mass, link mass and
@@ -113,7 +142,8 @@ class Run(OdePhases, LiftOffPhases):
         t_end = self.events[-1].time if self.events else 0.0
         log = sorted(self.events + [e for e in self.palm_events if e.time <= t_end],
                      key=lambda e: e.time)
-        outcome = Outcome(completed=self.completed, stages_passed=self.passed,
+        passed = self.passed if self.completed else min(self.passed, self.n - 1)
+        outcome = Outcome(completed=self.completed, stages_passed=passed,
                           failure=self.failure)
         traj = {k: list(v) for k, v in self.traj.items()} if self.record else {}
         stages = [rec if all(type(v) in _PLAIN for v in rec.values())
@@ -257,6 +287,15 @@ class Run(OdePhases, LiftOffPhases):
 
         log_as: "landing" (from a flight), "handover" (from the previous palm), "rebound" (onto
         the palm it bounced off), "stop" (its palm has just been stopped by the front stop)."""
+        swinging = self._swinging_from_rest(t, j) if log_as in ("landing", "handover") else None
+        if swinging is not None:
+            return self._fail(t, "swinging_palm", j + 1, before,
+                              f"the object reaches palm {j + 1} while palm {swinging}, released "
+                              "past the vertical, still swings from rest")
+        if log_as in ("landing", "handover") and self._comes_onto(j):
+            return self._fail(t, "skipped_palm", self.at + 2, before,
+                              f"the object flew over palm {self.at + 2} and came onto palm "
+                              f"{j + 1}")
         imp, held = self._resolve(j, vx, vy, w, theta, self.eps, at_rest)
         gn = imp.vy + imp.w * math.sin(theta)
         bounce = self.eps > 0.0 and not imp.jam and gn > self.zeno_speed
@@ -283,8 +322,6 @@ class Run(OdePhases, LiftOffPhases):
             self._log(t, "landing", j + 1, before, after,
                       f"on palm {j + 1} at {offset:+.4g} m from its centre, "
                       f"{'sticking' if imp.stick else 'sliding'}")
-        if log_as in ("landing", "handover"):
-            self.passed = max(self.passed, j)
         if rec is not None and not imp.stick:
             rec["slipped"] = True
         lo, hi = self.row.support(offset)
@@ -316,6 +353,21 @@ class Run(OdePhases, LiftOffPhases):
             return lambda: self._stuck(t, j, theta, imp.w, offset)
         sd = imp.vx - imp.w * math.cos(theta)
         return lambda: self._sliding(t, j, theta, imp.w / self.ls[j], offset, sd)
+
+    def _comes_onto(self, j):
+        """Bookkeeping of the object coming onto palm j (a landing or a handover) from palm
+        self.at. The next palm in order: the one it came from has carried it forward
+        (stages_passed). Back onto the same palm (after a lift-off or a bounce), or onto one
+        behind: nothing passed. Further on: the palms between were flown over; True (the run
+        fails, skipped_palm, the palm it came from counted as passed) unless skips are
+        allowed, where they count as passed too."""
+        if j > self.at + 1 and not self.allow_skips:
+            self.passed = max(self.passed, self.at + 1)
+            return True
+        if j > self.at:
+            self.passed = max(self.passed, j)
+        self.at = j
+        return False
 
     def _bouncing_in_place(self, j, x, y, vx, t):
         """True when the object has just bounced straight up off palm j, held by a stop, at the
@@ -409,7 +461,6 @@ class Run(OdePhases, LiftOffPhases):
         if rec is not None:
             rec.update(handover_time=t, handover_speed=math.hypot(vx, vy), handover_angle=theta,
                        handover_vx=vx, handover_vy=vy, release_speed=self.ls[k] * omega)
-        self.passed = max(self.passed, k + 1)
         self._release(k, t, theta, self.ls[k] * omega)
         return self._impact(t, j, self.rest_angle[j], 0.0, before["x"], before["y"], vx, vy,
                             log_as="handover", stage=k + 1, before=before, at_rest=True)
@@ -424,6 +475,11 @@ class Run(OdePhases, LiftOffPhases):
 
     def _complete(self, t, k, theta, omega, s, sd=0.0):
         state = self._on_palm(k, theta, omega, s, sd)
+        swinging = self._swinging_from_rest(t, k)
+        if swinging is not None:
+            return self._fail(t, "swinging_palm", k + 1, state,
+                              f"palm {swinging}, released past the vertical, still swings from "
+                              "rest")
         rec = self._stage(k)
         if rec is not None:
             rec.update(handover_angle=theta)
