@@ -297,8 +297,13 @@ def test_a_required_lift_off_margin_is_still_reported_when_the_run_completes(tmp
 CASE_RUNNER = """
 import inspect, json, sys
 from types import SimpleNamespace
-from pdm_design.scenes import Body, ManipulatorsDesign, ManipulatorsInitial, ManipulatorsScene, Palm
-from pdm_design.scenes.manipulators.sim import simulate_manipulators
+try:  # this code's layout, or the one of the commit before the flight was modelled
+    from pdm_design.scenes.manipulators.model import (Body, ManipulatorsDesign,
+                                                      ManipulatorsInitial, ManipulatorsScene, Palm)
+    from pdm_design.scenes.manipulators.sim import simulate_manipulators
+except ImportError:
+    from pdm_design.scenes import Body, ManipulatorsDesign, ManipulatorsInitial, ManipulatorsScene, Palm
+    from pdm_design.sim.manipulators import simulate_manipulators
 out = []
 for c in json.load(sys.stdin):
     scene = ManipulatorsScene(

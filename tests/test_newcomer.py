@@ -470,12 +470,22 @@ def test_a_sheet_sized_for_a_yield_shows_the_placement_tolerance_everywhere(tmp_
     sheet = _sized_sheet(tmp_path, kind)
     spec, stages = sheet.spec, sheet.spec.verification.stages
     t = sheet.items[0][columns[0]]
-    # the value meets the target: the linearised yield at it (and at 1e-3 more) brackets it
+    # the value is the linearised yield's size (the linearised yield at it, and at 1e-3 more,
+    # brackets the target), times the Monte Carlo check's common factor (solve/yield_check.py)
+    from pdm_design.solve.yield_allocation import allocate_for_yield
+    from pdm_design.solve.yield_check import check_allocation
+
+    allocation = allocate_for_yield(spec.scene, spec.design_at(), spec.tolerances, stages=stages)
+    checked = check_allocation(spec.scene, spec.design_at(), allocation.tolerances, set(axes),
+                               target=allocation.target, stages=stages,
+                               accuracy=spec.verification.accuracy)
+    linear = t / checked.factor
     sized = dataclasses.replace(spec.tolerances, items=tuple(
-        dataclasses.replace(q, value=t) if q.quantity in axes else q
+        dataclasses.replace(q, value=linear) if q.quantity in axes else q
         for q in spec.tolerances))
     bigger = dataclasses.replace(sized, items=tuple(
-        dataclasses.replace(q, value=1.001 * t) if q.quantity in axes else q for q in sized))
+        dataclasses.replace(q, value=1.001 * linear) if q.quantity in axes else q
+        for q in sized))
     at = linearised_yield_function(spec.scene)
     assert at(spec.scene, spec.design_at(), sized, stages)["yield"] >= 0.9973 - 1e-9
     assert at(spec.scene, spec.design_at(), bigger, stages)["yield"] < 0.9973

@@ -224,7 +224,7 @@ def test_simulate_from_a_saved_optimize_document_solves_nothing(robust_yield, tm
     code, solved, _ = run("simulate", spec, "--build", "3:0", "--stages", 6, "--format", "json")
     _no_solve(monkeypatch)
     monkeypatch.setattr("pdm_design.commands.yield_.sized_tolerances",
-                        lambda spec, source, point, stages: spec.tolerances)  # none to size
+                        lambda spec, source, point, stages, **_: spec.tolerances)  # none to size
     code, out, err = run("simulate", spec, "--build", "3:0", "--stages", 6, "--from", saved,
                          "--format", "json")
     assert code == 0, err

@@ -11,12 +11,12 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from pdm_design.accuracy import accuracy
-from pdm_design.scenes import Links, Pivots
-from pdm_design.sim.manipulators import simulate_manipulators
-from pdm_design.sim.manipulators.geometry import Parts
-from pdm_design.sim.manipulators.run import Run
+from pdm_design.scenes.manipulators.model import Links, Pivots
+from pdm_design.scenes.manipulators.sim import simulate_manipulators
+from pdm_design.scenes.manipulators.sim.geometry import Parts
+from pdm_design.scenes.manipulators.sim.run import Run
 from pdm_design.spec.loader import load_spec
-from pdm_design.tolerances.manipulators import run_builds
+from pdm_design.scenes.manipulators.tolerances import run_builds
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 STAGES = 4

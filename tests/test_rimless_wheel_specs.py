@@ -91,20 +91,23 @@ def test_template_reads_and_its_start_vaults_every_slope():
     assert formulation.build(spec)
 
 
-def test_plugin_names_the_pieces_and_imports_nothing_heavy():
+def test_the_scene_object_names_the_pieces_and_imports_nothing_heavy():
     import subprocess
     import sys
 
-    code = ("import sys; import pdm_design.scenes.rimless_wheel.plugin as p; "
+    code = ("import sys; from pdm_design.plugin import scene_kind; "
+            "s = scene_kind('rimless_wheel'); "
             "print(sorted(m for m in ('numpy', 'scipy', 'casadi') if m in sys.modules)); "
-            "print(p.KIND, p.MARGINS, p.FAILURE_KINDS)")
+            "print(s.kind, s.margins)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=Path(__file__).resolve().parent.parent, check=True).stdout
     assert out.splitlines()[0] == "[]"
+    from pdm_design.plugin import scene_kind
     from pdm_design.scenes.rimless_wheel import plugin
     from pdm_design.scenes.rimless_wheel.sim import FAILURE_KINDS
 
+    scene = scene_kind("rimless_wheel")
     assert plugin.FAILURE_KINDS == FAILURE_KINDS
-    data, spec = read(plugin.template())
-    assert plugin.analyse(spec.scene, RimlessWheelDesign(
-        spokes=8, leg_length=1.0, slope=0.1)).kind == plugin.KIND
+    data, spec = read(scene.template())
+    assert scene.analyse(spec.scene, RimlessWheelDesign(
+        spokes=8, leg_length=1.0, slope=0.1)).kind == scene.kind

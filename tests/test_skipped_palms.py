@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import pytest
 
 from pdm_design.errors import SpecError
-from pdm_design.sim.manipulators import simulate_manipulators
+from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.spec.loader import load_spec, parse_spec, read_spec_data
 from pdm_design.tolerances import Tolerance, Tolerances
 from pdm_design.tolerances.yield_ import simulate_one, yield_of
