@@ -84,6 +84,7 @@ def test_max_yield_needs_values_and_a_row_of_manipulators():
     assert spec.tolerances  # the shipped long row has values
 
 
+@pytest.mark.slow  # two optimisations and their yields (30-60 s): the slow suite, CI's own step
 def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_builds():
     # the long row with its stop angles free, optimised for yield and for the worst-case box,
     # each design built 2000 times with the same seed (the same deviations) and judged as

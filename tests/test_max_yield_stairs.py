@@ -132,6 +132,7 @@ def test_max_yield_is_accepted_on_stairs_at_given_tolerances():
     assert parse_spec(data).objective == {"max_yield": 1.0}
 
 
+@pytest.mark.slow  # two optimisations and their yields (30-60 s): the slow suite, CI's own step
 def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_builds():
     # stairs_yield_design (100 bounces): optimised for yield and for the worst-case box of the
     # steps, each design built with the same seed (the same deviations) and judged by the map
