@@ -35,11 +35,14 @@ def disagreement_note(spec) -> str:
 
 
 def handover_speeds(spec, analysis, stages):
-    """Closed-form handover speeds of the first `stages` stages (extends the analysis' list)."""
+    """Closed-form handover speeds of the first `stages` stages (extends the analysis' list
+    by the paper's device's stage map; on real links or pivots, whose map that is not, the
+    analysis' own list is compared alone)."""
     from . import physics as phys
 
     speeds = list(analysis.approach.get("handover_speeds", []))
-    if not speeds or analysis.periodic.get("handover_speed") is None:
+    if (not speeds or analysis.periodic.get("handover_speed") is None
+            or not spec.scene.plain_mechanism):
         return speeds
     d = analysis.design
     while len(speeds) < stages:
