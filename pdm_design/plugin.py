@@ -182,6 +182,11 @@ class Scene:
     in the scenario (`formulate`) and in `simulate`, with their quantities, and the quantities
     every part holds. None by default: the scene has no per-stage box."""
 
+    def box_axes_of(self, spec):
+        """The explicit-offset box of this spec (a scene whose box depends on the spec, a
+        walker's slope on a ramp or rise and tread on stairs, says so here); `box_axes`."""
+        return self.box_axes
+
     def length_scale(self, spec, design: dict) -> float:
         """The device's size (m) at a design (values by name): the unit the linearised
         tolerance regions are solved in. 1 m by default."""

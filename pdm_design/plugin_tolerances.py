@@ -17,7 +17,7 @@ class BoxAxes:
     holds (a random build draws one value per part; a corner takes them all high or all low).
     alternating: those of per_part whose corners also alternate part by part."""
 
-    axes: tuple[tuple[str, str], tuple[str, str]]
+    axes: tuple[tuple[str, str], ...]  # two (a pivot's, a step's) or one (a ramp's slope)
     per_part: tuple[str, ...] = ()
     alternating: tuple[str, ...] = ()
 

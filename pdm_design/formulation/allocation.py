@@ -105,7 +105,7 @@ def pivot_box(spec, entries) -> dict[str, float]:
     from ..plugin import of
 
     value = {e["quantity"]: e["value"] for e in entries}
-    return {axis: float(value.get(q, 0.0)) for axis, q in of(spec).box_axes.axes}
+    return {axis: float(value.get(q, 0.0)) for axis, q in of(spec).box_axes_of(spec).axes}
 
 
 def box_conditions(spec, rows_of, today: dict, s) -> list:

@@ -69,15 +69,16 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
-    box = of(spec).box_axes
-    per_stage = set(box.quantities)  # the corner patterns' own quantities
+    box = of(spec).box_axes_of(spec)
+    per_stage = set(box.quantities)
+    pair = (*half, 0.0)[:2]  # a box of one axis: its errors' second entry 0  # the corner patterns' own quantities
     lot = {e["quantity"]: e["value"] for e in (lots or ()) if e["quantity"] not in per_stage}
-    builds = [(name + _lot_name(signs_l), [(sx * half[0], sy * half[1]) for sx, sy in signs],
+    builds = [(name + _lot_name(signs_l), [(sx * pair[0], sy * pair[1]) for sx, sy in signs],
                {q: _scaled(sl, lot[q]) for q, (_, sl) in zip(lot, signs_l)})
               for name, signs in corner_patterns(stages)
               for signs_l in itertools.product(*(_lot_signs(q, stages, box) for q in lot))]
     for i in range(random_builds(samples, stages)):
-        draws = rng.uniform(-1.0, 1.0, size=(stages, 2)) * np.asarray(half)
+        draws = rng.uniform(-1.0, 1.0, size=(stages, 2)) * np.asarray(pair)
         built = {q: rng.uniform(-t, t, stages).tolist() if q in box.per_part  # part by part
                  else float(rng.uniform(-t, t)) for q, t in lot.items()}
         builds.append((f"random sample {i + 1}", [tuple(map(float, d)) for d in draws], built))
@@ -133,8 +134,8 @@ def _simulate(spec: Spec, design, errors, deviations: dict, accuracy):
     return of(spec).simulate_box_build(spec, design, errors, deviations, accuracy)
 
 
-def _axes(spec: Spec) -> tuple[str, str]:
-    return of(spec).box_axes.names
+def _axes(spec: Spec) -> tuple[str, ...]:
+    return of(spec).box_axes_of(spec).names
 
 
 def _half_widths(spec: Spec, tolerance: dict) -> tuple[float, float]:

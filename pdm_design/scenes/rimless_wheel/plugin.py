@@ -99,6 +99,23 @@ class RimlessWheel(Scene):
                                       step_errors=step_errors_of(deviations, stages),
                                       record_trajectory=record_trajectory)
 
+    def box_axes_of(self, spec):
+        """Every step's own slope on a ramp; every step's rise and tread on stairs."""
+        from ...plugin_tolerances import BoxAxes
+
+        if spec.scene.ground == "ramp":
+            return BoxAxes((("slope", "slope"),))
+        return BoxAxes((("rise", "rise"), ("tread", "tread")))
+
+    def simulate_box_build(self, spec, design, errors, deviations, accuracy):
+        """One build of the box: every step's slope error (a ramp) or rise and tread errors."""
+        from .sim import simulate_rimless_wheel
+
+        names = ("slope",) if spec.scene.ground == "ramp" else ("rise", "tread")
+        steps = [{"step": k + 1, **dict(zip(names, e))} for k, e in enumerate(errors)]
+        return simulate_rimless_wheel(spec.scene, design, stages=spec.verification.stages,
+                                      accuracy=accuracy, step_errors=steps)
+
     def yield_extras(self, scene, design, tolerances, stages):
         """The mean steps before failure on a rough ramp by the Markov chain (rough.mfpt), when
         the only toleranced quantity is every step's own slope."""
