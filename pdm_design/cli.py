@@ -524,8 +524,6 @@ def sheet(source, out, count, no_tolerance, no_drawing):
     document. Pivot coordinates, stop angles, link length and palm mass of every manipulator,
     or every step's rise and tread, each with its tolerance; Markdown, CSV and a dimensioned
     drawing. Exit 1 (sheet still written) when the design does not work."""
-    from pathlib import Path
-
     from .plugin import of
     from .sheet import sheet_for, write_sheet
 

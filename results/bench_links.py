@@ -38,13 +38,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from pdm_design.accuracy import accuracy  # noqa: E402
-from pdm_design.scenes.manipulators.analysis import carry_terms
+from pdm_design.scenes.manipulators.analysis import carry_terms  # noqa: E402
 from pdm_design.formulation import build  # noqa: E402
-from pdm_design.scenes.manipulators import formulation as form
+from pdm_design.scenes.manipulators import formulation as form  # noqa: E402
 from pdm_design.io import write_atomic  # noqa: E402
-from pdm_design.scenes.manipulators import physics as phys
-from pdm_design.scenes.manipulators.model import ManipulatorsDesign, Pivots
-from pdm_design.scenes.manipulators.sim import simulate_manipulators
+from pdm_design.scenes.manipulators import physics as phys  # noqa: E402
+from pdm_design.scenes.manipulators.model import ManipulatorsDesign, Pivots  # noqa: E402
+from pdm_design.scenes.manipulators.sim import simulate_manipulators  # noqa: E402
 from pdm_design.solve.optimize import optimize  # noqa: E402
 from pdm_design.spec.loader import load_spec  # noqa: E402
 

@@ -65,6 +65,18 @@ class CompassGait(Scene):
         return model, bounds, None
 
     # ------------------------------------------------------------------ tolerances, yield, verification
+    def box_axes_of(self, spec):
+        """Every step's own slope (the NLP's max_slope_tolerance box)."""
+        from ...plugin_tolerances import BoxAxes
+
+        return BoxAxes((("slope", "slope"),))
+
+    def simulate_box_build(self, spec, design, errors, deviations, accuracy):
+        """One build of the box: every step's slope error (the first of each pair)."""
+        from .simulate import simulate_compass_gait
+
+        return simulate_compass_gait(spec.scene, design, stages=spec.verification.stages,
+                                     accuracy=accuracy, step_errors=[e[0] for e in errors])
 
     # ------------------------------------------------------------------ sheets, drawings, reports
     dxf_layers = {"GROUND": 7, "WALKER": 5}  # scenes/compass_gait/dxf.py
