@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from ..analysis.result import required
 from ..api import DesignOutcome
 from ..status import Status
@@ -23,9 +25,16 @@ def _rows(values: dict) -> list[str]:
     return out
 
 
+def _box_size(axis: str, value: float) -> str:
+    """A box's half-width in build units: mm, or degrees for an angle (a slope)."""
+    if _UNITS.get(axis) == "rad":
+        return f"{value:.4g} rad ({math.degrees(value):.3g} deg)"
+    return f"{value * 1e3:.2f} mm"
+
+
 def _tolerance_rows(tolerance: dict) -> list[str]:
     box = {k: v for k, v in tolerance.items() if k not in ("linearised", "limited_by")}
-    lines = [f"  {axis:<6} +-{value * 1e3:.2f} mm (robust NLP)" for axis, value in box.items()]
+    lines = [f"  {axis:<6} +-{_box_size(axis, value)} (robust NLP)" for axis, value in box.items()]
     linear = tolerance.get("linearised")
     if linear:
         parts = []

@@ -13,6 +13,8 @@ UNITS = {
     "horizontal_speed": "m/s", "spin": "rad/s", "flight_time": "s", "drift_per_bounce": "m",
     "effective_mass": "kg", "link_mass": "kg", "link_inertia": "kg m^2", "link_count": "",
     "pivot_friction_torque": "N m", "pivot_damping": "N m s/rad",
+    "slope": "rad", "leg_length": "m", "spokes": "", "step_length": "m", "step_period": "s",
+    "spectral_radius": "",
 }
 
 MECHANISM = ("link_mass", "link_inertia", "link_count", "pivot_friction_torque", "pivot_damping")

@@ -67,7 +67,8 @@ class PendulumRow(Scene):
     def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
         from .sim import simulate
 
-        return simulate(spec.scene, design, stages=stages, accuracy=accuracy)
+        return simulate(spec.scene, design, stages=stages, accuracy=accuracy,
+                        record_trajectory=record_trajectory)
 
     def formulate(self, spec, parameters=None):
         from .formulation import build
