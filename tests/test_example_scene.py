@@ -91,3 +91,38 @@ def test_simulate_settles_on_the_periodic_speed(installed, spec):
 def test_check_passes_the_expectations(installed, spec):
     code, out, err = _run(installed, "check", str(spec), cwd=spec.parent)
     assert code == 0, out + err
+
+
+def test_sheet_report_and_table_run_on_the_interface_defaults(installed, spec):
+    folder = spec.parent
+    for args, made in ((("sheet", str(spec), "--out", "s"), "s/sheet.csv"),
+                       (("report", str(spec), "--out", "r"), "r/report.html"),
+                       (("table", str(spec), "--sweep", "drop=0.1:0.3:3", "--out", "t"),
+                        "t/table.csv")):
+        code, _, err = _run(installed, *args, cwd=folder)
+        assert code == 0, err
+        assert (folder / made).stat().st_size > 0
+
+
+def test_yield_of_one_toleranced_part_is_the_exact_probability(installed, spec):
+    """Every bob's mass drawn normal (sigma = t/3). At the first bob the puck arrives at the
+    start speed whatever was built: no bob loops there (gain^2 v0^2 <= 1.5^2 x 4 < 4 g l), so
+    a build gets past bob 1 exactly when that bob is neither too heavy for the puck to go on
+    (e M_1 >= m) nor without mass (M_1 <= 0): Phi((m/e - M)/sigma) - Phi(-M/sigma). (Later a
+    light bob lets the puck speed up until one loops: no closed form there.)"""
+    from scipy.stats import norm
+
+    code, out, err = _run(installed, "optimize", str(spec), "--format", "json", cwd=spec.parent)
+    M = json.loads(out)["design"]["bob_mass"]
+    fixed = spec.parent / "fixed.toml"
+    text = spec.read_text().replace("bob_mass = { min = 0.1, max = 1.9, initial = 1.0 }",
+                                    f"bob_mass = {M!r}")
+    fixed.write_text(text + '\n[tolerances]\nbuilds = 4000\nconfirm = 5\n'
+                            'bob_mass = { value = 1.5, applies_to = "each" }\n')
+    code, out, err = _run(installed, "yield", str(fixed), "--format", "json", cwd=spec.parent)
+    assert code == 0, err
+    run = json.loads(out)
+    sigma = 0.5
+    exact = norm.cdf((M_PUCK / E - M) / sigma) - norm.cdf(-M / sigma)
+    assert run["survival_band"]["low"][0] <= exact <= run["survival_band"]["high"][0]
+    assert 0.8 < exact < 0.9  # a band that can miss: 4000 builds, about +-1 %

@@ -70,6 +70,25 @@ class PendulumRow(Scene):
         return simulate(spec.scene, design, stages=stages, accuracy=accuracy,
                         record_trajectory=record_trajectory)
 
+    def quantities(self):
+        from .builds import QUANTITIES
+
+        return QUANTITIES
+
+    def run_builds(self, scene, design, deviations, stages):
+        from .builds import run_builds
+
+        return run_builds(scene, design, deviations, stages)
+
+    def simulate_build(self, scene, design, deviations, stages, *, accuracy="default",
+                       record_trajectory=False, allow_skips=False):
+        from .builds import per_stage
+        from .sim import simulate
+
+        masses, drops = per_stage(design, deviations, 1, stages)
+        return simulate(scene, design, stages=stages, accuracy=accuracy, masses=masses[0],
+                        drops=drops[0], record_trajectory=record_trajectory)
+
     def formulate(self, spec, parameters=None):
         from .formulation import build
 

@@ -27,17 +27,19 @@ def _down_the_ramp(v0: float, length: float, g: float, angle: float, accuracy):
     return float(run.y_events[0][0][1]), float(run.t_events[0][0]), lambda t: run.sol(t)[0]
 
 
-def simulate(scene, design, *, stages: int, accuracy,
+def simulate(scene, design, *, stages: int, accuracy, masses=None, drops=None,
              record_trajectory: bool = False) -> SimulationResult:
     """The run from the first bob; record_trajectory: the puck's path (time, x, y; the first
     bob at the origin, x along the row, y up), sampled along every ramp."""
     m, e, g = scene.puck.mass, scene.puck.restitution, scene.gravity
-    M, l = design.bob_mass, design.rod_length
-    length = design.drop / math.sin(scene.ramp_angle)
+    l = design.rod_length
+    masses = [design.bob_mass] * stages if masses is None else masses  # a build's own parts
+    drops = [design.drop] * stages if drops is None else drops
     v, t, events, records, failure = scene.initial.speed, 0.0, [], [], None
     path = {"time": [0.0], "x": [0.0], "y": [0.0]}
     cos_a, sin_a = math.cos(scene.ramp_angle), math.sin(scene.ramp_angle)
     for k in range(1, stages + 1):
+        M, length = masses[k - 1], drops[k - 1] / math.sin(scene.ramp_angle)
         v_after = (m * v - e * M * v) / (m + M)  # momentum, and restitution's speed apart
         bob = v_after + e * v
         events.append(Event(t, "impact", k, {"speed": v}, {"speed": v_after, "bob_speed": bob}))
