@@ -18,6 +18,7 @@ This module imports nothing heavy: the CLI's start-up path reaches it.
 from __future__ import annotations
 
 import functools
+import importlib
 from dataclasses import dataclass
 from importlib import metadata
 
@@ -42,6 +43,20 @@ class StageErrors:
 
     def item(self, k: int, a: float, b: float):
         return self.make(k, a, b)
+
+
+def lazily(target: str):
+    """A Scene method that is `module:function` of the scene's own package (a relative module,
+    ".sheet:parts"), imported when first called and called with the method's arguments: the
+    scene object stays light, its heavy parts load with the command that needs them."""
+    module, name = target.split(":")
+
+    def method(self, *args, **kwargs):
+        package = type(self).__module__.rpartition(".")[0]
+        return getattr(importlib.import_module(module, package), name)(*args, **kwargs)
+
+    method.__doc__ = f"`{target}` of the scene's package (imported when called)."
+    return method
 
 
 class Scene:
@@ -155,7 +170,7 @@ class Scene:
         (a part of the NLP's cache key, formulation.common.spec_key). () by default."""
         return ()
 
-    # ------------------------------------------------------------------ tolerances, yield, verification
+    # ------------------------------------------------------ tolerances, yield, verification
     allocatable: tuple[str, ...] = ()
     """The quantities whose worst-case tolerance the robust NLP allocates, or takes as given
     half-widths while allocating: those over whose box a sound outer bound of every row is
@@ -257,7 +272,7 @@ class Scene:
         as words appended to a disagreement (" (...)"); "" by default."""
         return ""
 
-    # ------------------------------------------------------------------ sheets, drawings, reports
+    # ------------------------------------------------------ sheets, drawings, reports
     # A build sheet lists one item (a CSV row) per stage: whatever a workshop places for that
     # stage (a manipulator's pivot, a step). The defaults give a scene that implements only the
     # core above a usable sheet and report: its design values, one row per stage, the simulated
@@ -377,7 +392,7 @@ class Scene:
 
         return generic_animation(result)
 
-    # ------------------------------------------------------------------ command line, tables, API
+    # ------------------------------------------------------ command line, tables, API
     def infeasible_words(self, spec, design: dict) -> str | None:
         """Why an optimisation found no feasible design, in words, when the scene can tell
         from the spec and the least-violation `design` (values by name); None to say only

@@ -3,7 +3,7 @@ scipy, casadi) are imported only when a method is called."""
 
 from __future__ import annotations
 
-from ...plugin import Scene
+from ...plugin import Scene, lazily
 
 MARGINS = ("stance_contact", "no_slip", "stability", "hip_limit")
 
@@ -14,7 +14,8 @@ class CompassGait(Scene):
     stage_noun = ("step", "steps")
     margins = MARGINS
     requirement_keys = (*MARGINS, "max_spectral_radius")
-    verification_hints = {"allow_skips": "allow_skips is for manipulators scenes (a palm flown over)",
+    verification_hints = {"allow_skips": "allow_skips is for manipulators scenes (a palm flown "
+                                         "over)",
                           "offsets": "offsets are for manipulators scenes; a compass gait "
                                      "takes step_errors"}
 
@@ -29,10 +30,7 @@ class CompassGait(Scene):
 
         return CompassGaitDesign
 
-    def template(self):
-        from .template import compass_gait_template
-
-        return compass_gait_template()
+    template = lazily(".template:compass_gait_template")
 
     # ------------------------------------------------------------------ closed forms
     def analyse(self, scene, design, stages=None, requirements=None):
@@ -64,7 +62,7 @@ class CompassGait(Scene):
         model, bounds, _ = build(spec)
         return model, bounds, None
 
-    # ------------------------------------------------------------------ tolerances, yield, verification
+    # ------------------------------------------------------ tolerances, yield, verification
     def box_axes_of(self, spec):
         """Every step's own slope (the NLP's max_slope_tolerance box)."""
         from ...plugin_tolerances import BoxAxes
@@ -78,7 +76,7 @@ class CompassGait(Scene):
         return simulate_compass_gait(spec.scene, design, stages=spec.verification.stages,
                                      accuracy=accuracy, step_errors=[e[0] for e in errors])
 
-    # ------------------------------------------------------------------ sheets, drawings, reports
+    # ------------------------------------------------------ sheets, drawings, reports
     dxf_layers = {"GROUND": 7, "WALKER": 5}  # scenes/compass_gait/dxf.py
     stage_columns = ("step", "time", "step_period", "step_length", "foot_x", "foot_y",
                      "stance", "swing", "stance_rate", "swing_rate")
@@ -89,10 +87,7 @@ class CompassGait(Scene):
 
         return PART_WORDS
 
-    def sheet_rows(self, spec, analysis, tolerance, count):
-        from .sheet import sheet_rows
-
-        return sheet_rows(spec, analysis, tolerance, count)
+    sheet_rows = lazily(".sheet:sheet_rows")
 
     def sheet_words(self):
         from .sheet import WORDS
@@ -104,25 +99,15 @@ class CompassGait(Scene):
 
         return box_tolerances(self, sheet, why)
 
-    def parts(self, sheet):
-        from .sheet import parts
-
-        return parts(sheet)
-
-    def table_rows(self, sheet):
-        from .sheet import table_rows
-
-        return table_rows(sheet)
+    parts = lazily(".sheet:parts")
+    table_rows = lazily(".sheet:table_rows")
 
     def draw_sheet(self, ax, labels, sheet, items, detail):
         from .drawing import draw_walker
 
         draw_walker(ax, labels, sheet, items, detail)
 
-    def draw_dxf(self, msp, sheet):
-        from .dxf import draw_dxf
-
-        return draw_dxf(msp, sheet)
+    draw_dxf = lazily(".dxf:draw_dxf")
 
     def document_keys(self):
         from .analysis import PERIODIC_KEYS
@@ -136,11 +121,8 @@ class CompassGait(Scene):
 
         plot_compass_gait_run(result, path, title=title)
 
-    def animation(self, spec, result, timeline):
-        from .animation import animation
+    animation = lazily(".animation:animation")
 
-        return animation(spec, result, timeline)
-
-    # ------------------------------------------------------------------ command line, tables, API
+    # ------------------------------------------------------ command line, tables, API
     tolerance_axes = ("slope",)
     table_periodic = ("step_length", "step_period", "spectral_radius")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ...plugin import Scene, StageErrors
+from ...plugin import Scene, StageErrors, lazily
 from ...plugin_tolerances import BoxAxes
 
 # A manipulator run keeps every stage's record and event (about 15 kB a stage).
@@ -67,16 +67,10 @@ class Manipulators(Scene):
                 "device's; `pdm-design yield` judges a design on real links and pivots)",
                 "[scene.links] or [scene.pivots]")
 
-    def template(self):
-        from .template import manipulators_template
-
-        return manipulators_template()
+    template = lazily(".template:manipulators_template")
 
     # ------------------------------------------------------------------ closed forms
-    def analyse(self, scene, design, stages=None):
-        from .analysis import analyse_manipulators
-
-        return analyse_manipulators(scene, design, stages)
+    analyse = lazily(".analysis:analyse_manipulators")
 
     # ------------------------------------------------------------------ the simulator
     def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
@@ -90,6 +84,7 @@ class Manipulators(Scene):
     # ------------------------------------------------------------------ the NLP
     objectives = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence",
                   "max_yield")
+
     def formulate(self, spec, parameters=None):
         from .formulation import build
         from .formulation.offsets import Stages
@@ -105,7 +100,7 @@ class Manipulators(Scene):
         damped = spec.scene.pivots.damping or forced
         return (spec.verification.accuracy.agreement if damped else None,)
 
-    # ------------------------------------------------------------------ tolerances, yield, verification
+    # ------------------------------------------------------ tolerances, yield, verification
     allocatable = ("pivot_x", "pivot_y", "feed_x", "friction", "object_width", "feed_speed",
                    "palm_mass", "object_mass", "back_stop", "link_length", "link_mass",
                    "pivot_friction")
@@ -118,68 +113,34 @@ class Manipulators(Scene):
                                  "pivot_friction"),
                        alternating=("link_length",))
 
-    def allocation_refusal(self, spec):
-        from .refusals import allocation_refusal
-
-        return allocation_refusal(spec)
+    allocation_refusal = lazily(".refusals:allocation_refusal")
 
     def length_scale(self, spec, design):
         """Its link length."""
         return float(design.get("link_length", 1.0))
 
-    def simulate_build(self, scene, design, deviations, stages, *, accuracy="default",
-                       record_trajectory=False, allow_skips=False):
-        from .tolerances import simulate_build
-
-        return simulate_build(scene, design, deviations, stages, accuracy=accuracy,
-                              record_trajectory=record_trajectory, allow_skips=allow_skips)
-
-    def left_closed_forms(self, result):
-        from .verification import left_closed_forms
-
-        return left_closed_forms(result)
-
-    def disagreement_note(self, spec):
-        from .verification import disagreement_note
-
-        return disagreement_note(spec)
-
-    def run_builds(self, scene, design, deviations, stages):
-        from .tolerances import run_builds
-
-        return run_builds(scene, design, deviations, stages)
-
-    def linearised_yield(self, scene, design, tolerances, stages):
-        from .formulation.statistical import linearised_yield
-
-        return linearised_yield(scene, design, tolerances, stages)
-
-    def linearised_rows(self, scene, design, tolerances, stages):
-        from .formulation.statistical import placed_rows
-
-        return placed_rows(scene, design, tolerances, stages)
+    simulate_build = lazily(".tolerances:simulate_build")
+    left_closed_forms = lazily(".verification:left_closed_forms")
+    disagreement_note = lazily(".verification:disagreement_note")
+    run_builds = lazily(".tolerances:run_builds")
+    linearised_yield = lazily(".formulation.statistical:linearised_yield")
+    linearised_rows = lazily(".formulation.statistical:placed_rows")
 
     def simulate_box_build(self, spec, design, errors, deviations, accuracy):
         from .verification import simulate_box_build
 
         return simulate_box_build(self, spec, design, errors, deviations, accuracy)
 
-    def closed_form_agreement(self, spec, analysis, result):
-        from .verification import closed_form_agreement
-
-        return closed_form_agreement(spec, analysis, result)
+    closed_form_agreement = lazily(".verification:closed_form_agreement")
 
     def condition_words(self):
         from .words import CONDITIONS
 
         return {name: (what, advice, ()) for name, (what, advice) in CONDITIONS.items()}
 
-    def tolerance_refusal(self, spec, quantity):
-        from .refusals import tolerance_refusal
+    tolerance_refusal = lazily(".refusals:tolerance_refusal")
 
-        return tolerance_refusal(spec, quantity)
-
-    # ------------------------------------------------------------------ sheets, drawings, reports
+    # ------------------------------------------------------ sheets, drawings, reports
     tolerance_axes = ("dx", "dy")
     dxf_layers = {"PIVOTS": 7, "LINKS": 5, "PALMS": 8, "STOPS": 1}  # scenes/manipulators/dxf.py
     stage_columns = ("manipulator", "landing_time", "landing_offset", "landing_speed",
@@ -191,40 +152,23 @@ class Manipulators(Scene):
 
         return PART_WORDS
 
-    def sheet_rows(self, spec, analysis, tolerance, count):
-        from .sheet import sheet_rows
-
-        return sheet_rows(spec, analysis, tolerance, count)
+    sheet_rows = lazily(".sheet:sheet_rows")
 
     def sheet_words(self):
         from .sheet import WORDS
 
         return WORDS
 
-    def box_tolerances(self, sheet, why):
-        from .sheet import box_tolerances
-
-        return box_tolerances(sheet, why)
-
-    def parts(self, sheet):
-        from .sheet import parts
-
-        return parts(sheet)
-
-    def table_rows(self, sheet):
-        from .sheet import table_rows
-
-        return table_rows(sheet)
+    box_tolerances = lazily(".sheet:box_tolerances")
+    parts = lazily(".sheet:parts")
+    table_rows = lazily(".sheet:table_rows")
 
     def draw_sheet(self, ax, labels, sheet, items, detail):
         from .drawing import draw_manipulators
 
         draw_manipulators(ax, labels, sheet, items, detail)
 
-    def draw_dxf(self, msp, sheet):
-        from .dxf import draw_dxf
-
-        return draw_dxf(msp, sheet)
+    draw_dxf = lazily(".dxf:draw_dxf")
 
     def document_keys(self):
         from .model import ManipulatorsDesign
@@ -257,7 +201,7 @@ class Manipulators(Scene):
         return animation(spec, result)
 
 
-    # ------------------------------------------------------------------ command line, tables, API
+    # ------------------------------------------------------ command line, tables, API
     table_geometry = ("pitch_x", "pitch_y", "palm_mass", "landing_offset")
     table_periodic = ("handover_speed", "landing_speed", "contraction",
                       "drop_per_stage")

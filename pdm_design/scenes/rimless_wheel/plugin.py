@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from ...plugin import Scene
+from ...plugin import Scene, lazily
 
 MARGINS = ("over_the_top", "no_flight", "no_slip", "impact_friction", "landing",
            "nose_clearance")
@@ -15,7 +15,8 @@ class RimlessWheel(Scene):
     title = "a rimless wheel rolling down a ramp or stairs"
     stage_noun = ("step", "steps")
     margins = MARGINS
-    verification_hints = {"allow_skips": "allow_skips is for manipulators scenes (a palm flown over)",
+    verification_hints = {"allow_skips": "allow_skips is for manipulators scenes (a palm flown "
+                                         "over)",
                           "offsets": "offsets are for manipulators scenes; a rimless wheel "
                                      "takes step_errors (slope on a ramp, rise and tread on "
                                      "stairs)"}
@@ -31,10 +32,7 @@ class RimlessWheel(Scene):
 
         return RimlessWheelDesign
 
-    def template(self):
-        from .template import rimless_wheel_template
-
-        return rimless_wheel_template()
+    template = lazily(".template:rimless_wheel_template")
 
     def variants(self, spec):
         """One spec per spoke count in the design's bounds (the count is an integer)."""
@@ -48,10 +46,7 @@ class RimlessWheel(Scene):
         return QUANTITIES
 
     # ------------------------------------------------------------------ closed forms
-    def analyse(self, scene, design, stages=None):
-        from .analysis import analyse_rimless_wheel
-
-        return analyse_rimless_wheel(scene, design, stages)
+    analyse = lazily(".analysis:analyse_rimless_wheel")
 
     # ------------------------------------------------------------------ the simulator
     def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
@@ -66,12 +61,7 @@ class RimlessWheel(Scene):
 
     search_objectives = ("max_mfpt",)
 
-    def search(self, spec):
-        """The spoke count and slope of the longest mean first-passage time on the spec's rough
-        ramp (rough.longest_lasting: the Markov chain, a golden-section search per count)."""
-        from .search import longest_lasting_design
-
-        return longest_lasting_design(spec)
+    search = lazily(".search:longest_lasting_design")
 
     def formulate(self, spec, parameters=None):
         from .formulation import build
@@ -79,11 +69,8 @@ class RimlessWheel(Scene):
         model, bounds, _ = build(spec)
         return model, bounds, None
 
-    # ------------------------------------------------------------------ tolerances, yield, verification
-    def run_builds(self, scene, design, deviations, stages):
-        from .builds import build_outcome
-
-        return build_outcome(scene, design, deviations, stages)
+    # ------------------------------------------------------ tolerances, yield, verification
+    run_builds = lazily(".builds:build_outcome")
 
     def simulate_build(self, scene, design, deviations, stages, *, accuracy="default",
                        record_trajectory=False, allow_skips=False):
@@ -127,7 +114,7 @@ class RimlessWheel(Scene):
         found = mfpt(scene, design, next(t.value for t in tolerances))
         return {"mfpt": {k: found[k] for k in ("estimate", "ci_low", "ci_high", "method")}}
 
-    # ------------------------------------------------------------------ sheets, drawings, reports
+    # ------------------------------------------------------ sheets, drawings, reports
     dxf_layers = {"GROUND": 7, "WHEEL": 5}  # scenes/rimless_wheel/dxf.py
     stage_columns = ("step", "impact_time", "speed_before", "speed_after", "foot_x", "foot_y")
 
@@ -137,40 +124,23 @@ class RimlessWheel(Scene):
 
         return PART_WORDS
 
-    def sheet_rows(self, spec, analysis, tolerance, count):
-        from .sheet import sheet_rows
-
-        return sheet_rows(spec, analysis, tolerance, count)
+    sheet_rows = lazily(".sheet:sheet_rows")
 
     def sheet_words(self):
         from .sheet import WORDS
 
         return WORDS
 
-    def box_tolerances(self, sheet, why):
-        from .sheet import box_tolerances
-
-        return box_tolerances(sheet, why)
-
-    def parts(self, sheet):
-        from .sheet import parts
-
-        return parts(sheet)
-
-    def table_rows(self, sheet):
-        from .sheet import table_rows
-
-        return table_rows(sheet)
+    box_tolerances = lazily(".sheet:box_tolerances")
+    parts = lazily(".sheet:parts")
+    table_rows = lazily(".sheet:table_rows")
 
     def draw_sheet(self, ax, labels, sheet, items, detail):
         from .drawing import draw_wheel_sheet
 
         draw_wheel_sheet(ax, labels, sheet, items, detail)
 
-    def draw_dxf(self, msp, sheet):
-        from .dxf import draw_dxf
-
-        return draw_dxf(msp, sheet)
+    draw_dxf = lazily(".dxf:draw_dxf")
 
     def scene_parameters(self, scene):
         """`wheel` as built: the hub's mass (kg), its radius of gyration (m) and each spoke's
@@ -183,10 +153,7 @@ class RimlessWheel(Scene):
 
         plot_wheel_run(spec, result, path, title=title)
 
-    def animation(self, spec, result, timeline):
-        from .animation import animation
+    animation = lazily(".animation:animation")
 
-        return animation(spec, result, timeline)
-
-    # ------------------------------------------------------------------ command line, tables, API
+    # ------------------------------------------------------ command line, tables, API
     tolerance_axes = ("slope",)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ...plugin import Scene, StageErrors
+from ...plugin import Scene, StageErrors, lazily
 from ...plugin_tolerances import BoxAxes
 
 # A stairs NLP has rows for every bounce, and IPOPT needs ever more iterations for them (23 at
@@ -48,16 +48,10 @@ class Stairs(Scene):
     def max_yield_refusal(self, scene):
         return None
 
-    def template(self):
-        from .template import stairs_template
-
-        return stairs_template()
+    template = lazily(".template:stairs_template")
 
     # ------------------------------------------------------------------ closed forms
-    def analyse(self, scene, design, stages=None):
-        from .analysis import analyse_stairs
-
-        return analyse_stairs(scene, design, stages)
+    analyse = lazily(".analysis:analyse_stairs")
 
     # ------------------------------------------------------------------ the simulator
     def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
@@ -70,6 +64,7 @@ class Stairs(Scene):
     # ------------------------------------------------------------------ the NLP
     objectives = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence",
                   "max_yield")
+
     def formulate(self, spec, parameters=None):
         import functools
 
@@ -86,7 +81,7 @@ class Stairs(Scene):
 
         return (requires_rows(spec),)
 
-    # ------------------------------------------------------------------ tolerances, yield, verification
+    # ------------------------------------------------------ tolerances, yield, verification
     allocatable = ("rise", "tread", "launch_x", "restitution", "friction", "launch_speed")
     sizes_for_yield_target = True
     box_axes = BoxAxes((("rise", "rise"), ("tread", "tread")))
@@ -103,30 +98,16 @@ class Stairs(Scene):
         return simulate_build(scene, design, {q: d[0] for q, d in deviations.items()}, stages,
                               accuracy=accuracy, record_trajectory=record_trajectory)
 
-    def run_builds(self, scene, design, deviations, stages):
-        from .tolerances import run_builds
-
-        return run_builds(scene, design, deviations, stages)
-
-    def linearised_yield(self, scene, design, tolerances, stages):
-        from .formulation.statistical import linearised_yield
-
-        return linearised_yield(scene, design, tolerances, stages)
-
-    def linearised_rows(self, scene, design, tolerances, stages):
-        from .formulation.statistical import placed_rows
-
-        return placed_rows(scene, design, tolerances, stages)
+    run_builds = lazily(".tolerances:run_builds")
+    linearised_yield = lazily(".formulation.statistical:linearised_yield")
+    linearised_rows = lazily(".formulation.statistical:placed_rows")
 
     def simulate_box_build(self, spec, design, errors, deviations, accuracy):
         from .verification import simulate_box_build
 
         return simulate_box_build(self, spec, design, errors, deviations, accuracy)
 
-    def closed_form_agreement(self, spec, analysis, result):
-        from .verification import closed_form_agreement
-
-        return closed_form_agreement(spec, analysis, result)
+    closed_form_agreement = lazily(".verification:closed_form_agreement")
 
     def condition_words(self):
         from .words import CONDITIONS, PHASE_HINTS
@@ -134,12 +115,9 @@ class Stairs(Scene):
         return {name: (what, advice, PHASE_HINTS.get(name, ()))
                 for name, (what, advice) in CONDITIONS.items()}
 
-    def tolerance_refusal(self, spec, quantity):
-        from .refusals import tolerance_refusal
+    tolerance_refusal = lazily(".refusals:tolerance_refusal")
 
-        return tolerance_refusal(spec, quantity)
-
-    # ------------------------------------------------------------------ sheets, drawings, reports
+    # ------------------------------------------------------ sheets, drawings, reports
     tolerance_axes = ("rise", "tread")
     dxf_layers = {"STEPS": 7}  # scenes/stairs/dxf.py
     stage_columns = ("step", "impact_time", "landing_x", "impact_speed", "vx", "spin_after")
@@ -151,40 +129,23 @@ class Stairs(Scene):
 
         return PART_WORDS
 
-    def sheet_rows(self, spec, analysis, tolerance, count):
-        from .sheet import sheet_rows
-
-        return sheet_rows(spec, analysis, tolerance, count)
+    sheet_rows = lazily(".sheet:sheet_rows")
 
     def sheet_words(self):
         from .sheet import WORDS
 
         return WORDS
 
-    def box_shift(self, spec):
-        from .sheet import box_shift
-
-        return box_shift(spec)
-
-    def parts(self, sheet):
-        from .sheet import parts
-
-        return parts(sheet)
-
-    def table_rows(self, sheet):
-        from .sheet import table_rows
-
-        return table_rows(sheet)
+    box_shift = lazily(".sheet:box_shift")
+    parts = lazily(".sheet:parts")
+    table_rows = lazily(".sheet:table_rows")
 
     def draw_sheet(self, ax, labels, sheet, items, detail):
         from .drawing import draw_stairs
 
         draw_stairs(ax, labels, sheet, items, detail)
 
-    def draw_dxf(self, msp, sheet):
-        from .dxf import draw_dxf
-
-        return draw_dxf(msp, sheet)
+    draw_dxf = lazily(".dxf:draw_dxf")
 
     def document_keys(self):
         from .model import StairsDesign
@@ -200,17 +161,11 @@ class Stairs(Scene):
 
         plot_stairs_run(result, path, title=title)
 
-    def animation(self, spec, result, timeline):
-        from .animation import animation
-
-        return animation(spec, result, timeline)
+    animation = lazily(".animation:animation")
 
 
-    # ------------------------------------------------------------------ command line, tables, API
-    def infeasible_cause(self, spec, design):
-        from .words import flat_floor
-
-        return flat_floor(spec, design)
+    # ------------------------------------------------------ command line, tables, API
+    infeasible_cause = lazily(".words:flat_floor")
 
     table_geometry = ("nose_clearance",)
     table_periodic = ("impact_speed", "vertical_impact_speed", "horizontal_speed",
