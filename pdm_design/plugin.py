@@ -45,18 +45,23 @@ class StageErrors:
         return self.make(k, a, b)
 
 
-def lazily(target: str):
+class lazily:
     """A Scene method that is `module:function` of the scene's own package (a relative module,
-    ".sheet:parts"), imported when first called and called with the method's arguments: the
-    scene object stays light, its heavy parts load with the command that needs them."""
-    module, name = target.split(":")
+    ".sheet:parts", resolved against the package of the class that names it), imported when
+    first called and called with the method's arguments: the scene object stays light, its
+    heavy parts load with the command that needs them."""
 
-    def method(self, *args, **kwargs):
-        package = type(self).__module__.rpartition(".")[0]
-        return getattr(importlib.import_module(module, package), name)(*args, **kwargs)
+    def __init__(self, target: str):
+        self.module, self.name = target.split(":")
+        self.package = None
+        self.__doc__ = f"`{target}` of the scene's package (imported when called)."
 
-    method.__doc__ = f"`{target}` of the scene's package (imported when called)."
-    return method
+    def __set_name__(self, owner, name):
+        self.package = owner.__module__.rpartition(".")[0]
+
+    def __get__(self, instance, owner=None):
+        # the function itself: it takes the method's arguments, not the scene object
+        return getattr(importlib.import_module(self.module, self.package), self.name)
 
 
 class Scene:
