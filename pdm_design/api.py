@@ -162,8 +162,8 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
     besides the others (a table's neighbour); the answer is the same design without it
     (solve/tiebreak.py). continued: a neighbour's local optima (`DesignOutcome.optima`) to
     solve from instead of the starts (solve.optimize)."""
-    from .solve import optimize as solve
     from .plugin import of
+    from .solve import optimize as solve
     from .solve.words import bounds_hint, summarise
 
     accuracy = resolve_accuracy(accuracy or spec.verification.accuracy)

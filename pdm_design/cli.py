@@ -368,10 +368,10 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
     is run, with a warning, and the exit code is 1)."""
     from .api import design
     from .errors import PdmError, SpecError
+    from .plugin import of
     from .report.simulation import simulation_text
     from .sim.core import SimulationRefused
     from .spec import load_spec
-    from .plugin import of
     from .verify import simulate_spec
 
     if plot is not None:
@@ -566,8 +566,8 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
     pass every stage (95 % interval), survival by stage, failures by name, the tolerances'
     Sobol' indices, each failing build as one `simulate --build` command; the event simulator
     confirms a sample."""
-    from .spec import load_spec
     from .commands.yield_ import commands_from, run_yield, write_outputs, yield_json, yield_text
+    from .spec import load_spec
 
     if out is not None:
         out = _out_folder(out, spec, "yield")

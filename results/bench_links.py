@@ -38,11 +38,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from pdm_design.accuracy import accuracy  # noqa: E402
-from pdm_design.scenes.manipulators.analysis import carry_terms  # noqa: E402
 from pdm_design.formulation import build  # noqa: E402
-from pdm_design.scenes.manipulators import formulation as form  # noqa: E402
 from pdm_design.io import write_atomic  # noqa: E402
+from pdm_design.scenes.manipulators import formulation as form  # noqa: E402
 from pdm_design.scenes.manipulators import physics as phys  # noqa: E402
+from pdm_design.scenes.manipulators.analysis import carry_terms  # noqa: E402
 from pdm_design.scenes.manipulators.model import ManipulatorsDesign, Pivots  # noqa: E402
 from pdm_design.scenes.manipulators.sim import simulate_manipulators  # noqa: E402
 from pdm_design.solve.optimize import optimize  # noqa: E402

@@ -29,10 +29,10 @@ import numpy as np  # noqa: E402
 from pdm_design.io import write_atomic  # noqa: E402
 from pdm_design.scenes.stairs import physics as phys  # noqa: E402
 from pdm_design.scenes.stairs.sim import bounce_sequence, stairs_geometry  # noqa: E402
+from pdm_design.scenes.stairs.tolerances import run_builds, simulate_build  # noqa: E402
 from pdm_design.spec import load_spec  # noqa: E402
 from pdm_design.tolerances.draw import draw as draw_builds  # noqa: E402
 from pdm_design.tolerances.sensitivity import sobol_indices  # noqa: E402
-from pdm_design.scenes.stairs.tolerances import run_builds, simulate_build  # noqa: E402
 
 SPEC_PATH = "problems/stairs_yield.toml"
 SPEC = load_spec(ROOT / SPEC_PATH)

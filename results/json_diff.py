@@ -1,7 +1,11 @@
 """Compare two folders of pdm-design JSON documents (optimize, yield) key by key, timings aside:
 `python results/json_diff.py BEFORE_DIR AFTER_DIR` prints one line per document (results/
 seam_unchanged.md)."""
-import json, sys, os, math
+import json
+import math
+import os
+import sys
+
 base, after = sys.argv[1], sys.argv[2]
 SKIP = {"time", "build_time", "solve_time", "wall_time", "seconds", "ipopt_time", "total_time", "elapsed", "t_wall", "t_proc_total", "creation_time", "nlp_time", "check_time", "verify_time", "solver_creation_time"}
 def walk(a, b, path, out):

@@ -19,7 +19,6 @@ import sys
 import time
 from pathlib import Path
 
-
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 SPEC = "problems/manipulators_long_row.toml"
@@ -40,9 +39,9 @@ def cases():
 
 
 def compare(scene, design, tolerances, scale) -> dict:
+    from pdm_design.scenes.manipulators.tolerances import meets_another_palm, simulate_build
     from pdm_design.tolerances import Tolerance, run_builds
     from pdm_design.tolerances.draw import draw
-    from pdm_design.scenes.manipulators.tolerances import meets_another_palm, simulate_build
 
     scaled = [Tolerance(t.quantity, t.applies_to, t.value * scale, 1.0, t.distribution)
               for t in tolerances]

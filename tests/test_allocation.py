@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.solve import optimize
 from pdm_design.spec import load_spec
-from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.verify.tolerance import corner_patterns
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -14,14 +14,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pdm_design.scenes.manipulators.formulation import carry_box
-from pdm_design.formulation.common import DEFAULT_BACKOFF
-from pdm_design.scenes.manipulators.formulation.rows import MASS_KEPT
-from pdm_design.scenes.manipulators.formulation import _Model
-from pdm_design.scenes.manipulators import physics as phys
 from pdm_design.api import optimize
-from pdm_design.spec import load_spec
+from pdm_design.formulation.common import DEFAULT_BACKOFF
+from pdm_design.scenes.manipulators import physics as phys
+from pdm_design.scenes.manipulators.formulation import _Model, carry_box
+from pdm_design.scenes.manipulators.formulation.rows import MASS_KEPT
 from pdm_design.scenes.manipulators.tolerances import simulate_build
+from pdm_design.spec import load_spec
 from pdm_design.verify.tolerance import corner_patterns, random_builds
 
 ROOT = Path(__file__).resolve().parent.parent

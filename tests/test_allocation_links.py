@@ -10,13 +10,12 @@ import math
 
 import numpy as np
 import pytest
+from test_allocation import BASE
 
+from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.solve import optimize
 from pdm_design.spec import load_spec
-from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.verify.tolerance import corner_patterns, verify_tolerance
-
-from test_allocation import BASE
 
 ALONE = "[tolerances]\nlink_length = { allocate = true }\n"
 WITH_PIVOTS = ("[tolerances]\npivot_x = { allocate = true }\npivot_y = { allocate = true }\n"

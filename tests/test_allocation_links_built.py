@@ -13,11 +13,10 @@ import sys
 
 import numpy as np
 import pytest
-
-from pdm_design.scenes.manipulators import physics as phys
-
 from test_allocation_built import BASE, ROOT
 from test_allocation_links import _links, allocated
+
+from pdm_design.scenes.manipulators import physics as phys
 
 ALONE = "link_length = { allocate = true }\n"
 PIVOTS = "pivot_x = { allocate = true }\npivot_y = { allocate = true }\n"

@@ -9,7 +9,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pdm_design.analysis import analyse
-from pdm_design.scenes.stairs.model import Ball, StairsDesign, StairsInitial, StairsScene
 from pdm_design.scenes.manipulators.model import (
     Body,
     ManipulatorsDesign,
@@ -17,6 +16,7 @@ from pdm_design.scenes.manipulators.model import (
     ManipulatorsScene,
     Palm,
 )
+from pdm_design.scenes.stairs.model import Ball, StairsDesign, StairsInitial, StairsScene
 
 HALF_PI = math.pi / 2
 

@@ -34,7 +34,6 @@ from test_fuzz_cli import dumps, leaves, replaced
 
 from pdm_design.analysis import analyse
 from pdm_design.cli import main
-from pdm_design.scenes.stairs.model import Ball, StairsDesign, StairsInitial, StairsScene
 from pdm_design.scenes.manipulators.model import (
     Body,
     ManipulatorsDesign,
@@ -42,12 +41,13 @@ from pdm_design.scenes.manipulators.model import (
     ManipulatorsScene,
     Palm,
 )
-from pdm_design.scenes.manipulators.sim import phases as ph
-from pdm_design.sim.core import SimulationRefused
 from pdm_design.scenes.manipulators.sim import FAILURE_KINDS, handover_map, simulate_manipulators
-from pdm_design.sim.numerics import BRENT_RTOL, brentq, carlson_rf
+from pdm_design.scenes.manipulators.sim import phases as ph
+from pdm_design.scenes.stairs.model import Ball, StairsDesign, StairsInitial, StairsScene
 from pdm_design.scenes.stairs.sim import FAILURE_KINDS as STAIRS_FAILURES
 from pdm_design.scenes.stairs.sim import impact_map, impact_once, simulate_stairs
+from pdm_design.sim.core import SimulationRefused
+from pdm_design.sim.numerics import BRENT_RTOL, brentq, carlson_rf
 
 G = 9.81
 EPS = 2.220446049250313e-16

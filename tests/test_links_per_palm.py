@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from pdm_design.scenes.manipulators.model import Links, Pivots
-from pdm_design.sim.core import SimulationRefused
 from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.scenes.manipulators.sim.geometry import Parts
+from pdm_design.sim.core import SimulationRefused
 from pdm_design.spec.loader import load_spec
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -18,13 +18,13 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from pdm_design.scenes.manipulators.analysis import analyse_manipulators
+from pdm_design.accuracy import accuracy
 from pdm_design.scenes.manipulators import physics as phys
+from pdm_design.scenes.manipulators.analysis import analyse_manipulators
 from pdm_design.scenes.manipulators.model import Links, Pivots
 from pdm_design.scenes.manipulators.sim import phases as ph
 from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.scenes.manipulators.sim.run import Run
-from pdm_design.accuracy import accuracy
 from pdm_design.spec.loader import load_spec
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from scipy.special import ndtr
+from test_max_yield import sign_test
 
 from pdm_design.scenes.stairs.formulation.statistical import linearised_yield, row_reliability
 from pdm_design.scenes.stairs.model import StairsDesign
@@ -17,8 +18,6 @@ from pdm_design.spec.loader import parse_spec
 from pdm_design.tolerances import Tolerance, Tolerances, run_builds
 from pdm_design.tolerances.draw import draw
 from pdm_design.tolerances.yield_ import wilson
-
-from test_max_yield import sign_test
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 

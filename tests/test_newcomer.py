@@ -12,12 +12,12 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from test_fuzz_cli import dumps
 
 from pdm_design.api import design
 from pdm_design.cli import main
 from pdm_design.solve import optimize
 from pdm_design.spec import parse_spec
-from test_fuzz_cli import dumps
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 ROBUST = PROBLEMS / "manipulators_robust.toml"
@@ -327,8 +327,7 @@ def test_a_tip_in_the_carry_reaches_the_supported_edge_without_contradiction():
 
 
 def test_a_tip_at_the_landing_says_by_how_much_the_impulse_misses_the_support():
-    from test_sim_manipulators import first_landing, momentum_speed
-    from test_sim_manipulators import ALPHA
+    from test_sim_manipulators import ALPHA, first_landing, momentum_speed
 
     failure = _first_failure(width=0.2, height=2.0)
     _, _, vx, vy = first_landing()
@@ -369,8 +368,9 @@ def test_option_errors_all_come_in_the_tools_format(args, words):
 def _each_additive(weights):
     """Output sum_q w_q * (sum of q's deviations): quantity q's variance share is
     w_q^2 Var(q) / sum of them (parts of one quantity are independent)."""
-    from pdm_design.tolerances.outcome import BuildOutcome
     import numpy as np
+
+    from pdm_design.tolerances.outcome import BuildOutcome
 
     def run(deviations, stages):
         y = sum(w * deviations[q].sum(axis=1) for q, w in weights.items())
@@ -461,8 +461,8 @@ def test_a_sheet_sized_for_a_yield_shows_the_placement_tolerance_everywhere(tmp_
                                                                            columns):
     import dataclasses
 
-    from pdm_design.sheet import sheet_csv
     from pdm_design.plugin import of
+    from pdm_design.sheet import sheet_csv
     from pdm_design.sheet.drawing import draw
     from pdm_design.sheet.parts import tolerance_entries
     from pdm_design.solve.yield_allocation import linearised_yield_function
@@ -597,8 +597,8 @@ def test_the_sensitivity_line_is_sorted_with_its_intervals_and_says_what_is_not_
         tmp_path):
     import dataclasses
 
-    from pdm_design.spec import load_spec
     from pdm_design.commands.yield_ import yield_text
+    from pdm_design.spec import load_spec
     from pdm_design.tolerances.yield_ import yield_of
 
     spec = load_spec(_one_tolerance_spec(tmp_path, "stairs_yield.toml",

@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from pdm_design.scenes.stairs.analysis import nose_clearance
 from pdm_design.formulation import formulate
 from pdm_design.scenes.manipulators.model import Body, ManipulatorsInitial, ManipulatorsScene, Palm
+from pdm_design.scenes.stairs.analysis import nose_clearance
 from pdm_design.solve import map_status, optimize
 from pdm_design.solve.ipopt import start_designs
 from pdm_design.solve.tolerance import linear_safe_set

@@ -12,13 +12,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_scale import flat_data
 
 from pdm_design.formulation import formulate
 from pdm_design.formulation.common import spec_key
 from pdm_design.solve import optimize
 from pdm_design.spec import parse_spec, read_spec_data
-
-from test_scale import flat_data
 
 ROBUST = Path(__file__).resolve().parents[1] / "problems" / "manipulators_robust.toml"
 SWEPT = ("design.mass_ratio", "scene.palm.friction")

@@ -15,8 +15,8 @@ from pdm_design.scenes.manipulators.model import Links, Pivots
 from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.scenes.manipulators.sim.geometry import Parts
 from pdm_design.scenes.manipulators.sim.run import Run
-from pdm_design.spec.loader import load_spec
 from pdm_design.scenes.manipulators.tolerances import run_builds
+from pdm_design.spec.loader import load_spec
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 STAGES = 4

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_optimize import propagate_offsets, robust_tolerance_grid
 
 from pdm_design.api import design
 from pdm_design.formulation import formulate
@@ -26,8 +27,6 @@ from pdm_design.spec import parse_spec
 from pdm_design.status import Status
 from pdm_design.sweep.run import run_sweep
 from pdm_design.verify.tolerance import verify_tolerance
-
-from test_optimize import propagate_offsets, robust_tolerance_grid
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 ROBUST = PROBLEMS / "manipulators_robust.toml"

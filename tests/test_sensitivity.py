@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from pdm_design.scenes.stairs.model import Ball, StairsDesign, StairsInitial, StairsScene
+from pdm_design.scenes.stairs.tolerances import run_builds
 from pdm_design.tolerances.outcome import BuildOutcome
 from pdm_design.tolerances.sensitivity import plot_sensitivity, sobol_indices
-from pdm_design.scenes.stairs.tolerances import run_builds
 
 
 def additive(weights):

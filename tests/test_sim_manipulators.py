@@ -24,7 +24,6 @@ from pdm_design.scenes.manipulators.model import (
     ManipulatorsScene,
     Palm,
 )
-from pdm_design.scenes.manipulators.sim import phases as ph
 from pdm_design.scenes.manipulators.sim import (
     EVENT_KINDS,
     FAILURE_KINDS,
@@ -32,6 +31,7 @@ from pdm_design.scenes.manipulators.sim import (
     handover_map,
     simulate_manipulators,
 )
+from pdm_design.scenes.manipulators.sim import phases as ph
 from pdm_design.spec.loader import load_spec
 
 ROOT = Path(__file__).resolve().parents[1]

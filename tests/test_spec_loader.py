@@ -14,8 +14,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pdm_design.errors import SpecError
-from pdm_design.scenes.stairs.model import Ball, StairsInitial, StairsScene
 from pdm_design.scenes.manipulators.model import Body, ManipulatorsInitial, ManipulatorsScene, Palm
+from pdm_design.scenes.stairs.model import Ball, StairsInitial, StairsScene
 from pdm_design.spec import Bounds, Spec, load_spec, parse_spec
 
 PROBLEMS = Path(__file__).resolve().parent.parent / "problems"

@@ -15,9 +15,9 @@ import pytest
 
 from pdm_design.formulation.common import DEFAULT_BACKOFF
 from pdm_design.scenes.stairs import physics as phys
+from pdm_design.scenes.stairs.tolerances import simulate_build
 from pdm_design.solve import optimize
 from pdm_design.spec import load_spec
-from pdm_design.scenes.stairs.tolerances import simulate_build
 from pdm_design.verify.tolerance import corner_patterns
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -13,10 +13,10 @@ from scipy.special import ndtr
 from pdm_design.cli import main
 from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.scenes.manipulators.sim.geometry import Parts
+from pdm_design.scenes.manipulators.tolerances import meets_another_palm, simulate_build
 from pdm_design.spec import load_spec
 from pdm_design.tolerances import Tolerance, Tolerances, run_builds
 from pdm_design.tolerances.draw import draw
-from pdm_design.scenes.manipulators.tolerances import meets_another_palm, simulate_build
 from pdm_design.tolerances.yield_ import wilson, yield_of
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"

@@ -11,13 +11,13 @@ import pytest
 from click.testing import CliRunner
 
 from pdm_design.cli import main
+from pdm_design.commands.yield_ import yield_text
 from pdm_design.scenes.manipulators.sim import simulate_manipulators
+from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.spec import load_spec
 from pdm_design.spec.model import ManipulatorOffset
 from pdm_design.tolerances import run_builds
-from pdm_design.commands.yield_ import yield_text
 from pdm_design.tolerances.draw import draw
-from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.tolerances.yield_ import simulate_one, yield_of
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"

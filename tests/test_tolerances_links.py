@@ -14,10 +14,10 @@ import pytest
 from scipy.optimize import brentq, minimize_scalar
 from scipy.special import ndtr
 
+from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.spec.loader import load_spec
 from pdm_design.tolerances import Tolerance, Tolerances, run_builds
 from pdm_design.tolerances.draw import draw
-from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.tolerances.yield_ import yield_of
 
 ROOT = Path(__file__).resolve().parents[1]

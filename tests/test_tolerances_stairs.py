@@ -13,10 +13,10 @@ import pytest
 from scipy import optimize, stats
 
 from pdm_design.scenes.stairs.model import Ball, StairsDesign, StairsInitial, StairsScene
-from pdm_design.sim.core import SimulationRefused
 from pdm_design.scenes.stairs.sim import FAILURE_KINDS, build_variation, simulate_stairs
-from pdm_design.tolerances.outcome import BuildOutcome
 from pdm_design.scenes.stairs.tolerances import FAILURES, march_builds, run_builds, simulate_build
+from pdm_design.sim.core import SimulationRefused
+from pdm_design.tolerances.outcome import BuildOutcome
 
 G = 9.81
 H0 = 1.0

@@ -160,7 +160,6 @@ def _parts(sheet) -> str:
 
 def _yield(result) -> str:
     from .jsonable import jsonable
-
     from .yield_section import is_yield_document, yield_html
 
     data = jsonable(result)

@@ -97,8 +97,8 @@ def check_yield_made_for(data: dict, path, source) -> None:
     for another spec than the report's source (a spec, or a saved optimize JSON naming one):
     its schema and spec_sha256 (spec.loader.content_digest) must be those of the source's
     spec. A table that is not a yield document (curves, numbers) is shown as it is."""
-    from ..errors import SpecError
     from ..commands.yield_ import YIELD_SCHEMA
+    from ..errors import SpecError
     from .yield_section import is_yield_document
 
     if not is_yield_document(data):

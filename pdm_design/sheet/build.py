@@ -24,8 +24,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import PdmError, SpecError
-from ..spec import load_spec
 from ..plugin import of
+from ..spec import load_spec
 from ..spec.model import Bounds, Spec
 from ..status import Status
 
@@ -153,8 +153,8 @@ def _sized_at(spec, point, source: str) -> tuple:
     """optimize's tolerance list (`allocated_entries`' input) of a fixed design whose
     tolerances to allocate are sized for the spec's yield target: the sizes `pdm-design yield`
     builds with, each allocated one limited by the union bound's dominant rows."""
-    from ..solve.yield_allocation import dominant_rows
     from ..commands.yield_ import sized_tolerances
+    from ..solve.yield_allocation import dominant_rows
 
     stages = spec.verification.stages
     sized = sized_tolerances(spec, source, point, stages)

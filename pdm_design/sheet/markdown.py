@@ -9,6 +9,7 @@ from pathlib import Path
 from ..plugin import of
 from .build import MARKDOWN_ROWS, BuildSheet
 
+
 def sheet_csv(sheet: BuildSheet) -> str:
     """Every manipulator or step, one row each (exact floats)."""
     from ..sweep.tables import cell, csv_line

@@ -7,9 +7,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..formulation import formulate
+from ..formulation import build, formulate
 from ..formulation.allocation import allocating, pivot_box, values_at
-from ..formulation import build
 from ..formulation.build import FULL
 from ..formulation.common import BACKOFF_FACTOR, MODEL, OBJECTIVE_SENSE
 from ..formulation.yield_target import AUX as TARGET_SCALE

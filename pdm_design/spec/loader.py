@@ -22,9 +22,9 @@ from typing import Annotated, Any, NamedTuple
 import pydantic
 from pydantic import Field, Strict, TypeAdapter
 
+from .. import plugin
 from ..accuracy import Accuracy, AccuracyError, accuracy
 from ..errors import SpecError, did_you_mean
-from .. import plugin
 from ..scenes.common import CONFIG, is_number
 from .model import (
     Bounds,

@@ -1,5 +1,5 @@
 """What a batch of builds did, whatever the scene: the result every vectorised build map returns
-(`pdm_design.scenes.manipulators.tolerances.run_builds`, `pdm_design.scenes.stairs.tolerances.run_builds`) and
+(each scene's `Scene.run_builds`) and
 the input of the yield and of the sensitivity."""
 
 from __future__ import annotations

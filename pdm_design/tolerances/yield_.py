@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..plugin import of
-from .draw import draw
 from ..tolerance_model import Tolerances
+from .draw import draw
 from .outcome import BuildOutcome
 
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile

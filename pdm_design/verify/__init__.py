@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from ..accuracy import accuracy as accuracy_preset
 from ..analysis import Analysis
-from ..sim.core import SimulationRefused
 from ..plugin import of
+from ..sim.core import SimulationRefused
 from ..spec.model import Spec
 from ..units import counted
 

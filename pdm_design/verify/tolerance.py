@@ -70,8 +70,8 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)
     box = of(spec).box_axes_of(spec)
-    per_stage = set(box.quantities)
-    pair = (*half, 0.0)[:2]  # a box of one axis: its errors' second entry 0  # the corner patterns' own quantities
+    per_stage = set(box.quantities)  # the corner patterns' own quantities
+    pair = (*half, 0.0)[:2]  # a box of one axis: its errors' second entry 0
     lot = {e["quantity"]: e["value"] for e in (lots or ()) if e["quantity"] not in per_stage}
     builds = [(name + _lot_name(signs_l), [(sx * pair[0], sy * pair[1]) for sx, sy in signs],
                {q: _scaled(sl, lot[q]) for q, (_, sl) in zip(lot, signs_l)})

@@ -5,7 +5,13 @@ from __future__ import annotations
 
 from pydantic.dataclasses import dataclass
 
-from pdm_design.scenes.common import CONFIG, STANDARD_GRAVITY, Fraction, Positive, PositiveQuarterTurn
+from pdm_design.scenes.common import (
+    CONFIG,
+    STANDARD_GRAVITY,
+    Fraction,
+    Positive,
+    PositiveQuarterTurn,
+)
 
 
 @dataclass(frozen=True, config=CONFIG)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+from ...analysis.result import Analysis, margin
 from . import physics as phys
 from .model import ManipulatorsDesign, ManipulatorsScene
-from ...analysis.result import Analysis, margin
 
 APPROACH_STAGES = 6
 # Margins that depend on the landing velocity (the others are the same at every stage).

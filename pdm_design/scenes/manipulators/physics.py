@@ -183,7 +183,8 @@ def carry_terms(mass_ratio, *, object_mass, gravity, link_length, link_mass=0.0,
     q, m = mass_ratio, object_mass
     j = links_inertia_mass(link_mass=link_mass, link_length=link_length,
                            link_inertia=link_inertia)
-    if is_exact_zero(j) and is_exact_zero(link_mass):  # the same values, without 0 * symbol in an NLP
+    # the same values, without 0 * symbol in an NLP
+    if is_exact_zero(j) and is_exact_zero(link_mass):
         q_e, g_e = q, gravity
     else:
         q_e = q / (1.0 + q * (j / m))

@@ -38,8 +38,8 @@ import math
 
 import numpy as np
 
-from . import physics as phys
 from ...tolerances.outcome import BuildOutcome
+from . import physics as phys
 
 INVALID = "invalid_part"
 # Parts no workshop can make, (build_values' key, test on its values, what it needs); friction
@@ -564,9 +564,9 @@ def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="de
     import pydantic
 
     from ...sim.core import SimulationRefused
+    from ...spec.model import ManipulatorOffset
     from .sim import simulate_manipulators
     from .sim.geometry import Parts
-    from ...spec.model import ManipulatorOffset
 
     v = build_values(scene, design, deviations, stages, 1)
     unbuilt = unbuildable_part(v)

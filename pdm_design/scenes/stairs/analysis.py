@@ -6,9 +6,9 @@ import math
 import sys
 from dataclasses import dataclass
 
+from ...analysis.result import Analysis, margin
 from . import physics as phys
 from .model import StairsDesign, StairsScene
-from ...analysis.result import Analysis, margin
 
 
 def analyse_stairs(scene: StairsScene, design: StairsDesign,

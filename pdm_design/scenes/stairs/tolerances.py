@@ -6,7 +6,7 @@ each tread's restitution and friction those of its material, the launcher throwi
 speed from its own place. `deviations` gives them, added to the nominal values (SI units), one
 array per quantity: shape (N, K) for a quantity that varies per step (column k - 1 is step k's),
 (N,) for one shared by the whole build (a lot of boards, the launcher). The staircase is laid
-out from the design as the simulator lays it out (`pdm_design.scenes.stairs.sim.stairs_geometry`), and
+out from the design as the simulator lays it out (`scenes/stairs/sim.stairs_geometry`), and
 every step is built on the one before, so errors accumulate along the stairs.
 
 The map follows the simulator's bounce closed form by closed form, all N builds a stage at a
@@ -33,9 +33,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ...sim.core import Event, Outcome
+from ...tolerances.outcome import BuildOutcome
 from . import physics as phys
 from .model import StairsDesign, StairsScene
-from ...sim.core import Event, Outcome
+from .quantities import QUANTITIES as ALL_QUANTITIES
 from .sim import (
     build_variation,
     check_stairs_scales,
@@ -44,8 +46,6 @@ from .sim import (
     simulate_stairs,
     stairs_geometry,
 )
-from .quantities import QUANTITIES as ALL_QUANTITIES
-from ...tolerances.outcome import BuildOutcome
 
 QUANTITIES = tuple(ALL_QUANTITIES)
 LOT_ONLY = ("launch_speed", "launch_x")
@@ -312,7 +312,7 @@ class _StepError(NamedTuple):
 
 def simulate_build(scene: StairsScene, design: StairsDesign, deviations: dict, stages: int,
                    accuracy="default", **options):
-    """One build in the event simulator (`pdm_design.scenes.stairs.sim.simulate_stairs`; options go to
+    """One build in the event simulator (`sim.simulate_stairs`; options go to
     it): deviations of that build, by quantity, a number (lot) or one per step (K values).
     Values beyond their physical range are taken at its end, as `run_builds` takes them. A build
     with a step that cannot be built runs up to the step before it, and fails there

@@ -51,13 +51,11 @@ import math
 import casadi as ca
 
 from ....errors import SpecError
-from .. import physics as phys
-from . import yield_target
 from ....formulation import allocation
-from . import links
-from . import rows
-from ..model import ManipulatorsDesign
 from ....formulation.common import SceneModel, design_inputs, fmax_all, fmin_all, objective_scale
+from .. import physics as phys
+from ..model import ManipulatorsDesign
+from . import links, rows, yield_target
 from .rows import LIFT_OFF, OVER_THE_TOP
 from .rows import nonzero as _nonzero
 

@@ -30,9 +30,9 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from ....formulation.common import VALIDITY
 from .. import physics as phys
 from . import rows
-from ....formulation.common import VALIDITY
 
 QUANTITIES = ("object_mass", "palm_mass", "link_mass", "pivot_friction")
 

@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from ..physics import cos_difference
 from ....formulation.common import fmax_all, fmin_all
+from ..physics import cos_difference
 
 
 def ends(m, box):

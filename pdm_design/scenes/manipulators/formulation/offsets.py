@@ -29,8 +29,8 @@ from dataclasses import replace
 import casadi as ca
 import numpy as np
 
-from .. import physics as phys
 from ....formulation.common import MARGIN, VALIDITY, ConditionInfo, Scenario
+from .. import physics as phys
 from .rows import impact_rows, scene_sizes
 
 

@@ -15,10 +15,9 @@ import math
 
 import casadi as ca
 
-from .. import physics as phys
-from . import carry_box
-from . import links
 from ....formulation.common import MARGIN, MODEL, VALIDITY, Condition, fmax_all, fmin_all
+from .. import physics as phys
+from . import carry_box, links
 
 START_CLEARANCE = 1e-3  # (x link length): the object starts at least this far above palm 1
 # Margins whose periodic and first_ versions are one row (the speed interval covers both): the

@@ -40,9 +40,9 @@ import math
 import casadi as ca
 import numpy as np
 
-from .. import physics as phys
 from ....formulation import chain_moments
 from ....formulation.chain_moments import nines
+from .. import physics as phys
 
 PARTS = ("pivot_x", "pivot_y", "link_length", "back_stop", "palm_mass")
 LOTS = ("friction", "object_mass", "object_width", "feed_x", "feed_speed") + tuple(

@@ -8,8 +8,16 @@ union bound 1 - sum_i Phi(-beta_i)), -log10(sum_i Phi(-beta_i(x, s))).
 from __future__ import annotations
 
 from ....formulation.yield_target import (  # noqa: F401 (the names callers read here)
-    AUX, CONDITION, SCALE_BOUNDS, START_GRID, TargetRows, active, needed_nines,
-    refuse_objectives, start_scale)
+    AUX,
+    CONDITION,
+    SCALE_BOUNDS,
+    START_GRID,
+    TargetRows,
+    active,
+    needed_nines,
+    refuse_objectives,
+    start_scale,
+)
 
 
 def check(spec) -> None:

@@ -24,8 +24,8 @@ import math
 import numpy as np
 
 from ....accuracy import accuracy as resolve_accuracy
-from .. import physics as phys
 from ....sim.core import SimulationResult, check_scales
+from .. import physics as phys
 from .run import Run
 
 EVENT_KINDS = {

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import physics as phys
 from ....sim.core import SimulationRefused
+from .. import physics as phys
 
 
 @dataclass(frozen=True)

@@ -29,9 +29,9 @@ from __future__ import annotations
 
 import math
 
+from ....sim.numerics import brentq
 from . import phases as ph
 from .geometry import Ballistic, Box, first_contact, first_entry
-from ....sim.numerics import brentq
 
 ROOT_XTOL = 1e-15  # rad: Brent to about the rounding of the angles (and 4 eps relative)
 

@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 
-from . import phases as ph
 from ....sim.core import Event
+from . import phases as ph
 from .geometry import Arc, face_guards, first_contact, support_words
 
 SLIP_START_ATOLS = 100.0  # initial slip speed of a slip from relative rest, in units of atol

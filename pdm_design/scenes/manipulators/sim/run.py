@@ -12,13 +12,13 @@ import math
 
 import numpy as np
 
-from . import phases as ph
 from ....sim.core import Event, Outcome, SimulationResult
+from ....sim.numerics import brentq
+from .. import physics as phys
+from . import phases as ph
 from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
-from ....sim.numerics import brentq
-from .. import physics as phys
 
 FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object is given up
 ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact

@@ -57,9 +57,6 @@ from typing import NamedTuple
 import casadi as ca
 
 from ....errors import SpecError
-from .. import physics as phys
-from ..model import StairsDesign
-from . import statistical as statistical_stairs
 from ....formulation import allocation, yield_target
 from ....formulation.common import (
     MARGIN,
@@ -70,6 +67,9 @@ from ....formulation.common import (
     design_inputs,
     objective_scale,
 )
+from .. import physics as phys
+from ..model import StairsDesign
+from . import statistical as statistical_stairs
 
 DEFAULTS = {"rise": None, "tread": None, "landing_offset": None}
 # The ball keeps moving forward: vx >= this fraction of the first vertical impact speed

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from .. import physics as phys
 from ....formulation.common import MARGIN, ConditionInfo, Scenario
+from .. import physics as phys
 
 
 def scenario(spec, model, m) -> Scenario:

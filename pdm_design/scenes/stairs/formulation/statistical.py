@@ -36,9 +36,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from .. import physics as phys
-from ....physics.ops import where
 from ....formulation import chain_moments
+from ....physics.ops import where
+from .. import physics as phys
 
 DESIGN = ("restitution", "launch_speed", "rise", "tread", "landing_offset")
 PARTS = ("rise", "tread")

@@ -70,11 +70,10 @@ from dataclasses import dataclass, field
 
 from ....accuracy import Accuracy
 from ....accuracy import accuracy as accuracy_preset
-from ..model import StairsDesign, StairsScene
 from ....sim.core import Event, Outcome, SimulationRefused, SimulationResult, check_scales
+from ..model import StairsDesign, StairsScene
 from .flight import Contact, next_contact, step_under
 from .geometry import StairsGeometry, stairs_geometry
-from .materials import BuildVariation, build_variation
 from .maps import (
     BOUNCE_FAILURES,
     BounceSequence,
@@ -84,6 +83,7 @@ from .maps import (
     impact_map,
     impact_once,
 )
+from .materials import BuildVariation, build_variation
 
 __all__ = [
     "BOUNCE_FAILURES", "DEFAULT_RECORD_LIMIT", "FAILURE_KINDS", "BounceSequence", "BuildVariation",

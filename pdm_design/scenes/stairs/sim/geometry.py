@@ -11,9 +11,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from ....sim.core import SimulationRefused
 from .. import physics as phys
 from ..model import StairsDesign, StairsScene
-from ....sim.core import SimulationRefused
 from .maps import impact_once
 
 
