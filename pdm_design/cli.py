@@ -455,9 +455,10 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
               "friction, or dotted path, e.g. scene.body.width) over COUNT evenly spaced values "
               "from START to STOP. Repeat for a grid.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
-              help="Folder for table.csv, table.md, sweep.json and the plots, PNG and SVG "
-              "(default: the "
-              "spec's name, else its file's, followed by -table).")
+              help="Folder for table.csv, table.md, sweep.json and the plots, PNG and SVG, "
+              "and a scene's own files (a compass gait's slope sweep: bifurcations.json, "
+              "bifurcation.png) (default: the spec's name, else its file's, followed by "
+              "-table).")
 @click.option("--resume", is_flag=True,
               help="Keep the rows an interrupted run left in --out and solve only the rest.")
 @click.option("--workers", type=_Count(1, 4096), default=None,

@@ -414,6 +414,12 @@ class Scene:
         them), from the spec and the least-violation `design`; None by default."""
         return None
 
+    def table_extras(self, spec, axes, *, plots: bool) -> dict[str, bytes]:
+        """Files a design table adds for this scene, {name: content}, from its spec and its
+        sweep axes (sweep.grid.SweepAxis): a walker's bifurcations along a slope sweep. None by
+        default."""
+        return {}
+
     stage_errors: StageErrors | None = None
     """The per-stage build errors `simulate` takes (None: the scene takes none); they reach
     `simulate` as its `errors`."""

@@ -296,6 +296,11 @@ def _write_outputs(folder, spec, source, axes, header, rows, plots,
         for name, payload in sweep_figures(spec.kind, axes, rows).items():
             write_atomic(folder / name, payload)
             files.append(folder / name)
+    from ..plugin import of
+
+    for name, payload in of(spec).table_extras(spec, axes, plots=plots).items():
+        write_atomic(folder / name, payload)  # the scene's own (a walker's bifurcations)
+        files.append(folder / name)
     return tuple(files)
 
 

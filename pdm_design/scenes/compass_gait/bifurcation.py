@@ -232,3 +232,23 @@ def plot_sweep(result: dict, path) -> None:
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
+
+
+def table_files(spec, axes, *, plots: bool) -> dict[str, bytes]:
+    """`pdm-design table SPEC --sweep slope=...` of a fixed walker: {"bifurcations.json": the
+    continuation's {parameter, bifurcations [{parameter, value, kind}], period_two, points},
+    "bifurcation.png": the classic figure}; nothing for another sweep."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    if len(axes) != 1 or axes[0].path != ("design", "slope") or spec.free_variables:
+        return {}
+    found = sweep(spec.scene, spec.design_at({}), list(axes[0].values))
+    files = {"bifurcations.json": (json.dumps(found, indent=1, default=float) + "\n").encode()}
+    if plots:
+        with tempfile.TemporaryDirectory() as folder:
+            path = Path(folder) / "bifurcation.png"
+            plot_sweep(found, path)
+            files["bifurcation.png"] = path.read_bytes()
+    return files

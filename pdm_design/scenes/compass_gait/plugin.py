@@ -124,5 +124,13 @@ class CompassGait(Scene):
     animation = lazily(".animation:animation")
 
     # ------------------------------------------------------ command line, tables, API
+    def table_extras(self, spec, axes, *, plots):
+        """A slope swept alone on a fixed walker: the gait continued along it, where a
+        multiplier leaves the unit circle (bifurcations.json) and the classic figure of step
+        length against slope (bifurcation.png)."""
+        from .bifurcation import table_files
+
+        return table_files(spec, axes, plots=plots)
+
     tolerance_axes = ("slope",)
     table_periodic = ("step_length", "step_period", "spectral_radius")
