@@ -127,6 +127,10 @@ def analyse_rimless_wheel(scene: RimlessWheelScene, design: RimlessWheelDesign,
         orbit = float(phys.periodic_energy(wh.beta, wh.alpha, wh.eta, wh.rate, wh.loss))
         w2 = float(phys.speed_squared(orbit, phi0, wh.rate))
         rolls = orbit > 0.0 or phi0 >= 0.0  # the orbit's stance vaults its spoke
+        if not rolls:
+            problems.append("no rolling orbit: the speed every step would settle on is too slow "
+                            "to vault the stance spoke, so the wheel slows to a stop (a steeper "
+                            "ground, or more spokes, gives the step more energy than it loses)")
         period = float(phys.step_time(orbit, phi0, phi1, wh.rate, 64)) if rolls else None
         periodic.update(
             post_impact_speed=math.sqrt(w2), pre_impact_speed=math.sqrt(w2) / wh.eta,
