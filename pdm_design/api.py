@@ -76,7 +76,10 @@ def evaluate(spec: Spec, *, verify: bool = True,
     accuracy = resolve_accuracy(accuracy or spec.verification.accuracy)
     point = spec.design_at()
     analysis = analyse(spec.scene, point, spec.verification.stages)
-    violations = tuple(analysis.problems) + tuple(analysis.violations(spec.requirements))
+    from .plugin import of
+
+    violations = (tuple(analysis.problems) + tuple(analysis.violations(spec.requirements))
+                  + tuple(of(spec).bound_violations(spec, analysis)))
     status = Status.EVALUATED if not violations else Status.INFEASIBLE
     verification = None
     if verify and not analysis.problems:

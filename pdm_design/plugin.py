@@ -97,6 +97,11 @@ class Scene:
     def requirement_keys(self) -> tuple[str, ...]:
         """The `[requirements]` a spec may set: its margins (and any bound its NLP holds)."""
         return self.margins
+
+    def bound_violations(self, spec, analysis) -> list[str]:
+        """A fixed design's violations, in words, of the `[requirements]` that are bounds
+        rather than margins (a walker's max_spectral_radius); none by default."""
+        return []
     verification_hints: dict[str, str] = {}
     """`[verification]` keys this scene does not take, each with the reason shown to the user."""
 

@@ -45,3 +45,19 @@ def test_another_sweep_adds_no_bifurcations(tmp_path):
     assert out.exit_code == 0, out.output
     assert (tmp_path / "t" / "table.csv").exists()
     assert not (tmp_path / "t" / "bifurcations.json").exists()
+
+
+def test_a_fixed_walker_above_its_max_spectral_radius_is_infeasible_in_words(tmp_path):
+    """The classic walker's gait at 3 degrees has spectral radius 0.58 (its AD multipliers, held
+    against the simulator's finite differences in test_compass_gait_multipliers.py)."""
+    from pdm_design.api import evaluate
+    from pdm_design.spec.loader import parse_spec, read_spec_data
+
+    radius = fixed_point(load_spec(SPEC).scene, load_spec(SPEC).design_at(), None)[
+        "spectral_radius"]
+    for bound, feasible in ((radius + 0.01, True), (radius - 0.01, False)):
+        data = read_spec_data(SPEC)
+        data["requirements"] = {"max_spectral_radius": bound}
+        outcome = evaluate(parse_spec(data, str(SPEC)), verify=False)
+        assert outcome.status.is_success is feasible
+        assert any("spectral radius" in v for v in outcome.violations) is not feasible

@@ -32,6 +32,15 @@ class CompassGait(Scene):
 
     template = lazily(".template:compass_gait_template")
 
+    def bound_violations(self, spec, analysis):
+        """The gait's spectral radius above the spec's max_spectral_radius."""
+        bound = spec.requirements.get("max_spectral_radius")
+        radius = analysis.periodic.get("spectral_radius")
+        if bound is None or radius is None or radius <= bound:
+            return []
+        return [f"the gait's spectral radius {radius:.4g} is above the required "
+                f"max_spectral_radius {bound:.4g}"]
+
     # ------------------------------------------------------------------ closed forms
     def analyse(self, scene, design, stages=None, requirements=None):
         from .analysis import analyse_compass_gait
