@@ -85,7 +85,7 @@ def test_map_and_simulator_agree_build_by_build(case, scale):
 
 def test_the_sample_meets_every_failure_the_map_names():
     seen = set()
-    for case, (scene, design, friction) in CASES.items():
+    for scene, design, friction in CASES.values():
         for scale in (1.0, 8.0):
             dev = draws(np.random.default_rng(7), 120, 30, scale, friction)
             seen |= set(run_builds(scene, design, dev, 30).failure)

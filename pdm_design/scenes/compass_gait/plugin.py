@@ -111,10 +111,7 @@ class CompassGait(Scene):
     parts = lazily(".sheet:parts")
     table_rows = lazily(".sheet:table_rows")
 
-    def draw_sheet(self, ax, labels, sheet, items, detail):
-        from .drawing import draw_walker
-
-        draw_walker(ax, labels, sheet, items, detail)
+    draw_sheet = lazily(".drawing:draw_walker")
 
     draw_dxf = lazily(".dxf:draw_dxf")
 

@@ -163,10 +163,7 @@ class Manipulators(Scene):
     parts = lazily(".sheet:parts")
     table_rows = lazily(".sheet:table_rows")
 
-    def draw_sheet(self, ax, labels, sheet, items, detail):
-        from .drawing import draw_manipulators
-
-        draw_manipulators(ax, labels, sheet, items, detail)
+    draw_sheet = lazily(".drawing:draw_manipulators")
 
     draw_dxf = lazily(".dxf:draw_dxf")
 

@@ -135,10 +135,7 @@ class RimlessWheel(Scene):
     parts = lazily(".sheet:parts")
     table_rows = lazily(".sheet:table_rows")
 
-    def draw_sheet(self, ax, labels, sheet, items, detail):
-        from .drawing import draw_wheel_sheet
-
-        draw_wheel_sheet(ax, labels, sheet, items, detail)
+    draw_sheet = lazily(".drawing:draw_wheel_sheet")
 
     draw_dxf = lazily(".dxf:draw_dxf")
 

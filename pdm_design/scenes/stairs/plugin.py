@@ -140,10 +140,7 @@ class Stairs(Scene):
     parts = lazily(".sheet:parts")
     table_rows = lazily(".sheet:table_rows")
 
-    def draw_sheet(self, ax, labels, sheet, items, detail):
-        from .drawing import draw_stairs
-
-        draw_stairs(ax, labels, sheet, items, detail)
+    draw_sheet = lazily(".drawing:draw_stairs")
 
     draw_dxf = lazily(".dxf:draw_dxf")
 
