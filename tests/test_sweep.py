@@ -331,7 +331,9 @@ def test_ctrl_c_twice_in_process_stops_the_workers_once_and_restores_the_handler
     import multiprocessing
     import signal
 
-    before = signal.getsignal(signal.SIGINT)
+    # a shell's background job starts with SIGINT ignored, and the guard leaves an ignored
+    # signal ignored: press as in a terminal, where Python's own handler is installed
+    outer = signal.signal(signal.SIGINT, signal.default_int_handler)
 
     def press_twice(point, row):  # Ctrl-C twice as the first row is written
         if not press_twice.pressed:
@@ -340,9 +342,12 @@ def test_ctrl_c_twice_in_process_stops_the_workers_once_and_restores_the_handler
             signal.raise_signal(signal.SIGINT)
     press_twice.pressed = False
 
-    with pytest.raises(KeyboardInterrupt):
-        run_sweep(MANIP, GRID, tmp_path, workers=2, plots=False, on_row=press_twice)
-    assert signal.getsignal(signal.SIGINT) is before
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_sweep(MANIP, GRID, tmp_path, workers=2, plots=False, on_row=press_twice)
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGINT, outer)
     assert multiprocessing.active_children() == []  # the workers were ended, not left to idle
     rows = rows_of(tmp_path)
     assert 1 <= len(rows) < 6 and (tmp_path / "table.csv").read_text().endswith("\n")
