@@ -364,6 +364,17 @@ class Scene:
 
         return draw_dxf(msp, sheet)
 
+    quantity_units: dict[str, str] = {}
+    """{quantity: its SI unit ("m", "rad/s", "kg m^2"; "" for a ratio or a count)} of the
+    design, geometry and periodic-orbit quantities the reports show, over the shared table
+    (report/units.py UNITS); a quantity in neither is shown without a unit."""
+
+    def shown_geometry(self, geometry: dict) -> dict:
+        """The analysis' geometry the text report and the report page show (the JSON keeps
+        every key): a scene leaves out the rows of parts a device has not built. Default:
+        all of it."""
+        return geometry
+
     def document_keys(self) -> dict[str, tuple[str, ...]]:
         """The keys the optimize JSON document (report/document.py) carries in "design",
         "geometry", "periodic" and "approach", null where the analysis has none (then any

@@ -16,6 +16,8 @@ MARGINS = (
     "first_over_the_top", "first_lift_off", "first_slip_impact", "first_tip_impact",
     "parked_palms",
 )
+# the geometry of the links and pivots as built (shown only where the row has them)
+MECHANISM = ("link_mass", "link_inertia", "link_count", "pivot_friction_torque", "pivot_damping")
 
 
 class Manipulators(Scene):
@@ -145,6 +147,21 @@ class Manipulators(Scene):
     dxf_layers = {"PIVOTS": 7, "LINKS": 5, "PALMS": 8, "STOPS": 1}  # scenes/manipulators/dxf.py
     stage_columns = ("manipulator", "landing_time", "landing_offset", "landing_speed",
                      "handover_speed", "handover_angle")
+    quantity_units = {
+        "alpha": "rad", "beta": "rad", "link_length": "m", "mass_ratio": "", "first_pivot_x": "m",
+        "first_pivot_y": "m", "landing_offset": "m", "pitch_x": "m", "pitch_y": "m",
+        "palm_mass": "kg", "handover_speed": "m/s", "landing_speed": "m/s", "contraction": "",
+        "drop_per_stage": "m", "effective_mass": "kg", "link_mass": "kg",
+        "link_inertia": "kg m^2", "link_count": "", "pivot_friction_torque": "N m",
+        "pivot_damping": "N m s/rad",
+    }
+
+    def shown_geometry(self, geometry):
+        """The links' and pivots' rows only where the row has links or pivots (massless links
+        and free pivots show none)."""
+        if any(geometry.get(k) for k in MECHANISM if k != "link_count"):
+            return geometry
+        return {k: v for k, v in geometry.items() if k not in MECHANISM}
 
     @property
     def part_words(self):

@@ -122,6 +122,12 @@ class Stairs(Scene):
     dxf_layers = {"STEPS": 7}  # scenes/stairs/dxf.py
     stage_columns = ("step", "impact_time", "landing_x", "impact_speed", "vx", "spin_after")
     quantity_parts = {"friction": "every tread's surface (the ball's grip)"}
+    quantity_units = {
+        "restitution": "", "launch_speed": "m/s", "rise": "m", "tread": "m",
+        "landing_offset": "m", "nose_clearance": "m", "impact_speed": "m/s",
+        "vertical_impact_speed": "m/s", "horizontal_speed": "m/s", "spin": "rad/s",
+        "flight_time": "s", "drift_per_bounce": "m",
+    }
 
     @property
     def part_words(self):
