@@ -325,8 +325,9 @@ class Scene:
         return box_tolerances(self, sheet, why)
 
     quantity_parts: dict[str, str] = {}
-    """{toleranced quantity: the part it is built on, in words} where the scene's words differ
-    from the shared ones (sheet/build.py ALLOCATED_PART): a ball's grip is on the treads."""
+    """{toleranced quantity: the part it is built on, in words ("every step", "the feed (start
+    place)")}, which sheet/parts.py files its tolerance under (part_words); a quantity not
+    named is shown under its own name."""
 
     part_words: dict[str, tuple[str, ...]] = {}
     """{part name: words of a ToleranceEntry.applies_to that put it on that part}, first

@@ -166,26 +166,16 @@ def _sized_at(spec, point, source: str) -> tuple:
                  for t in sized)
 
 
-# the part each allocated quantity is built on, in the words sheet/parts.py puts on a part
-ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot bracket",
-                  "feed_x": "the feed (start place)", "friction": "every palm's surface",
-                  "object_width": "the objects carried", "feed_speed": "the feed (start speed)",
-                  "palm_mass": "every palm", "object_mass": "the objects carried",
-                  "launch_x": "the launcher (release place)", "link_length": "every link",
-                  "back_stop": "every back stop", "link_mass": "every link",
-                  "pivot_friction": "every pivot bracket's joints", "rise": "every step",
-                  "tread": "every step", "restitution": "every step's surface (the ball's "
-                  "bounce)", "launch_speed": "the launcher (launch speed)"}
 SPEC_WORDS = "the spec's statistical tolerance"
 
 
 def part_words(kind: str, quantity: str) -> str:
     """The part a tolerance of `quantity` is built on, in the words of sheet/parts.py (the
-    scene's own where they differ: Scene.quantity_parts)."""
+    scene's: Scene.quantity_parts), or the quantity's own name where the scene gives none."""
     from ..plugin import scene_kind
 
     own = scene_kind(kind).quantity_parts if kind else {}
-    return own.get(quantity, ALLOCATED_PART.get(quantity, quantity))
+    return own.get(quantity, quantity)
 
 
 def allocated_entries(entries, target: float | None = None, kind: str = "") -> tuple:

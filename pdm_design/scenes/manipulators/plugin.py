@@ -155,6 +155,14 @@ class Manipulators(Scene):
         "link_inertia": "kg m^2", "link_count": "", "pivot_friction_torque": "N m",
         "pivot_damping": "N m s/rad",
     }
+    quantity_parts = {
+        "pivot_x": "every pivot bracket", "pivot_y": "every pivot bracket",
+        "feed_x": "the feed (start place)", "friction": "every palm's surface",
+        "object_width": "the objects carried", "feed_speed": "the feed (start speed)",
+        "palm_mass": "every palm", "object_mass": "the objects carried",
+        "link_length": "every link", "back_stop": "every back stop", "link_mass": "every link",
+        "pivot_friction": "every pivot bracket's joints",
+    }
 
     def shown_geometry(self, geometry):
         """The links' and pivots' rows only where the row has links or pivots (massless links

@@ -121,7 +121,10 @@ class Stairs(Scene):
     tolerance_axes = ("rise", "tread")
     dxf_layers = {"STEPS": 7}  # scenes/stairs/dxf.py
     stage_columns = ("step", "impact_time", "landing_x", "impact_speed", "vx", "spin_after")
-    quantity_parts = {"friction": "every tread's surface (the ball's grip)"}
+    quantity_parts = {"friction": "every tread's surface (the ball's grip)",
+                      "launch_x": "the launcher (release place)", "rise": "every step",
+                      "tread": "every step", "restitution": "every step's surface (the ball's "
+                      "bounce)", "launch_speed": "the launcher (launch speed)"}
     quantity_units = {
         "restitution": "", "launch_speed": "m/s", "rise": "m", "tread": "m",
         "landing_offset": "m", "nose_clearance": "m", "impact_speed": "m/s",
