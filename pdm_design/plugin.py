@@ -271,6 +271,11 @@ class Scene:
         diagnosis (solve/words.py). None by default: a condition is shown by its name."""
         return {}
 
+    place_nouns: tuple[str, ...] = ()
+    """The nouns that number a place along the run in an NLP row's `where` ("flight" of
+    "flight 3, ..."): the diagnosis writes the rows of one condition that differ only in that
+    number as one line ("flights 1-3, 5"). None by default: each row is its own line."""
+
     def left_closed_forms(self, result) -> str:
         """Words appended to a nominal run's summary when the run left the closed forms'
         regime (an object that lifted off and flew on), so they are not compared with it

@@ -141,6 +141,7 @@ class Manipulators(Scene):
         return {name: (what, advice, ()) for name, (what, advice) in CONDITIONS.items()}
 
     tolerance_refusal = lazily(".refusals:tolerance_refusal")
+    place_nouns = ("palm",)  # "palm 3 back, at its front stop" (formulation/rows.py)
 
     # ------------------------------------------------------ sheets, drawings, reports
     tolerance_axes = ("dx", "dy")

@@ -116,6 +116,7 @@ class Stairs(Scene):
                 for name, (what, advice) in CONDITIONS.items()}
 
     tolerance_refusal = lazily(".refusals:tolerance_refusal")
+    place_nouns = ("flight", "landing")  # "flight 3, ...", "landing 4" (formulation/)
 
     # ------------------------------------------------------ sheets, drawings, reports
     tolerance_axes = ("rise", "tread")
