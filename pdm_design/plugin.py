@@ -426,6 +426,9 @@ class Scene:
         what IPOPT's status says."""
         return None
 
+    column_labels: dict[str, tuple[str, str]] = {}
+    """{design table column: (its label on the table's plots, its SI unit)} over the shared
+    ones (sweep/plots.py); a column in neither is labelled by its name, without a unit."""
     table_geometry: tuple[str, ...] = ()
     """The analysis' geometry a design table shows, by name (Analysis.geometry keys)."""
     table_periodic: tuple[str, ...] = ()

@@ -2,7 +2,7 @@
 legend, lengths in millimetres."""
 
 from pdm_design.sweep.grid import SweepAxis
-from pdm_design.sweep.plots import _distinct, _figure, sweep_figures
+from pdm_design.sweep.plots import _distinct, _figure, labels_of, sweep_figures
 
 AXES = (SweepAxis("mass_ratio", ("design", "mass_ratio"), (2.0, 4.0, 6.0, 8.0)),)
 
@@ -27,7 +27,7 @@ def test_equal_columns_share_one_panel():
 
 def test_panels_share_the_x_range_and_lengths_are_millimetres():
     figure = _figure(AXES, rows(), [["tolerance", "tolerance.dx"], ["min_margin"],
-                                    ["pitch_x"]], "", "t")
+                                    ["pitch_x"]], "", "t", labels_of("manipulators"))
     shown = [ax for ax in figure.axes if ax.get_visible()]
     assert len(shown) == 3
     assert len({ax.get_xlim() for ax in shown}) == 1

@@ -144,3 +144,4 @@ class CompassGait(Scene):
 
     tolerance_axes = ("slope",)
     table_periodic = ("step_length", "step_period", "spectral_radius")
+    column_labels = {"rise": ("rise", "m"), "tread": ("tread", "m")}

@@ -226,6 +226,14 @@ class Manipulators(Scene):
 
     # ------------------------------------------------------ command line, tables, API
     table_geometry = ("pitch_x", "pitch_y", "palm_mass", "landing_offset")
+    column_labels = {
+        "handover_speed": ("handover speed", "m/s"), "pitch_x": ("pitch x", "m"),
+        "pitch_y": ("pitch y, down", "m"), "alpha": ("alpha", "rad"), "beta": ("beta", "rad"),
+        "link_length": ("link length", "m"), "palm_mass": ("palm mass", "kg"),
+        "landing_offset": ("landing offset", "m"), "landing_speed": ("landing speed", "m/s"),
+        "first_pivot_x": ("first pivot x", "m"), "first_pivot_y": ("first pivot y", "m"),
+        "tolerance.dx": ("tolerance dx", "m"), "tolerance.dy": ("tolerance dy", "m"),
+    }
     table_periodic = ("handover_speed", "landing_speed", "contraction",
                       "drop_per_stage")
     def infeasible_words(self, spec, design):

@@ -159,3 +159,5 @@ class RimlessWheel(Scene):
 
     # ------------------------------------------------------ command line, tables, API
     tolerance_axes = ("slope",)
+    column_labels = {"rise": ("rise", "m"), "tread": ("tread", "m"),
+                     "landing_offset": ("landing offset", "m")}

@@ -175,6 +175,15 @@ class Stairs(Scene):
     infeasible_cause = lazily(".words:flat_floor")
 
     table_geometry = ("nose_clearance",)
+    column_labels = {
+        "rise": ("rise", "m"), "tread": ("tread", "m"), "impact_speed": ("impact speed", "m/s"),
+        "landing_offset": ("landing offset", "m"), "nose_clearance": ("nose clearance", "m"),
+        "flight_time": ("flight time", "s"), "launch_speed": ("launch speed", "m/s"),
+        "horizontal_speed": ("horizontal speed", "m/s"),
+        "vertical_impact_speed": ("vertical impact speed", "m/s"), "spin": ("spin", "rad/s"),
+        "drift_per_bounce": ("drift per bounce", "m"),
+        "tolerance.rise": ("tolerance rise", "m"), "tolerance.tread": ("tolerance tread", "m"),
+    }
     table_periodic = ("impact_speed", "vertical_impact_speed", "horizontal_speed",
                       "spin", "flight_time", "drift_per_bounce")
     stage_errors = StageErrors("--step-error", "K:DRISE,DTREAD", "step_errors", "step",
