@@ -390,15 +390,14 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
         raise SpecError("command line", "--stages", f"at most {most} "
                         f"{scene.stage_noun[1]} ({why})", str(stages))
     row = stages or loaded.verification.stages
-    kwargs = {}
+    built = None  # the per-stage build errors of the run (None: the scene takes none)
     errors = scene.stage_errors
     if errors is not None:
         typed = {"--offset": offsets, "--step-error": step_errors}[errors.option]
         given = {k: errors.item(k, a, b) for k, a, b in
                  _parse_pairs(typed, errors.option, errors.metavar, row)}
-        kwargs[errors.key] = _with_spec_items(getattr(loaded.verification, errors.key), given,
-                                              errors.index, f"verification.{errors.key}", row,
-                                              spec)
+        built = _with_spec_items(getattr(loaded.verification, errors.key), given,
+                                 errors.index, f"verification.{errors.key}", row, spec)
     point, answered, found = loaded.design_at(), True, None
     if saved is not None:
         point, answered = saved.point, saved.success
@@ -428,14 +427,14 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
                 plot = None
         else:
             result = simulate_spec(loaded, point, stages=stages, accuracy=accuracy,
-                                   record_trajectory=plot is not None, **kwargs)
+                                   record_trajectory=plot is not None, errors=built)
     except SimulationRefused as refusal:  # the design is at fault, not the input's syntax: exit 1
         raise PdmError(f"{spec}: the simulator refuses this design: {refusal}") from None
     if plot is not None:
         from .report.plots import plot_simulation
 
         plot_simulation(loaded, point, result, plot, stages=stages,
-                        offsets=kwargs.get("offsets", ()))
+                        offsets=built or ())
     if fmt == "json":
         from .report.jsonable import jsonable
 
