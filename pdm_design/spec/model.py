@@ -94,6 +94,10 @@ class Verification:
     allow_skips: Annotated[bool, Strict()] = False
 
 
+# [verification]'s per-stage lists, each with the field that numbers the stage of its items
+STAGE_LISTS = (("offsets", "manipulator"), ("step_errors", "step"))
+
+
 @checked(frozen=True, config=CONFIG)
 class Expectations:
     """What CI expects of a spec (`pdm-design check`); None means not checked."""
