@@ -1,11 +1,11 @@
 """The scene interface, and the registry that finds scenes.
 
-A scene (a device and the object it moves: stairs and a ball, a row of manipulators and a box, a
-ramp and a walker) is one package that gives one `Scene` object. Everything the scene knows is a
-method or an attribute of it: its spec tables, its design variables, its closed forms, its
-simulator, its NLP rows, its tolerance quantities and build maps, its drawing and its animation,
-its `init` template. The shared machinery (spec loading, solving, verifying, yield, tables,
-sheets, reports, the CI gate, the CLI) asks the scene object and never which scene it has.
+A scene (a device and the object it moves) is one package that gives one `Scene` object.
+Everything the scene knows is a method or an attribute of it: its spec tables, its design
+variables, its closed forms, its simulator, its NLP rows, its tolerance quantities and build
+maps, its drawing and its animation, its `init` template. The shared machinery (spec loading,
+solving, verifying, yield, tables, sheets, reports, the CI gate, the CLI) asks the scene object
+and never which scene it has.
 
 Scenes are found through the entry-point group `pdm_design.scenes` (docs/scenes.md): the scenes
 that ship with pdm-design are registered in its pyproject.toml exactly as a scene in another
@@ -33,7 +33,8 @@ class SceneUnavailable(LookupError):
 class StageErrors:
     """A scene's per-stage build errors as `simulate` takes them from the command line and the
     spec: option "--offset", metavar "K:DX,DY", the spec's `[verification]` list they extend
-    ("offsets"), the stage field of its items ("manipulator"), and `make(k, a, b)` the item."""
+    ("offsets"), the field of its items that numbers their stage ("step"), and `make(k, a, b)`
+    the item."""
 
     option: str
     metavar: str
@@ -77,7 +78,7 @@ class Scene:
     kind: str = ""
     """The spec's `[scene] kind`, and the entry point's name."""
     title: str = ""
-    """A few words for listings: "a ball bouncing down stairs"."""
+    """A few words for listings: "an object passed along a row of pendulums"."""
     stage_noun: tuple[str, str] = ("stage", "stages")
     """What one stage of a run is called, singular and plural: ("step", "steps")."""
 
@@ -100,7 +101,7 @@ class Scene:
 
     def bound_violations(self, spec, analysis) -> list[str]:
         """A fixed design's violations, in words, of the `[requirements]` that are bounds
-        rather than margins (a walker's max_spectral_radius); none by default."""
+        rather than margins (a largest spectral radius of the stage map); none by default."""
         return []
     verification_hints: dict[str, str] = {}
     """`[verification]` keys this scene does not take, each with the reason shown to the user."""
@@ -161,7 +162,7 @@ class Scene:
 
     objective_aliases: dict[str, str] = {}
     """The scene's own names of shared objective terms (formulation.common.OBJECTIVE_SENSE):
-    a walker's max_slope_tolerance is the shared max_offset_tolerance. The loader stores the
+    a scene's max_slope_tolerance is the shared max_offset_tolerance. The loader stores the
     spec's objective under the shared names."""
     outside_min_margin: tuple[str, ...] = ()
     """Margins the max_min_margin objective does not cover."""
@@ -193,7 +194,7 @@ class Scene:
         return None
 
     nlp_parameters: tuple[str, ...] = ()
-    """Spec paths ("design.mass_ratio", "scene.palm.friction") whose numbers `formulate` can
+    """Spec paths ("design.mass_ratio", "scene.body.width") whose numbers `formulate` can
     take as CasADi parameters (formulation/parametric.py): read only in the rows' expressions,
     never to shape the NLP. None by default: a table builds each point's own NLP."""
 
@@ -208,8 +209,8 @@ class Scene:
     every part holds. None by default: the scene has no per-stage box."""
 
     def box_axes_of(self, spec):
-        """The explicit-offset box of this spec (a scene whose box depends on the spec, a
-        walker's slope on a ramp or rise and tread on stairs, says so here); `box_axes`."""
+        """The explicit-offset box of this spec (a scene whose box depends on the spec, a slope
+        on a ramp or rise and tread on steps, says so here); `box_axes`."""
         return self.box_axes
 
     def length_scale(self, spec, design: dict) -> float:
@@ -289,7 +290,7 @@ class Scene:
 
     # ------------------------------------------------------ sheets, drawings, reports
     # A build sheet lists one item (a CSV row) per stage: whatever a workshop places for that
-    # stage (a manipulator's pivot, a step). The defaults give a scene that implements only the
+    # stage (a pivot, a step). The defaults give a scene that implements only the
     # core above a usable sheet and report: its design values, one row per stage, the simulated
     # path drawn, no parts.
     tolerance_axes: tuple[str, ...] = ()
@@ -441,7 +442,7 @@ class Scene:
 
     def table_extras(self, spec, axes, *, plots: bool) -> dict[str, bytes]:
         """Files a design table adds for this scene, {name: content}, from its spec and its
-        sweep axes (sweep.grid.SweepAxis): a walker's bifurcations along a slope sweep. None by
+        sweep axes (sweep.grid.SweepAxis): the bifurcations along a slope sweep. None by
         default."""
         return {}
 
