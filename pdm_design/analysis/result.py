@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 # Requirements that hold another margin too (docs/spec.md, section 7), as the optimizer's rows
 # do: a nose_clearance requirement holds the launch over the top landing, first_nose_clearance;
 # one row measures over_the_top and first_over_the_top (lift_off and first_lift_off likewise,
-# formulation.manipulators.SHARED_ROWS), so either's requirement holds both.
+# a scene's formulation SHARED_ROWS), so either's requirement holds both.
 COVERED_BY = {
     "first_nose_clearance": ("nose_clearance",),
     "over_the_top": ("first_over_the_top",), "first_over_the_top": ("over_the_top",),
