@@ -94,6 +94,11 @@ class Scene:
     margins: tuple[str, ...] = ()
     """Every margin the analysis reports, by name: the `[requirements]` a spec may set."""
 
+    covered_by: dict[str, tuple[str, ...]] = {}
+    """{margin: the other requirements that hold it too}, where one NLP row measures two
+    margins and takes the largest requirement of either (analysis.result.required judges a
+    fixed design the same way); none by default."""
+
     @property
     def requirement_keys(self) -> tuple[str, ...]:
         """The `[requirements]` a spec may set: its margins (and any bound its NLP holds)."""

@@ -119,7 +119,7 @@ def _margins(margins: dict, spec) -> str:
 
     rows = []
     for key, value in margins.items():
-        need = required(key, spec.requirements)
+        need = required(key, spec.requirements, spec.kind)
         ok = value >= need
         flag = '<span class="ok">ok</span>' if ok else (
             f'<span class="bad">VIOLATED (needs &ge; {need:g})</span>')

@@ -89,7 +89,7 @@ def optimize_text(outcome: DesignOutcome) -> str:
     lines += ["", "margins (>= 0 holds; 1 - demand/capacity):"]
     width = max((len(k) for k in analysis.margins), default=0)
     for name, value in analysis.margins.items():
-        need = required(name, spec.requirements)
+        need = required(name, spec.requirements, spec.kind)
         flag = "ok" if value >= need else f"VIOLATED (needs >= {need:g})"
         lines.append(f"  {name:<{width}}  {value:+.4f}  {flag}")
     if outcome.tolerance:

@@ -30,7 +30,7 @@ def closed_form_check(spec, design: dict[str, float], requirements: dict[str, fl
         return {"passed": False, "failures": [f"design rejected: {exc}"], "analysis": None}
     failures = list(analysis.problems)
     for name, value in analysis.margins.items():
-        need = required(name, requirements)
+        need = required(name, requirements, spec.kind)
         if value < need - CHECK_TOL:
             failures.append(f"margin {name} = {value:.6g} is below the required {need:.6g}")
     return {"passed": not failures, "failures": failures, "analysis": analysis}

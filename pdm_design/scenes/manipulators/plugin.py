@@ -25,6 +25,9 @@ class Manipulators(Scene):
     title = "an object passed along a row of passive parallelogram manipulators"
     stage_noun = ("manipulator", "manipulators")
     margins = MARGINS
+    # one row measures each pair (formulation.SHARED_ROWS): either's requirement holds both
+    covered_by = {"over_the_top": ("first_over_the_top",), "first_over_the_top": ("over_the_top",),
+                  "lift_off": ("first_lift_off",), "first_lift_off": ("lift_off",)}
     outside_min_margin = ("parked_palms",)  # formulation.OUTSIDE_MIN_MARGIN
     verification_hints = {"step_errors": "step_errors are for stairs scenes; manipulators "
                                          "take offsets"}
