@@ -26,9 +26,10 @@ _LABELS = {
     "min_margin": ("smallest margin", ""), "contraction": ("contraction factor", ""),
     "drop_per_stage": ("drop per stage", "m"),
 }
-# swept keys (by last name) that are lengths: drawn in millimetres on the x axis
-LENGTH_KEYS = {"link_length", "first_pivot_x", "first_pivot_y", "rise", "tread",
-               "landing_offset", "width", "height", "thickness", "radius", "drop_height"}
+# swept keys (by last name) that are lengths in any scene: drawn in millimetres on the x axis,
+# as is a key the scene's columns give in metres (Scene.column_labels) other than a requirement
+# (a margin, whatever its name)
+LENGTH_KEYS = {"width", "height", "thickness", "radius", "drop_height"}
 
 
 def sweep_figures(kind: str, axes: tuple[SweepAxis, ...], rows: list[dict[str, str]]
@@ -86,8 +87,10 @@ def _label(columns, labels: dict) -> tuple[str, float]:
     return (f"{text} ({unit})" if unit else text), 1.0
 
 
-def _x_axis(axis) -> tuple[str, float]:
-    if axis.path[-1] in LENGTH_KEYS:
+def _x_axis(axis, labels: dict) -> tuple[str, float]:
+    name = axis.path[-1]
+    metres = axis.path[0] != "requirements" and labels.get(name, (name, ""))[1] == "m"
+    if name in LENGTH_KEYS or metres:
         return f"{axis.column} (mm)", 1e3
     return axis.column, 1.0
 
@@ -137,7 +140,7 @@ def _figure(axes, rows, panels, empty, title, labels=None):
     flat = [a for row in grid for a in row]
     for extra in flat[count:]:
         extra.set_visible(False)
-    xlabel, xscale = _x_axis(axes[0])
+    xlabel, xscale = _x_axis(axes[0], labels or _LABELS)
     if not panels:
         flat[0].text(0.5, 0.5, empty, ha="center", va="center", transform=flat[0].transAxes)
         flat[0].set_xlabel(xlabel)
