@@ -65,10 +65,10 @@ def _tolerance(key: str, value) -> float:
 class Accuracy:
     """Tolerances of a simulation run and of its verification.
 
-    rtol, atol: integration tolerances where a phase is integrated numerically (the sliding
-        carry and the bouncing phase of the manipulators scene; every other phase is closed form).
-    event_tol: absolute tolerance on a located event (s for times, rad for angles, m for the
-        stairs' nose contacts).
+    rtol, atol: integration tolerances where a scene integrates a phase numerically (a sliding
+        carry, a phase with impacts; every other phase is closed form).
+    event_tol: absolute tolerance on a located event (s for times, rad for angles, m for a
+        contact located by position).
     agreement: relative difference between simulated and closed-form periodic quantities that
         verification accepts (verify.verify_nominal). The presets' values are 10x or more above
         the errors measured by results/bench_accuracy.py (results/accuracy.md).
@@ -131,7 +131,8 @@ def accuracy(setting: AccuracySetting = "default") -> Accuracy:
     """An Accuracy from a preset name, an Accuracy (passed through), or a mapping
     {"base": "default", "rtol": 1e-10, "carry": "integrated", ...}: tolerances left out come
     from the base preset (default "default") and the result is named "custom" (just the base
-    preset when no tolerance and no carry is given). AccuracyError (a ValueError) names the offending key."""
+    preset when no tolerance and no carry is given). AccuracyError (a ValueError) names the
+    offending key."""
     if isinstance(setting, Accuracy):
         return setting
     if isinstance(setting, Mapping):

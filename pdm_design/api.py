@@ -94,7 +94,7 @@ def design(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | None 
            linearise: bool = False, start_from: dict | None = None,
            continued: tuple = ()) -> DesignOutcome:
     """Solve the spec: evaluate a fixed design, or optimise the free variables; verify. A spec
-    with a discrete design variable (Scene.variants: a rimless wheel's spoke count) is solved
+    with a discrete design variable (Scene.variants: a count of parts) is solved
     at each of its values, and the best answer kept (the highest objective among the
     successes; the first variant's outcome when none succeeds)."""
     from .plugin import of

@@ -109,7 +109,8 @@ def _usage_words(error: click.UsageError) -> str:
 @click.group(cls=_Main, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="pdm-design")
 def main():
-    """Design passive dynamic object manipulation systems (stairs, passive manipulator rows)."""
+    """Design passive dynamic object manipulation systems (each installed scene: a device and
+    the object it moves)."""
 
 
 class _AccuracyType(click.ParamType):
@@ -159,8 +160,8 @@ class _KindType(click.ParamType):
               "folder) instead of stdout.")
 @_guarded
 def init(kind, out):
-    """A commented spec to start from for the installed scene KIND (manipulators: the object's
-    start lands on palm 1's centre; stairs: every landing mid-tread). It optimizes as written."""
+    """A commented spec to start from for the installed scene KIND (the scene's own, its
+    initial state one its design runs from). It optimizes as written."""
     from .plugin import scene_kind
 
     text = scene_kind(kind).template()
@@ -341,10 +342,10 @@ def _refuse_other_stage_errors(scene, given: dict) -> None:
 @main.command()
 @SPEC
 @click.option("--stages", type=_Count(1, 10_000_000), default=None,
-              help="Manipulators in the row, or bounces (default: the spec's verification.stages; "
-              "at least the highest K of the spec's offsets or step errors).")
+              help="Stages to run, in the scene's own unit (default: the spec's "
+              "verification.stages; at least the highest K of the spec's per-stage errors).")
 @click.option("--offset", "offsets", multiple=True, metavar="K:DX,DY",
-              help="Offset manipulator K (from 1) by DX, DY metres (y up), in place of the "
+              help="Offset stage K's pivot (from 1) by DX, DY metres (y up), in place of the "
               "spec's offset for K; the spec's others stay. Repeatable.")
 @click.option("--step-error", "step_errors", multiple=True, metavar="K:DRISE,DTREAD",
               help="Add DRISE, DTREAD metres to step K's rise and tread, in place of the spec's "
@@ -390,15 +391,14 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
         raise SpecError("command line", "--stages", f"at most {most} "
                         f"{scene.stage_noun[1]} ({why})", str(stages))
     row = stages or loaded.verification.stages
-    kwargs = {}
+    built = None  # the per-stage build errors of the run (None: the scene takes none)
     errors = scene.stage_errors
     if errors is not None:
         typed = {"--offset": offsets, "--step-error": step_errors}[errors.option]
         given = {k: errors.item(k, a, b) for k, a, b in
                  _parse_pairs(typed, errors.option, errors.metavar, row)}
-        kwargs[errors.key] = _with_spec_items(getattr(loaded.verification, errors.key), given,
-                                              errors.index, f"verification.{errors.key}", row,
-                                              spec)
+        built = _with_spec_items(getattr(loaded.verification, errors.key), given,
+                                 errors.index, f"verification.{errors.key}", row, spec)
     point, answered, found = loaded.design_at(), True, None
     if saved is not None:
         point, answered = saved.point, saved.success
@@ -428,14 +428,14 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
                 plot = None
         else:
             result = simulate_spec(loaded, point, stages=stages, accuracy=accuracy,
-                                   record_trajectory=plot is not None, **kwargs)
+                                   record_trajectory=plot is not None, errors=built)
     except SimulationRefused as refusal:  # the design is at fault, not the input's syntax: exit 1
         raise PdmError(f"{spec}: the simulator refuses this design: {refusal}") from None
     if plot is not None:
         from .report.plots import plot_simulation
 
         plot_simulation(loaded, point, result, plot, stages=stages,
-                        offsets=kwargs.get("offsets", ()))
+                        offsets=built or ())
     if fmt == "json":
         from .report.jsonable import jsonable
 
@@ -456,9 +456,9 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
               "from START to STOP. Repeat for a grid.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=str), default=None,
               help="Folder for table.csv, table.md, sweep.json and the plots, PNG and SVG, "
-              "and a scene's own files (a compass gait's slope sweep: bifurcations.json, "
-              "bifurcation.png) (default: the spec's name, else its file's, followed by "
-              "-table).")
+              "and a scene's own files (a slope sweep's bifurcations.json and "
+              "bifurcation.png, where the scene writes them) (default: the spec's name, else "
+              "its file's, followed by -table).")
 @click.option("--resume", is_flag=True,
               help="Keep the rows an interrupted run left in --out and solve only the rest.")
 @click.option("--workers", type=_Count(1, 4096), default=None,
@@ -512,7 +512,7 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
               "sheet.dxf and its rendering sheet_dxf.png (default: the spec's name, else the "
               "source file's, followed by -sheet).")
 @click.option("--count", type=_Count(1, 10_000_000), default=None,
-              help="Manipulators or steps listed (default: the spec's verification.stages; the "
+              help="Stages listed, one item each (default: the spec's verification.stages; the "
               "tolerance covers only the first verification.stages of them).")
 @click.option("--no-tolerance", is_flag=True,
               help="Do not solve for the placement tolerance when the design carries none.")
@@ -522,8 +522,8 @@ def table(spec, sweeps, out, resume, workers, scheduler, chain, no_plots):
 @_guarded
 def sheet(source, out, count, no_tolerance, no_drawing):
     """Build sheet of a design: a spec (solved first) or a saved `optimize --format json`
-    document. Pivot coordinates, stop angles, link length and palm mass of every manipulator,
-    or every step's rise and tread, each with its tolerance; Markdown, CSV and a dimensioned
+    document. What a workshop places for every stage (a pivot's coordinates, a step's rise
+    and tread), each with its tolerance, and the parts list; Markdown, CSV and a dimensioned
     drawing. Exit 1 (sheet still written) when the design does not work."""
     from .plugin import of
     from .sheet import sheet_for, write_sheet
@@ -589,7 +589,7 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
               help="Folder for report.html (default: the spec's name, else the source file's, "
               "followed by -report).")
 @click.option("--count", type=_Count(1, 10_000_000), default=None,
-              help="Manipulators or steps on the drawing (default: verification.stages).")
+              help="Stages on the drawing (default: verification.stages).")
 @click.option("--no-tolerance", is_flag=True, help="Do not solve for the tolerance.")
 @click.option("--yield", "yield_path", type=click.Path(dir_okay=False, path_type=str),
               default=None, help="A yield analysis saved as JSON, shown on the page.")

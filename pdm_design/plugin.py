@@ -1,11 +1,11 @@
 """The scene interface, and the registry that finds scenes.
 
-A scene (a device and the object it moves: stairs and a ball, a row of manipulators and a box, a
-ramp and a walker) is one package that gives one `Scene` object. Everything the scene knows is a
-method or an attribute of it: its spec tables, its design variables, its closed forms, its
-simulator, its NLP rows, its tolerance quantities and build maps, its drawing and its animation,
-its `init` template. The shared machinery (spec loading, solving, verifying, yield, tables,
-sheets, reports, the CI gate, the CLI) asks the scene object and never which scene it has.
+A scene (a device and the object it moves) is one package that gives one `Scene` object.
+Everything the scene knows is a method or an attribute of it: its spec tables, its design
+variables, its closed forms, its simulator, its NLP rows, its tolerance quantities and build
+maps, its drawing and its animation, its `init` template. The shared machinery (spec loading,
+solving, verifying, yield, tables, sheets, reports, the CI gate, the CLI) asks the scene object
+and never which scene it has.
 
 Scenes are found through the entry-point group `pdm_design.scenes` (docs/scenes.md): the scenes
 that ship with pdm-design are registered in its pyproject.toml exactly as a scene in another
@@ -33,7 +33,8 @@ class SceneUnavailable(LookupError):
 class StageErrors:
     """A scene's per-stage build errors as `simulate` takes them from the command line and the
     spec: option "--offset", metavar "K:DX,DY", the spec's `[verification]` list they extend
-    ("offsets"), the stage field of its items ("manipulator"), and `make(k, a, b)` the item."""
+    ("offsets"), the field of its items that numbers their stage ("step"), and `make(k, a, b)`
+    the item."""
 
     option: str
     metavar: str
@@ -77,7 +78,7 @@ class Scene:
     kind: str = ""
     """The spec's `[scene] kind`, and the entry point's name."""
     title: str = ""
-    """A few words for listings: "a ball bouncing down stairs"."""
+    """A few words for listings: "an object passed along a row of pendulums"."""
     stage_noun: tuple[str, str] = ("stage", "stages")
     """What one stage of a run is called, singular and plural: ("step", "steps")."""
 
@@ -93,6 +94,11 @@ class Scene:
     margins: tuple[str, ...] = ()
     """Every margin the analysis reports, by name: the `[requirements]` a spec may set."""
 
+    covered_by: dict[str, tuple[str, ...]] = {}
+    """{margin: the other requirements that hold it too}, where one NLP row measures two
+    margins and takes the largest requirement of either (analysis.result.required judges a
+    fixed design the same way); none by default."""
+
     @property
     def requirement_keys(self) -> tuple[str, ...]:
         """The `[requirements]` a spec may set: its margins (and any bound its NLP holds)."""
@@ -100,7 +106,7 @@ class Scene:
 
     def bound_violations(self, spec, analysis) -> list[str]:
         """A fixed design's violations, in words, of the `[requirements]` that are bounds
-        rather than margins (a walker's max_spectral_radius); none by default."""
+        rather than margins (a largest spectral radius of the stage map); none by default."""
         return []
     verification_hints: dict[str, str] = {}
     """`[verification]` keys this scene does not take, each with the reason shown to the user."""
@@ -161,7 +167,7 @@ class Scene:
 
     objective_aliases: dict[str, str] = {}
     """The scene's own names of shared objective terms (formulation.common.OBJECTIVE_SENSE):
-    a walker's max_slope_tolerance is the shared max_offset_tolerance. The loader stores the
+    a scene's max_slope_tolerance is the shared max_offset_tolerance. The loader stores the
     spec's objective under the shared names."""
     outside_min_margin: tuple[str, ...] = ()
     """Margins the max_min_margin objective does not cover."""
@@ -193,7 +199,7 @@ class Scene:
         return None
 
     nlp_parameters: tuple[str, ...] = ()
-    """Spec paths ("design.mass_ratio", "scene.palm.friction") whose numbers `formulate` can
+    """Spec paths ("design.mass_ratio", "scene.body.width") whose numbers `formulate` can
     take as CasADi parameters (formulation/parametric.py): read only in the rows' expressions,
     never to shape the NLP. None by default: a table builds each point's own NLP."""
 
@@ -208,8 +214,8 @@ class Scene:
     every part holds. None by default: the scene has no per-stage box."""
 
     def box_axes_of(self, spec):
-        """The explicit-offset box of this spec (a scene whose box depends on the spec, a
-        walker's slope on a ramp or rise and tread on stairs, says so here); `box_axes`."""
+        """The explicit-offset box of this spec (a scene whose box depends on the spec, a slope
+        on a ramp or rise and tread on steps, says so here); `box_axes`."""
         return self.box_axes
 
     def length_scale(self, spec, design: dict) -> float:
@@ -271,6 +277,11 @@ class Scene:
         diagnosis (solve/words.py). None by default: a condition is shown by its name."""
         return {}
 
+    place_nouns: tuple[str, ...] = ()
+    """The nouns that number a place along the run in an NLP row's `where` ("flight" of
+    "flight 3, ..."): the diagnosis writes the rows of one condition that differ only in that
+    number as one line ("flights 1-3, 5"). None by default: each row is its own line."""
+
     def left_closed_forms(self, result) -> str:
         """Words appended to a nominal run's summary when the run left the closed forms'
         regime (an object that lifted off and flew on), so they are not compared with it
@@ -284,7 +295,7 @@ class Scene:
 
     # ------------------------------------------------------ sheets, drawings, reports
     # A build sheet lists one item (a CSV row) per stage: whatever a workshop places for that
-    # stage (a manipulator's pivot, a step). The defaults give a scene that implements only the
+    # stage (a pivot, a step). The defaults give a scene that implements only the
     # core above a usable sheet and report: its design values, one row per stage, the simulated
     # path drawn, no parts.
     tolerance_axes: tuple[str, ...] = ()
@@ -325,8 +336,9 @@ class Scene:
         return box_tolerances(self, sheet, why)
 
     quantity_parts: dict[str, str] = {}
-    """{toleranced quantity: the part it is built on, in words} where the scene's words differ
-    from the shared ones (sheet/build.py ALLOCATED_PART): a ball's grip is on the treads."""
+    """{toleranced quantity: the part it is built on, in words ("every step", "the feed (start
+    place)")}, which sheet/parts.py files its tolerance under (part_words); a quantity not
+    named is shown under its own name."""
 
     part_words: dict[str, tuple[str, ...]] = {}
     """{part name: words of a ToleranceEntry.applies_to that put it on that part}, first
@@ -363,6 +375,17 @@ class Scene:
         from .sheet.generic import draw_dxf
 
         return draw_dxf(msp, sheet)
+
+    quantity_units: dict[str, str] = {}
+    """{quantity: its SI unit ("m", "rad/s", "kg m^2"; "" for a ratio or a count)} of the
+    design, geometry and periodic-orbit quantities the reports show, over the shared table
+    (report/units.py UNITS); a quantity in neither is shown without a unit."""
+
+    def shown_geometry(self, geometry: dict) -> dict:
+        """The analysis' geometry the text report and the report page show (the JSON keeps
+        every key): a scene leaves out the rows of parts a device has not built. Default:
+        all of it."""
+        return geometry
 
     def document_keys(self) -> dict[str, tuple[str, ...]]:
         """The keys the optimize JSON document (report/document.py) carries in "design",
@@ -409,6 +432,9 @@ class Scene:
         what IPOPT's status says."""
         return None
 
+    column_labels: dict[str, tuple[str, str]] = {}
+    """{design table column: (its label on the table's plots, its SI unit)} over the shared
+    ones (sweep/plots.py); a column in neither is labelled by its name, without a unit."""
     table_geometry: tuple[str, ...] = ()
     """The analysis' geometry a design table shows, by name (Analysis.geometry keys)."""
     table_periodic: tuple[str, ...] = ()
@@ -421,7 +447,7 @@ class Scene:
 
     def table_extras(self, spec, axes, *, plots: bool) -> dict[str, bytes]:
         """Files a design table adds for this scene, {name: content}, from its spec and its
-        sweep axes (sweep.grid.SweepAxis): a walker's bifurcations along a slope sweep. None by
+        sweep axes (sweep.grid.SweepAxis): the bifurcations along a slope sweep. None by
         default."""
         return {}
 

@@ -12,7 +12,7 @@ class BoxAxes:
     """A scene's explicit-offset box.
 
     axes: the two errors every stage takes, each (its name in the box, the toleranced
-    quantity it is): (("dx", "pivot_x"), ("dy", "pivot_y")) for a manipulator's pivot,
+    quantity it is): (("dx", "pivot_x"), ("dy", "pivot_y")) for a pivot,
     (("rise", "rise"), ("tread", "tread")) for a step. per_part: the other quantities each part
     holds (a random build draws one value per part; a corner takes them all high or all low).
     alternating: those of per_part whose corners also alternate part by part."""
@@ -39,7 +39,7 @@ class PlacedRows:
     g, sd: each row's mean margin and its standard deviation (arrays); names: each row's
     condition; weight: each row's weight in the union bound (1, or 0 for a row not counted);
     place: each row's place along the run (an integer array); word: (a place's noun, its
-    plural, place 0's own name or None): ("bounce", "bounces", None)."""
+    plural, place 0's own name or None): ("step", "steps", None)."""
 
     g: object
     sd: object

@@ -3,8 +3,7 @@
 A tolerance is a +- value in SI units (or a request to allocate one, with a relative weight:
 how cheap it is to hold tight; allocated tolerances share one scale s, t_q = s * w_min / w_q,
 so a quantity twice as cheap to hold tight gets half the tolerance: `allocation_shares`),
-applied to every part on its own ("each": every manipulator's own pivot, link, stop, palm;
-every step's own rise and tread) or once to
+applied to every part on its own ("each": every stage's own pivot, link or step) or once to
 the whole build ("lot": one friction for a material batch, one mass for an object batch).
 
 Distributions, for the statistical analysis:

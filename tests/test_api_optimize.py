@@ -114,7 +114,7 @@ def test_step_errors_given_as_data_are_checked_like_a_specs(errors):
 
     spec = load_spec(ROBUST.parent / "paper_stairs_frictionless.toml")
     with pytest.raises((ValueError, TypeError)):
-        simulate_spec(spec, spec.design_at(), step_errors=errors)
+        simulate_spec(spec, spec.design_at(), errors=errors)
 
 
 @pytest.mark.parametrize("options", [{"starts": 0}, {"starts": -1}, {"starts": 2.5},

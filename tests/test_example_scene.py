@@ -77,6 +77,20 @@ def test_optimize_finds_the_balanced_bob_mass(installed, spec):
     assert answer["periodic"]["contraction"] == pytest.approx(r * r, rel=1e-6)
 
 
+def test_the_text_report_prints_the_units_the_scene_gives(installed, spec):
+    # pdm-design's shared table has none of these quantities: the units are the scene's own
+    # (Scene.quantity_units)
+    import re
+
+    code, out, err = _run(installed, "optimize", str(spec), cwd=spec.parent)
+    assert code == 0, err
+    for name, unit in (("bob_mass", "kg"), ("rod_length", "m"), ("pitch", "m"),
+                       ("bob_speed", "m/s"), ("contraction", "")):
+        found = re.search(rf"^  {name} +(\S+)( \S+)?", out, re.M)
+        assert found, (name, out)
+        assert (found.group(2) or "").strip() == unit, found.group(0)
+
+
 def test_simulate_settles_on_the_periodic_speed(installed, spec):
     code, out, err = _run(installed, "simulate", str(spec), "--stages", "40", "--format",
                           "json", cwd=spec.parent)

@@ -127,16 +127,18 @@ def test_every_row_that_holds_two_margins_holds_each_to_the_others_requirement()
     # requirements hold which margins: a row takes the largest requirement of its keys, so they
     # must all hold the margin it is named after; a manipulators row that measures two margins
     # (SHARED_ROWS) holds each to the other's requirement.
-    from pdm_design.analysis.result import COVERED_BY
     from pdm_design.formulation import formulate
+    from pdm_design.plugin import scene_kind
     from pdm_design.scenes.manipulators.formulation import SHARED_ROWS
 
     for problem in ("manipulators_robust.toml", "stairs_design.toml"):
         spec = load_spec(PROBLEMS / problem)
+        covered = scene_kind(spec.kind).covered_by
         for info in formulate(spec, full=True).conditions:
-            assert set(info.keys) - {info.name} <= set(COVERED_BY.get(info.name, ())), info.label
+            assert set(info.keys) - {info.name} <= set(covered.get(info.name, ())), info.label
+    covered = scene_kind("manipulators").covered_by
     for a, b in SHARED_ROWS:
-        assert b in COVERED_BY[a] and a in COVERED_BY[b]
+        assert b in covered[a] and a in covered[b]
 
 
 def test_a_first_requirement_holds_a_fixed_designs_periodic_twin(tmp_path):

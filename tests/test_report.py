@@ -247,12 +247,14 @@ def test_the_yield_commands_document_goes_on_the_page_whole(tmp_path):
 
 def test_the_geometry_rows_carry_their_units_and_only_the_parts_built(tmp_path):
     from pdm_design.report.html import _values
-    from pdm_design.report.units import built_parts
+    from pdm_design.report.units import built_parts, units_of
 
-    table = _values(built_parts({"pitch_x": 0.5, "link_mass": 0.2, "link_inertia": 0.01,
-                                 "pivot_friction_torque": 0.0, "pivot_damping": 0.0}), set())
+    table = _values(built_parts("manipulators", {
+        "pitch_x": 0.5, "link_mass": 0.2, "link_inertia": 0.01, "pivot_friction_torque": 0.0,
+        "pivot_damping": 0.0}), set(), units_of("manipulators"))
     assert "<td>kg</td>" in table and "<td>kg m^2</td>" in table and "N m s/rad" in table
     assert "500 mm" in table
-    bare = built_parts({"pitch_x": 0.5, "link_mass": 0.0, "link_inertia": None,
-                        "link_count": 2, "pivot_friction_torque": 0.0, "pivot_damping": 0.0})
+    bare = built_parts("manipulators", {"pitch_x": 0.5, "link_mass": 0.0, "link_inertia": None,
+                                        "link_count": 2, "pivot_friction_torque": 0.0,
+                                        "pivot_damping": 0.0})
     assert bare == {"pitch_x": 0.5}

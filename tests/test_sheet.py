@@ -73,7 +73,7 @@ def test_pivot_tolerance_survives_the_simulator(manip_sheet):
     offsets = tuple(ManipulatorOffset(manipulator=k, dx=0.9 * tol["dx"] * (-1) ** k,
                                       dy=-0.9 * tol["dy"] * (-1) ** k) for k in range(1, 7))
     spec = manip_sheet.spec
-    result = simulate_spec(spec, spec.design_at(), offsets=offsets)
+    result = simulate_spec(spec, spec.design_at(), errors=offsets)
     assert result.outcome.completed
 
 
@@ -117,7 +117,7 @@ def test_step_tolerance_survives_the_simulator():
     assert tol["rise"] > 0 and tol["tread"] > 0
     errors = tuple(StepError(step=k, rise=0.9 * tol["rise"] * (-1) ** k,
                              tread=0.9 * tol["tread"]) for k in range(1, 21))
-    result = simulate_spec(sheet.spec, sheet.spec.design_at(), step_errors=errors)
+    result = simulate_spec(sheet.spec, sheet.spec.design_at(), errors=errors)
     assert result.outcome.completed
     # ... and from the other side: the shortest drift (every riser low, every tread long) at
     # the tolerance completes, and at 1.25 times it the simulator refutes the build (it first
@@ -125,7 +125,7 @@ def test_step_tolerance_survives_the_simulator():
     def shortest(k):
         errors = tuple(StepError(step=n, rise=-k * tol["rise"], tread=k * tol["tread"])
                        for n in range(1, 21))
-        return simulate_spec(sheet.spec, sheet.spec.design_at(), step_errors=errors)
+        return simulate_spec(sheet.spec, sheet.spec.design_at(), errors=errors)
 
     assert shortest(1.0).outcome.completed
     refuted = shortest(1.25)
@@ -150,7 +150,7 @@ def test_a_given_tread_off_the_periodic_flight_takes_that_off_its_tolerance(tmp_
     # the shortest drift at the sheet's box: every riser low, every tread long
     errors = tuple(StepError(step=n, rise=-sheet.tolerance["rise"],
                              tread=sheet.tolerance["tread"]) for n in range(1, 21))
-    assert simulate_spec(sheet.spec, sheet.spec.design_at(), step_errors=errors).outcome.completed
+    assert simulate_spec(sheet.spec, sheet.spec.design_at(), errors=errors).outcome.completed
 
 
 def test_sheet_command_writes_markdown_csv_and_drawing(tmp_path):
@@ -339,7 +339,7 @@ def test_the_tolerance_of_a_short_staircase_does_not_hold_for_a_longer_one():
         errors = tuple(StepError(step=k, rise=-tol["rise"], tread=tol["tread"])
                        for k in range(1, steps + 1))
         return simulate_spec(sheet.spec, sheet.spec.design_at(), stages=steps,
-                             step_errors=errors).outcome
+                             errors=errors).outcome
 
     assert build(stages).completed
     assert not build(2 * stages).completed

@@ -4,20 +4,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-# Requirements that hold another margin too (docs/spec.md, section 7), as the optimizer's rows
-# do: a nose_clearance requirement holds the launch over the top landing, first_nose_clearance;
-# one row measures over_the_top and first_over_the_top (lift_off and first_lift_off likewise,
-# formulation.manipulators.SHARED_ROWS), so either's requirement holds both.
-COVERED_BY = {
-    "first_nose_clearance": ("nose_clearance",),
-    "over_the_top": ("first_over_the_top",), "first_over_the_top": ("over_the_top",),
-    "lift_off": ("first_lift_off",), "first_lift_off": ("lift_off",),
-}
 
+def required(name: str, requirements: dict[str, float], kind: str) -> float:
+    """The least value margin `name` of a scene of `kind` must have: the largest requirement
+    that holds it, its own or one of those that hold it too (Scene.covered_by: docs/spec.md,
+    section 7), as the optimizer's rows do."""
+    from ..plugin import scene_kind
 
-def required(name: str, requirements: dict[str, float]) -> float:
-    """The least value margin `name` must have: the largest requirement that holds it."""
-    return max(float(requirements.get(key, 0.0)) for key in (name, *COVERED_BY.get(name, ())))
+    covering = scene_kind(kind).covered_by.get(name, ()) if kind else ()
+    return max(float(requirements.get(key, 0.0)) for key in (name, *covering))
 
 
 def margin(capacity, demand) -> float:
@@ -58,7 +53,7 @@ class Analysis:
         requirements = requirements or {}
         out = []
         for name, value in self.margins.items():
-            need = required(name, requirements)
+            need = required(name, requirements, self.kind)
             if value < need:
                 out.append(f"margin {name} = {value:.4g} is below the required {need:.4g}")
         return out

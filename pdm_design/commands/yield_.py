@@ -30,8 +30,9 @@ def spec_tolerances(spec, source: str):
 
 
 def _refuse(spec, source, quantity):
-    """A tolerance the scene cannot draw builds of (Scene.tolerance_refusal; exit 2): a point
-    ball's friction, a nominal of 0 that every part drawn around would fall below."""
+    """A tolerance the scene cannot draw builds of (Scene.tolerance_refusal; exit 2): a
+    quantity its physics leaves out, a nominal of 0 that every part drawn around would fall
+    below."""
     from ..plugin import of
 
     refusal = of(spec).tolerance_refusal(spec, quantity)

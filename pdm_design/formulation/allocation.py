@@ -34,7 +34,7 @@ NOT_YET = "no outer bound over its box is derived yet"
 
 def allocating(spec) -> bool:
     """Whether the spec's [tolerances] asks the optimizer to allocate a worst-case tolerance
-    (not one sized for a yield target: formulation/manipulators/yield_target.py)."""
+    (not one sized for a yield target: formulation/yield_target.py)."""
     from .yield_target import active
 
     return any(t.allocate for t in getattr(spec, "tolerances", ())) and not active(spec)
@@ -100,8 +100,8 @@ def values_at(spec, s: float) -> list[dict]:
 
 def pivot_box(spec, entries) -> dict[str, float]:
     """{axis: half-width} of the scene's explicit-offset box (Scene.box_axes: {"dx", "dy"} of a
-    row of manipulators, {"rise", "tread"} of a staircase) of a tolerance list, 0 where exact:
-    the box the offsets or step errors are checked in."""
+    pivot, {"rise", "tread"} of a step) of a tolerance list, 0 where exact: the box the
+    per-stage build errors are checked in."""
     from ..plugin import of
 
     value = {e["quantity"]: e["value"] for e in entries}

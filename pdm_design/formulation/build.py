@@ -100,5 +100,5 @@ def min_margin_term(kind: str, margins: dict[str, float],
     from ..plugin import scene_kind
 
     covered = [n for n in margins if n not in scene_kind(kind).outside_min_margin]
-    need = {n: required(n, requirements) for n in covered}
+    need = {n: required(n, requirements, kind) for n in covered}
     return min((margins[n] - need[n] for n in covered), default=None)

@@ -1,7 +1,6 @@
 """Moments of a chain of linearised stage maps and bounds on the probability that a row
-fails: the statistical linearisation both scenes' `max_yield` share
-(formulation/manipulators/statistical.py, formulation/stairs/statistical.py; docs/optimizer.md
-section 10).
+fails: the statistical linearisation the scenes' `max_yield` share (each scene's
+formulation/statistical.py; docs/optimizer.md section 10).
 
 A row of stages: stage k reads the state s_k (ns numbers), part k's deviations e_k, part
 k + 1's e_{k+1} (ne numbers each: every part's independent of every other's) and the lot's
@@ -224,7 +223,7 @@ def log_new_failure(beta_a, beta_b, rho):
     (beyond it the integrand is below about e^-12 of its start), + |beta_b| for beta_b < 0.
     Relative error below 3e-3 against scipy's quad where b holds at its mean (beta_b > 0), 3e-2
     where it fails there, over -1 <= beta <= 8, -0.5 <= rho <= 0.99999 (NODES = 8; 16 gave
-    2e-4 everywhere at 1.5 times the cost of an optimisation: tests/test_max_yield_stairs.py)."""
+    2e-4 everywhere at 1.5 times the cost of an optimisation)."""
     x, w = _legendre()
     rho = ca.fmin(ca.fmax(rho, -1.0 + 1e-9), 1.0 - 1e-9)
     s = ca.sqrt((1.0 - rho) * (1.0 + rho))

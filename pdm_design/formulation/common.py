@@ -1,7 +1,7 @@
 """What every scene's formulation shares: named conditions, the NLP assembly, the inverse map.
 
-A scene module (manipulators.py, stairs.py) writes each physical condition once, as CasADi SX
-expressions built from the closed forms in `pdm_design.physics`:
+A scene's formulation (Scene.formulate, scenes/<kind>/formulation) writes each physical
+condition once, as CasADi SX expressions built from the scene's closed forms:
 
     slack >= required_margin * scale        (capacity - demand >= r * capacity)
 
@@ -48,8 +48,8 @@ MARGIN, VALIDITY, MODEL = "margin", "validity", "model"
 # NLP parameter) in the normalised row's units. IPOPT meets a row only to its tolerance (and
 # relaxes it by bound_relax_factor): optima on a limit came back 1e-8 past it, and the simulator,
 # run at the claimed box's corners and at the nominal design, failed 71 of 386 answers to 900
-# random manipulators specs on such ties (lift-off, tip, a stall at the top), and 36 stairs
-# boxes of a point ball on a nose.
+# random specs of one shipped scene on such ties (lift-off, tip, a stall at the top), and 36
+# boxes of another's (a point object on a step's nose).
 # The solver sets it to BACKOFF_FACTOR times its tolerance (1e-6 at the default 1e-8).
 BACKOFF_FACTOR = 100.0
 DEFAULT_BACKOFF = 1e-6
@@ -127,18 +127,18 @@ class SceneModel:
     derived: dict[str, object]  # named design quantities (SX) reported with the design
     tolerance_axes: tuple[str, ...]  # ("dx", "dy") or ("rise", "tread")
     # the Scenario, or a function of no arguments that builds it (built when first asked for:
-    # it grows with the row, 0.37 s at 100 manipulators, and only the linearised sets use it)
+    # it grows with the row, 0.37 s at 100 stages, and only the linearised sets use it)
     scenario: object = None
     # The NLP minimises f / objective_scale (the optimum is the same; the reported terms are in
     # natural units). IPOPT's dual and complementarity tolerances are absolute in f's units, so
-    # f in metres on a centimetre scene stopped it short of the optimum (the stairs set it).
+    # f in metres on a centimetre scene stopped it short of the optimum (a scene sets it).
     objective_scale: float = 1.0
     # Whether optimize solves the multistart points together as one stacked NLP (solve/stacked.py).
     # Stacking shares IPOPT's per-iteration overhead, so it pays only where that overhead, not the
     # rows' evaluation, is an iteration's cost, and where the starts need alike iteration counts.
     stack_starts: bool = True
     # a term maximised besides the [objective] table's (None: none): the allocated scale's
-    # log s of a yield target (formulation/manipulators/yield_target.py)
+    # log s of a yield target (formulation/yield_target.py)
     extra_objective: object = None
 
 
@@ -483,8 +483,8 @@ def _fixed_values(spec) -> dict[str, float]:
             if not isinstance(v, (Bounds, ca.SX))}
 
 
-# Requirements that add rows when above 0 (the stairs' exact nose rows,
-# formulation/stairs/__init__.py).
+# Requirements that add rows when above 0 (a scene's exact rows, which its formulation adds
+# where they are asked for: Scene.nlp_key).
 def spec_key(spec) -> str:
     """A canonical text of everything in a spec that the NLP depends on (the build cache key):
     the requirements' values are parameters, but some add rows when above 0."""

@@ -7,14 +7,14 @@ expressions, its IPOPT solvers and its stage maps built again, most of a point's
 every point: a point binds its numbers (`Formulation.bind`) and reuses the built solvers.
 
 Which numbers can be parameters (Scene.nlp_parameters): those the formulation uses only in
-its rows' expressions, never to decide the NLP's shape (how many parked palms are checked, the
-tolerance variable's bound, the objective's scale read the alpha, beta and link length the box
-allows, so those stay constants). The symbolic build also checks this: a number compared or
-converted to a float while the NLP is built raises there, and the spec falls back to its own
-NLP (formulation/build.py). A spec asks for parameters with `Spec.nlp_parameters` (the table sets it to its
-swept paths, sweep/run.py); `optimize` of one spec builds its NLP with constants, as before.
-The parameters change the NLP's arithmetic, not its rows: a point's answer is the one its own
-NLP gives, to IPOPT's tolerance (tests/test_parametric.py).
+its rows' expressions, never to decide the NLP's shape (how many rows are checked, the
+tolerance variable's bound, the objective's scale read some of the design's numbers, so those
+stay constants). The symbolic build also checks this: a number compared or converted to a
+float while the NLP is built raises there, and the spec falls back to its own NLP
+(formulation/build.py). A spec asks for parameters with `Spec.nlp_parameters` (the table sets
+it to its swept paths, sweep/run.py); `optimize` of one spec builds its NLP with constants, as
+before. The parameters change the NLP's arithmetic, not its rows: a point's answer is the one
+its own NLP gives, to IPOPT's tolerance (tests/test_parametric.py).
 """
 
 from __future__ import annotations

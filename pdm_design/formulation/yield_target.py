@@ -13,8 +13,8 @@ yield reaches the target. One NLP:
 
 s an auxiliary variable (`yield_scale`), the allocated quantities' sigmas s times their shares
 (given tolerances at their values), nines the scene's -log10 of its bound on the failure
-probability: the manipulators' union bound (manipulators/yield_target.py), the stairs'
-Hunter's bound (stairs/statistical.py). The nines row is well scaled (2.57 for 99.73 %) where
+probability (a union bound, or Hunter's bound: the scene's formulation,
+scenes/<kind>/formulation). The nines row is well scaled (2.57 for 99.73 %) where
 the yield itself is within 3e-3 of 1; log s makes the objective free of the units s is in (a
 length, an angle, a mass: whichever quantity has the smallest weight).
 """

@@ -183,7 +183,7 @@ _SCRIPT = r"""
   var thin = {"vector-effect": "non-scaling-stroke", "stroke-width": 1.5};
   function styled(extra) { var o = {}; for (var k in thin) o[k] = thin[k];
     for (var j in extra) o[j] = extra[j]; return o; }
-  var lift = scene.lift(D);  // e.g. a ball's path drawn at its centre
+  var lift = scene.lift(D);  // e.g. a round object's path drawn at its centre
   var path = D.x.map(function (x, i) { return x + "," + (D.y[i] + lift); }).join(" ");
   el("polyline", styled({points: path, fill: "none", stroke: "#2ca02c",
                          "stroke-dasharray": "6 4", opacity: 0.6}));

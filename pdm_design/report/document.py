@@ -1,7 +1,7 @@
 """The JSON document printed by `pdm-design optimize --format json` (docs/json-schema.md).
 
 The document carries every key the schema lists, whatever the design: a quantity that does not
-exist for it (no periodic orbit, no bounce, no tolerance box asked) is null, a list with nothing
+exist for it (no periodic orbit, no impact, no tolerance box asked) is null, a list with nothing
 in it is []. The analysis leaves such quantities out; this layer puts them back as null.
 """
 

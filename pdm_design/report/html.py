@@ -20,7 +20,7 @@ import html
 import math
 
 from .animation import animation, animation_html
-from .units import UNITS, built_parts
+from .units import built_parts, units_of
 
 _STYLE = """
 body{font-family:system-ui,sans-serif;margin:1.5em auto;max-width:1200px;color:#222;
@@ -45,9 +45,10 @@ def report_page(sheet, *, margins: dict, run=None, refused: str = "",
     name = html.escape(spec.name or str(spec.source))
     body = [f"<h1>{name} ({sheet.kind})</h1>", _verdict(sheet)]
     body += ["<h2>Simulated run</h2>", _animation(spec, run, refused)]
-    body += ["<h2>Design</h2>", _values(sheet.design, set(spec.free_variables))]
+    units = units_of(sheet.kind)
+    body += ["<h2>Design</h2>", _values(sheet.design, set(spec.free_variables), units)]
     body += ["<h2>Geometry and periodic orbit</h2>",
-             _values({**built_parts(sheet.geometry), **sheet.periodic}, set())]
+             _values({**built_parts(sheet.kind, sheet.geometry), **sheet.periodic}, set(), units)]
     body += ["<h2>Margins</h2>", _margins(margins, spec)]
     body += ["<h2>Tolerances and parts</h2>", _parts(sheet)]
     if yield_result is not None:
@@ -96,12 +97,12 @@ def _cell(value) -> str:
 
 
 
-def _values(values: dict, free: set) -> str:
+def _values(values: dict, free: set, units: dict) -> str:
     from ..sheet.parts import workshop_value
 
     rows = []
     for key, value in values.items():
-        unit = UNITS.get(key, "")
+        unit = units.get(key, "")
         shown = "-"
         if isinstance(value, (int, float)) and unit and math.isfinite(value):
             number, words = workshop_value(float(value), unit)
@@ -118,7 +119,7 @@ def _margins(margins: dict, spec) -> str:
 
     rows = []
     for key, value in margins.items():
-        need = required(key, spec.requirements)
+        need = required(key, spec.requirements, spec.kind)
         ok = value >= need
         flag = '<span class="ok">ok</span>' if ok else (
             f'<span class="bad">VIOLATED (needs &ge; {need:g})</span>')
@@ -139,8 +140,8 @@ def _parts(sheet) -> str:
                     f"</td><td class=num>&plusmn;{value:.4g} {unit}</td>"
                     f"<td>{html.escape(e.limited_by)}</td></tr>")
     table = ("<p class=note>(spec): the spec's statistical tolerances; (box): the worst-case "
-             "box the optimizer computed.</p><table><tr><th>tolerance</th><th>applies to</th><th>value</th>"
-             "<th>what it is</th></tr>" + "".join(rows) + "</table>" if rows else
+             "box the optimizer computed.</p><table><tr><th>tolerance</th><th>applies to</th>"
+             "<th>value</th><th>what it is</th></tr>" + "".join(rows) + "</table>" if rows else
              f"<p>No tolerance: {html.escape(sheet.tolerance_note)}.</p>")
     from ..sheet.build_to import build_to_sentence  # which of two tolerances on a part
 

@@ -7,34 +7,35 @@ import math
 from ..analysis.result import required
 from ..api import DesignOutcome
 from ..status import Status
-from .units import UNITS as _UNITS
 from .units import built_parts as _built_parts
+from .units import units_of
 
 
-def _rows(values: dict) -> list[str]:
+def _rows(values: dict, units: dict) -> list[str]:
     width = max((len(k) for k in values), default=0)
     out = []
     for name, value in values.items():
         if value is None:
             shown = "-"
         elif isinstance(value, float) or hasattr(value, "__float__"):
-            shown = f"{float(value):.6g} {_UNITS.get(name, '')}".rstrip()
+            shown = f"{float(value):.6g} {units.get(name, '')}".rstrip()
         else:
             shown = str(value)
         out.append(f"  {name:<{width}}  {shown}")
     return out
 
 
-def _box_size(axis: str, value: float) -> str:
+def _box_size(axis: str, value: float, units: dict) -> str:
     """A box's half-width in build units: mm, or degrees for an angle (a slope)."""
-    if _UNITS.get(axis) == "rad":
+    if units.get(axis) == "rad":
         return f"{value:.4g} rad ({math.degrees(value):.3g} deg)"
     return f"{value * 1e3:.2f} mm"
 
 
-def _tolerance_rows(tolerance: dict) -> list[str]:
+def _tolerance_rows(tolerance: dict, units: dict) -> list[str]:
     box = {k: v for k, v in tolerance.items() if k not in ("linearised", "limited_by")}
-    lines = [f"  {axis:<6} +-{_box_size(axis, value)} (robust NLP)" for axis, value in box.items()]
+    lines = [f"  {axis:<6} +-{_box_size(axis, value, units)} (robust NLP)"
+             for axis, value in box.items()]
     linear = tolerance.get("linearised")
     if linear:
         parts = []
@@ -71,29 +72,29 @@ def _limited_by(entries: list[dict]) -> str:
 
 def optimize_text(outcome: DesignOutcome) -> str:
     spec, analysis = outcome.spec, outcome.analysis
-    free = set(spec.free_variables)
+    free, units = set(spec.free_variables), units_of(spec.kind)
     lines = [f"{spec.name or spec.source} ({spec.kind})",
              f"status: {outcome.status.value} - {outcome.status_message}", "", "design:"]
     design = {k: v for k, v in analysis.design.items() if v is not None}
     label = _free_label(outcome.status)
     lines += [row + (f"   ({label})" if name in free else "")
-              for name, row in zip(design, _rows(design))]
+              for name, row in zip(design, _rows(design, units))]
     if outcome.at_bounds:
         lines.append("  at a bound: " + ", ".join(
             f"{name} ({side} {spec.design[name].min if side == 'min' else spec.design[name].max:g}"
-            f"{(' ' + _UNITS[name]) if _UNITS.get(name) else ''})"
+            f"{(' ' + units[name]) if units.get(name) else ''})"
             for name, side in outcome.at_bounds.items()))
-    lines += ["", "geometry:", *_rows(_built_parts(analysis.geometry))]
-    lines += ["", "periodic orbit:", *_rows(analysis.periodic)]
+    lines += ["", "geometry:", *_rows(_built_parts(spec.kind, analysis.geometry), units)]
+    lines += ["", "periodic orbit:", *_rows(analysis.periodic, units)]
     lines += ["", "margins (>= 0 holds; 1 - demand/capacity):"]
     width = max((len(k) for k in analysis.margins), default=0)
     for name, value in analysis.margins.items():
-        need = required(name, spec.requirements)
+        need = required(name, spec.requirements, spec.kind)
         flag = "ok" if value >= need else f"VIOLATED (needs >= {need:g})"
         lines.append(f"  {name:<{width}}  {value:+.4f}  {flag}")
     if outcome.tolerance:
         lines += ["", "tolerance (half-widths of the box every pivot or step may be off by):"]
-        lines += _tolerance_rows(outcome.tolerance)
+        lines += _tolerance_rows(outcome.tolerance, units)
         if outcome.tolerance.get("limited_by"):
             lines.append(_limited_by(outcome.tolerance["limited_by"]))
     if outcome.tolerances:

@@ -1,28 +1,24 @@
 """The SI unit of every design, geometry and periodic-orbit quantity, one table for the text
-report (report/text.py) and the report page (report/html.py), and which of the links' and
-pivots' quantities a device has (massless links and free pivots have none to print)."""
+report (report/text.py) and the report page (report/html.py): the shared quantities' here, a
+scene's own over them (Scene.quantity_units); and the geometry a scene shows
+(Scene.shown_geometry)."""
 
 from __future__ import annotations
 
-UNITS = {
-    "alpha": "rad", "beta": "rad", "link_length": "m", "mass_ratio": "", "first_pivot_x": "m",
-    "first_pivot_y": "m", "restitution": "", "launch_speed": "m/s", "rise": "m", "tread": "m",
-    "landing_offset": "m", "pitch_x": "m", "pitch_y": "m", "palm_mass": "kg",
-    "nose_clearance": "m", "handover_speed": "m/s", "landing_speed": "m/s", "contraction": "",
-    "drop_per_stage": "m", "impact_speed": "m/s", "vertical_impact_speed": "m/s",
-    "horizontal_speed": "m/s", "spin": "rad/s", "flight_time": "s", "drift_per_bounce": "m",
-    "effective_mass": "kg", "link_mass": "kg", "link_inertia": "kg m^2", "link_count": "",
-    "pivot_friction_torque": "N m", "pivot_damping": "N m s/rad",
-    "slope": "rad", "leg_length": "m", "spokes": "", "step_length": "m", "step_period": "s",
-    "spectral_radius": "",
-}
-
-MECHANISM = ("link_mass", "link_inertia", "link_count", "pivot_friction_torque", "pivot_damping")
+# the quantities of the shared objectives (formulation.common.OBJECTIVE_SENSE: min_drop,
+# fastest_convergence), whatever scene reports them
+UNITS = {"contraction": "", "drop_per_stage": "m", "spectral_radius": ""}
 
 
-def built_parts(geometry: dict) -> dict:
-    """The geometry to show: the links' and pivots' rows only where the scene has links or
-    pivots (massless links and free pivots show none; the JSON keeps every key)."""
-    if any(geometry.get(k) for k in MECHANISM if k != "link_count"):
-        return geometry
-    return {k: v for k, v in geometry.items() if k not in MECHANISM}
+def units_of(kind: str) -> dict[str, str]:
+    """{quantity: SI unit} of a scene of `kind`: the shared table with the scene's own over it."""
+    from ..plugin import scene_kind
+
+    return {**UNITS, **scene_kind(kind).quantity_units}
+
+
+def built_parts(kind: str, geometry: dict) -> dict:
+    """The geometry a scene of `kind` shows (Scene.shown_geometry; the JSON keeps every key)."""
+    from ..plugin import scene_kind
+
+    return scene_kind(kind).shown_geometry(geometry)

@@ -1,6 +1,6 @@
 """Build sheets: the numbers a workshop builds a device from, with the tolerance of each.
 
-What a scene's sheet lists, one item a stage (a manipulator's pivot, a step), is the scene's:
+What a scene's sheet lists, one item a stage (a pivot, a step), is the scene's:
 Scene.sheet_rows (scenes/<kind>/sheet.py).
 
 The design comes from solving the spec (`pdm_design.api.design`) or from a saved design JSON
@@ -36,11 +36,11 @@ MARKDOWN_ROWS = 100
 @dataclass(frozen=True)
 class BuildSheet:
     """One design's build sheet. summary: (quantity, value, unit, tolerance or None) rows;
-    items: one dict per manipulator or step (CSV columns, SI units in the names); the tolerance
+    items: one dict per stage (CSV columns, SI units in the names); the tolerance
     columns are None past the spec's verification.stages (`tolerance_covers`). violations and
     verification: why the design does not meet its requirements, and the simulator's verdict
     (`passed`, `summary`, `failures`; None when it was not run). tolerances: tolerances of
-    further parts (link length, back stop, palm mass, ...) a tolerance analysis found, shown
+    further parts (a link's length, a part's mass, ...) a tolerance analysis found, shown
     on their parts (sheet/parts.py)."""
 
     spec: Spec
@@ -93,7 +93,7 @@ def sheet_for(path: str | Path, *, count: int | None = None,
               tolerance: bool = True) -> BuildSheet:
     """The build sheet of a spec file (solved first) or of a saved design JSON (*.json).
 
-    count: manipulators or steps listed (default: the spec's verification.stages).
+    count: stages listed, one item each (default: the spec's verification.stages).
     tolerance: find the placement tolerance when the design does not carry one.
     """
     path = Path(path)
@@ -129,7 +129,7 @@ def sheet_for(path: str | Path, *, count: int | None = None,
     try:
         sheet = make_sheet(fixed, status, tol, note, count, source=str(path),
                            violations=violations, verification=verification)
-    except ValueError as exc:  # e.g. a staircase that cannot be built from this design
+    except ValueError as exc:  # e.g. a device that cannot be built from this design
         raise PdmError(f"{path}: no build sheet: {exc}") from None
     if target is not None:
         sheet = dataclasses.replace(sheet, statistical=True)
@@ -166,32 +166,22 @@ def _sized_at(spec, point, source: str) -> tuple:
                  for t in sized)
 
 
-# the part each allocated quantity is built on, in the words sheet/parts.py puts on a part
-ALLOCATED_PART = {"pivot_x": "every pivot bracket", "pivot_y": "every pivot bracket",
-                  "feed_x": "the feed (start place)", "friction": "every palm's surface",
-                  "object_width": "the objects carried", "feed_speed": "the feed (start speed)",
-                  "palm_mass": "every palm", "object_mass": "the objects carried",
-                  "launch_x": "the launcher (release place)", "link_length": "every link",
-                  "back_stop": "every back stop", "link_mass": "every link",
-                  "pivot_friction": "every pivot bracket's joints", "rise": "every step",
-                  "tread": "every step", "restitution": "every step's surface (the ball's "
-                  "bounce)", "launch_speed": "the launcher (launch speed)"}
 SPEC_WORDS = "the spec's statistical tolerance"
 
 
 def part_words(kind: str, quantity: str) -> str:
     """The part a tolerance of `quantity` is built on, in the words of sheet/parts.py (the
-    scene's own where they differ: Scene.quantity_parts)."""
+    scene's: Scene.quantity_parts), or the quantity's own name where the scene gives none."""
     from ..plugin import scene_kind
 
     own = scene_kind(kind).quantity_parts if kind else {}
-    return own.get(quantity, ALLOCATED_PART.get(quantity, quantity))
+    return own.get(quantity, quantity)
 
 
 def allocated_entries(entries, target: float | None = None, kind: str = "") -> tuple:
     """ToleranceEntry of every allocated or given tolerance of an optimize answer other than
     the pivots' (the sheet's own box lists those), on its part, with what limits it; with a
-    yield `target` (tolerances sized for it, formulation/manipulators/yield_target.py: no box) the
+    yield `target` (tolerances sized for it, formulation/yield_target.py: no box) the
     pivots' too, statistical."""
     from ..solve.binding import SHARED, in_words
     from .parts import ToleranceEntry

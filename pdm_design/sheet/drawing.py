@@ -1,10 +1,10 @@
 """The dimensioned drawing of a build sheet, in millimetres and degrees (matplotlib Figure + Agg
 canvas; no pyplot state).
 
-`draw(sheet)` draws the whole device, every manipulator or step, scaled to fit one page, with the
+`draw(sheet)` draws the whole device, every stage's item, scaled to fit one page, with the
 parts list and the tolerances below it; `drawing_files` writes it as PNG and SVG, and as a PDF
-whose first page is that drawing, followed by pages of PAGE_ITEMS manipulators or steps each at a
-larger scale and the table of every pivot or step. The device itself is drawn by its scene
+whose first page is that drawing, followed by pages of PAGE_ITEMS items each at a larger scale
+and the table of every item. The device itself is drawn by its scene
 (Scene.draw_sheet: scenes/<kind>/drawing.py), with its words (Scene.sheet_words). Labels never
 overlap (sheet/labels.py).
 """
@@ -22,8 +22,8 @@ from .labels import FONT, Labels
 from .parts import parts_list, tolerance_entries
 
 DRAWING_FORMATS = ("png", "svg", "pdf")
-PAGE_ITEMS = 6          # manipulators or steps on each detail page of the PDF
-TABLE_ROWS = 60         # rows of the pivot or step table on each of its PDF pages
+PAGE_ITEMS = 6          # items (one a stage) on each detail page of the PDF
+TABLE_ROWS = 60         # rows of the items' table on each of its PDF pages
 WIDTH = 13.0            # inches
 DPI = 120               # of the PNG, and of the text extents that keep labels apart
 WARNING_WIDTH, WARNING_LINES = 110, 3  # characters a line, lines: the drawing's warning

@@ -23,7 +23,7 @@ HOLE_MARK = 10.0   # mm, diameter of the circle drawn at a hole centre
 
 
 def dxf_document(sheet):
-    """An ezdxf document of the sheet's device (every manipulator or step)."""
+    """An ezdxf document of the sheet's device (every stage's item)."""
     import ezdxf
     from ezdxf import units
 

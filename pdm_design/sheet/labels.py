@@ -6,8 +6,8 @@ with the figure's renderer (in the order they were made: the first ones stay whe
 moves a label that runs into one already placed (or into any other text of the figure: tick
 labels, titles, notes) to the nearest free place around its point (with a thin line back to
 it), and hides an optional label (an item's number) instead. A label that is not optional also
-keeps off the drawing's lines (links, palms, dimension and leader lines, the axes' frame) where
-a place free of them is found near its point; else it keeps off the texts only.
+keeps off the drawing's lines (the device's parts, dimension and leader lines, the axes'
+frame) where a place free of them is found near its point; else it keeps off the texts only.
 """
 
 from __future__ import annotations

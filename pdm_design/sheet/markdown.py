@@ -1,5 +1,5 @@
 """The build sheet as text: the Markdown page (millimetres and degrees, with the parts list and
-the tolerances by part) and the CSV (every manipulator or step, SI units, exact floats)."""
+the tolerances by part) and the CSV (every stage's item, SI units, exact floats)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from .build import MARKDOWN_ROWS, BuildSheet
 
 
 def sheet_csv(sheet: BuildSheet) -> str:
-    """Every manipulator or step, one row each (exact floats)."""
+    """Every stage's item, one row each (exact floats)."""
     from ..sweep.tables import cell, csv_line
 
     header = list(sheet.items[0])
@@ -102,8 +102,8 @@ def tolerance_limit(sheet: BuildSheet) -> str:
     if not sheet.tolerance or covers >= count:
         return ""
     unit_word = of(sheet.spec).stage_noun[1]
-    # the most stages a tolerance is solved for: stairs' NLP has rows for every bounce; the
-    # simulator keeps every manipulator's record
+    # the most stages a tolerance is solved for (Scene.stage_limit: an NLP with rows for every
+    # stage, a simulator that keeps every stage's record)
     most = of(sheet.spec).stage_limit(True)[0]
     how = (f"For a tolerance on all {count}, set `verification.stages = {count}` in the spec "
            "and make the sheet again." if count <= most else

@@ -15,7 +15,7 @@ from ..errors import PdmError
 
 # A length, speed or ratio more than SCALE_LIMIT times the scene's own scale (the link length,
 # sqrt(g l), 1, ...) is refused: double precision cannot follow a motion spread over more
-# orders of magnitude than that (on a 1e13 m flight a 1 m palm is below rounding). Quantities
+# orders of magnitude than that (on a 1e13 m flight a 1 m part is below rounding). Quantities
 # far *below* the scale are harmless (they round to nothing against it) and pass, as do zeros.
 # The scales themselves (g, l, h0, masses) must lie within [1/MAGNITUDE_LIMIT, MAGNITUDE_LIMIT]
 # and no value beyond MAGNITUDE_LIMIT, so that squares and products of a few stay finite.
@@ -51,9 +51,9 @@ def check_scales(reference: tuple[str, float], quantities: dict[str, float]) -> 
 
 @dataclass(frozen=True)
 class Event:
-    """One event of a run. stage numbers the manipulator carrying the object (from 1) or the
-    step the ball lands on (from 1); a failure is in the stage that fails, stages passed + 1
-    (on stairs its state's "step" is the step where it happens). before/after: the state just
+    """One event of a run. stage numbers the stage it happens in (from 1: the part carrying the
+    object, the step it lands on); a failure is in the stage that fails, stages passed + 1
+    (a scene's state may say more of where it happens). before/after: the state just
     before and after the reset, by name (SI units). A failure event ends the run."""
 
     time: float

@@ -9,8 +9,8 @@ swing time of a pendulum, so both are here:
   (tests/test_extremes.py checks it against scipy on random brackets).
 * `carlson_rf`: Carlson's symmetric elliptic integral R_F(x, y, z) by the duplication theorem
   (B. C. Carlson, "Numerical computation of real or complex elliptic integrals", Numer.
-  Algorithms 10, 1995, algorithm for R_F, truncation error < 3e-16 relative). The swing time of
-  the palm, l dth / v(th), integrates in closed form to R_F (phases.swing_time).
+  Algorithms 10, 1995, algorithm for R_F, truncation error < 3e-16 relative). A pendulum's
+  swing time, l dth / v(th), integrates in closed form to R_F (a scene's swing_time).
 """
 
 from __future__ import annotations

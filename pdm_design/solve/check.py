@@ -30,7 +30,7 @@ def closed_form_check(spec, design: dict[str, float], requirements: dict[str, fl
         return {"passed": False, "failures": [f"design rejected: {exc}"], "analysis": None}
     failures = list(analysis.problems)
     for name, value in analysis.margins.items():
-        need = required(name, requirements)
+        need = required(name, requirements, spec.kind)
         if value < need - CHECK_TOL:
             failures.append(f"margin {name} = {value:.6g} is below the required {need:.6g}")
     return {"passed": not failures, "failures": failures, "analysis": analysis}
@@ -93,9 +93,9 @@ def _pattern_value(sign, K: int) -> float:
 
 
 def _streamed_check(form, x, p, tau, samples: int, seed: int) -> dict:
-    """sampled_offsets_check of a manipulators row, streamed stage by stage through its stage
-    maps (formulation/manipulators/offsets.py): the fixed patterns, random corners and uniform
-    points, each pivot's offsets drawn when the row reaches it. Memory flat in the stages.
+    """sampled_offsets_check of a scene whose scenario source streams its stage maps (the
+    scene's formulation): the fixed patterns, random corners and uniform points, each stage's
+    offsets drawn when the row reaches it. Memory flat in the stages.
     tau: the box's half-width, or (dx, dy) half-widths of an allocated box."""
     half = np.broadcast_to(np.asarray(tau, dtype=float), (2,))
     stages = form.scenario_source
@@ -124,6 +124,6 @@ def _streamed_check(form, x, p, tau, samples: int, seed: int) -> dict:
 
 
 def _parked_reach(form, x) -> int:
-    """The parked palms that can reach the object at design x (the stage maps' `reach` at the
-    design's values): those further back never can."""
+    """The parts behind the object that can still reach it at design x (the stage maps' `reach`
+    at the design's values): those further back never can."""
     return form.scenario_source.reach(form.design_values(x))

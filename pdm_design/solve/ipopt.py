@@ -151,7 +151,7 @@ def _within(lo: float, hi: float, r: float) -> float:
 @functools.lru_cache(maxsize=64)
 def _sobol(dimension: int, count: int, seed: int) -> np.ndarray:
     """count scrambled-Sobol points in the unit cube (cached: drawing them took 0.4 ms, 4 % of
-    an 8-start optimize of problems/manipulators_robust.toml). solve/sobol.py draws scipy's
+    an 8-start optimize of a 6-stage robust problem). solve/sobol.py draws scipy's
     points without importing scipy.stats (0.4 s)."""
     from .sobol import sobol
 

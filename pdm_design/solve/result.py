@@ -57,7 +57,8 @@ class LinearisedTolerance:
     square: largest half-width of a box with the same width on every coordinate;
     box: largest-area box with one half-width per axis group (e.g. dx, dy);
     ellipsoid: largest-volume ellipsoid centred on the nominal, as its smallest and largest
-    semi-axes, the radius of the ball of equal volume, and its extent along each coordinate.
+    semi-axes, the radius of a sphere enclosing the same volume, and its extent along each
+    coordinate.
     """
 
     square: float

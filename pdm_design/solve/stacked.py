@@ -3,7 +3,7 @@
 The copies share no variable and no row, so the stacked KKT system is block diagonal and each
 copy's answer is a KKT point of the original NLP. What they share is IPOPT's per-iteration
 overhead, which on these small NLPs grows far more slowly than their size: an iteration of
-problems/manipulators_robust.toml costs about 0.2 ms for one copy and 0.7 ms for eight, and its
+a 6-stage robust problem costs about 0.2 ms for one copy and 0.7 ms for eight, and its
 8 starts take about 11 ms stacked against 23 ms one after another (results/bench_ipopt_cost.md).
 They also share the step length and the barrier parameter, so one copy that cannot converge
 holds the others back: the stacked run is capped (MAX_ITER) and, unless it succeeds,
@@ -25,10 +25,10 @@ from .ipopt import Solve, SolverOptions, map_status
 # Stacked runs of 8 starts of the shipped problems take 16-28 iterations (one start alone: a
 # median of 14-18; results/bench_optimize.md); a run needing many more has a copy in trouble.
 MAX_ITER = 100
-# Copies per stacked run. Per start, a run of problems/manipulators_robust.toml cost about the
-# same from 8 to 64 copies (1.4-1.8 ms), but one of problems/stairs_design.toml cost 4x more at
-# 64 than at 32; creating the solver grows with the copies (0.4-0.9 s for 64); and one failing
-# copy sends its whole group back to one run per start.
+# Copies per stacked run. Per start, a run of a 6-stage robust problem cost about the same
+# from 8 to 64 copies (1.4-1.8 ms), but one of a 20-stage problem cost 4x more at 64 than at
+# 32; creating the solver grows with the copies (0.4-0.9 s for 64); and one failing copy sends
+# its whole group back to one run per start.
 MAX_COPIES = 16
 
 

@@ -1,7 +1,7 @@
 """One spec, one design: on a flat optimum, the design nearest the spec's initial guess.
 
-An optimum need not be a point. On `problems/manipulators_robust.toml` with the mass ratio free,
-no row that limits the tolerance depends on it: every mass ratio in an interval gives the same
+An optimum need not be a point. On a 6-stage robust problem with the mass ratio free, no row
+that limits the tolerance depends on it: every mass ratio in an interval gives the same
 box, and IPOPT stopped wherever its start led it (`optimize` 11.0057, a `table` row warm-started
 from its neighbour 10.896, both with a box of 10.3184 mm). So, after the multistart, a second
 NLP picks one design of the optimal set, by a rule of the spec alone:
@@ -15,9 +15,9 @@ point whichever start found f*, and `optimize`, `table` (whose warm starts are e
 never the guess) and `sheet` give the same design. It costs the optimum at most IPOPT's
 tolerance `tol` of its value (1e-8 by default: 1e-9 mm of an 83 mm box; a larger slack, 100 tol,
 moved a unique optimum, beta on its slip limit, by 1e-6 rad toward the guess), and the row
-f <= cap holds to IPOPT's tolerance (10 tol is accepted). An answer that moves no variable by more than FLAT of its
-bounds is a curved optimum's slide along the slack, not a flat set: the multistart's answer
-stands then, as it does when the second solve fails (`stats.tie_break_kept`).
+f <= cap holds to IPOPT's tolerance (10 tol is accepted). An answer that moves no variable by
+more than FLAT of its bounds is a curved optimum's slide along the slack, not a flat set: the
+multistart's answer stands then, as it does when the second solve fails (`stats.tie_break_kept`).
 
 The second solve is not run where its answer is known to be the multistart's (`pinned`): where
 no design within the tie-break's slack s (the cap's RELATIVE tol max(|f*|, ABSOLUTE) and the
@@ -48,8 +48,8 @@ from .ipopt import solve_once, solver_for
 
 RELATIVE = 1.0  # times IPOPT's tol
 # A move smaller than this (of any variable's bounds) is no flat optimum: the objective's slack
-# lets a curved one slide ~ sqrt(tol) toward the guess (2e-5 rad of alpha on
-# problems/manipulators_robust.toml), noise that would differ between scales; it is not kept.
+# lets a curved one slide ~ sqrt(tol) toward the guess (2e-5 rad of an angle on that 6-stage
+# robust problem), noise that would differ between scales; it is not kept.
 FLAT = 1e-3
 ABSOLUTE = 1e-12  # the objective's size when the optimum is 0 (no objective: any design)
 _NLPS: Bounded = Bounded()
@@ -92,7 +92,8 @@ def nearest_optimum(form, options, chosen, p, guess: dict[str, float], lows, hig
     # iterations where a cold start from it took 11-14
     warm = replace(options, warm=True)
     solver = solver_for(form.key + " nearest optimum", tie_break_nlp(form), warm)
-    run = solve_once(solver, chosen.x, np.concatenate([np.asarray(p, float), [cap, size], g0, span]),
+    run = solve_once(solver, chosen.x,
+                     np.concatenate([np.asarray(p, float), [cap, size], g0, span]),
                      form.lbx, form.ubx, np.append(form.lbg, 0.0), np.append(form.ubg, np.inf),
                      lam_x0=chosen.lam_x, lam_g0=np.append(chosen.lam_g, 0.0),
                      start=chosen.start)

@@ -1,8 +1,8 @@
 """The convex sub-problem (cvxpy): tolerance regions inside the linearised safe set of offsets.
 
 At a design x*, the scenario conditions G_i(d) = slack_i(x*, d) - r_i scale_i(x*, d) (explicit in
-every manipulator's offset or every step's errors d, formulation/*_offsets.py) are linearised at
-d = 0 with CasADi's Jacobian and normalised by scale_i(x*, 0):  b + A d >= 0.  Then
+every stage's build errors d: the scene's scenario, Scene.formulate) are linearised at d = 0
+with CasADi's Jacobian and normalised by scale_i(x*, 0):  b + A d >= 0.  Then
 
 * square box   max tau         s.t.  b_i - tau ||A_i||_1 >= 0              (an LP)
 * axis box     max prod h_g    s.t.  b_i - sum_g h_g sum_{j in g} |A_ij| >= 0
@@ -100,7 +100,7 @@ def linearised_tolerance(form, x, p, *, cap: float, length: float) -> Linearised
     h = cp.Variable(len(groups), nonneg=True)
     box = {}
     # the largest area as a geometric mean (second-order cones): its logarithm (exponential
-    # cones) failed in Clarabel on a row of 100 manipulators. The optimum is flat along the
+    # cones) failed in Clarabel on a row of 100 stages. The optimum is flat along the
     # binding row, so the box is found to tight tolerances (defaults moved it by 1e-5).
     if _solved(cp.Problem(cp.Maximize(cp.geo_mean(h)), [b - G @ h >= 0, h <= top]),
                "axis box", problems, tight=True):

@@ -62,27 +62,45 @@ def _reached(required: float, achieved: float) -> str:
     return f"{required:.3g} less {required - achieved:.2g}"
 
 
-# A row repeated along the device: the same condition at flight (landing) 1, 2, ... or palm 2, ...
-_NUMBERED = re.compile(r"\b(flight|landing|palm) (\d+)\b")
+def _numbered(kind: str | None):
+    """The pattern of a numbered place ("flight 3") in a row's `where`: the scene's place nouns
+    (Scene.place_nouns), or with no kind every installed scene's; None when there are none."""
+    from .. import plugin
+
+    if kind is not None:
+        nouns = set(plugin.scene_kind(kind).place_nouns)
+    else:
+        nouns = set()
+        for name in plugin.kinds():
+            try:
+                nouns.update(plugin.scene_kind(name).place_nouns)
+            except plugin.SceneUnavailable:
+                continue
+    if not nouns:
+        return None
+    return re.compile(r"\b(" + "|".join(sorted(map(re.escape, nouns))) + r") (\d+)\b")
 
 
 def summarise(violations, kind: str | None = None) -> list[str]:
     """The elastic diagnosis' violations (most violated first) in words, one line per condition
-    and place: a row violated at several flights or palms is one line that names them all, with
-    the worst margin among them (in the words of a scene of `kind`, or of any installed one)."""
+    and place: a row violated at several numbered places (Scene.place_nouns) is one line that
+    names them all, with the worst margin among them (in the words of a scene of `kind`, or of
+    any installed one)."""
+    numbered = _numbered(kind)
     groups: dict[tuple, list] = {}
     for v in violations:
-        pattern = _NUMBERED.sub(lambda m: f"{m.group(1)} #", v.where)
+        pattern = numbered.sub(lambda m: f"{m.group(1)} #", v.where) if numbered else v.where
         key = (v.name, v.text if v.equality else pattern)
         groups.setdefault(key, []).append(v)
     lines = []
     for (name, pattern), members in groups.items():
-        if len(members) == 1:
-            if members[0].text not in lines:  # a row held by two keys is one line
-                lines.append(members[0].text)
+        if len(members) == 1 or not (numbered and numbered.search(members[0].where)):
+            for member in members:
+                if member.text not in lines:  # a row held by two keys is one line
+                    lines.append(member.text)
             continue
-        noun = _NUMBERED.search(members[0].where).group(1)
-        numbers = sorted({int(_NUMBERED.search(v.where).group(2)) for v in members})
+        noun = numbered.search(members[0].where).group(1)
+        numbers = sorted({int(numbered.search(v.where).group(2)) for v in members})
         where = pattern.replace(f"{noun} #", f"{noun}s {_spans(numbers)}", 1)
         worst = min(members, key=lambda v: v.achieved - v.required)
         lines.append(describe(name, where, worst.required, worst.achieved, kind=kind))

@@ -1,8 +1,8 @@
 """Tolerances allocated for a yield target: the largest common scale s of the tolerances to
 allocate (each t_q = s * w_min / w_q, SI: tolerance_model.allocation_shares) at which a design's
-linearised yield still reaches the target: the scene's own (`linearised_yield_function`): the
-manipulators' union bound 1 - sum_i Phi(-beta_i) (formulation/manipulators/statistical.py), the
-stairs' Hunter's bound (formulation/stairs/statistical.py).
+linearised yield still reaches the target: the scene's own (`linearised_yield_function`): a
+union bound 1 - sum_i Phi(-beta_i), or Hunter's bound (Scene.linearised_yield, the scene's
+formulation/statistical.py).
 
 The design is fixed (the spec's, or the optimizer's answer). The linearised yield falls as the
 tolerances grow (every row's spread grows with s; the second-order mean shift with s^2), so s
@@ -94,8 +94,8 @@ def dominant_rows(scene, design, tolerances: Tolerances, stages: int, *,
                   floor: float = 0.01) -> list[dict]:
     """What limits tolerances sized for a yield: the failures that make up the union bound
     sum_i Phi(-beta_i) at this design and these (valued) tolerances, by name, each with its
-    share of the bound and where along the row its rows are (`_rows_placed`: "palm k" or
-    "the first landing" on a row of manipulators, "bounce k" on a staircase), the largest
+    share of the bound and where along the row its rows are (`_rows_placed`: "step k", or the
+    scene's own name of place 0, PlacedRows.word), the largest
     first; those holding less than `floor` of it left out."""
     import numpy as np
     from scipy.special import ndtr
@@ -119,8 +119,8 @@ def dominant_rows(scene, design, tolerances: Tolerances, stages: int, *,
 
 def _rows_placed(scene, design, tolerances, stages):
     """(g, sd, names, the union bound's weight of each row, its place, word(place)) of the
-    scene's linearised rows (Scene.linearised_rows: on a row of manipulators place 0 is the
-    first landing, k palm k; on a staircase place k is bounce k)."""
+    scene's linearised rows (Scene.linearised_rows: place k is stage k, place 0 the scene's
+    own, such as a first landing)."""
     from ..plugin import of
 
     rows = of(scene).linearised_rows(scene, design, tolerances, stages)

@@ -27,6 +27,7 @@ from ..accuracy import Accuracy, AccuracyError, accuracy
 from ..errors import SpecError, did_you_mean
 from ..scenes.common import CONFIG, is_number
 from .model import (
+    STAGE_LISTS,
     Bounds,
     Expectations,
     Spec,
@@ -195,8 +196,8 @@ def _verification(table: dict, kind: _Kind) -> Verification:
     if setting is not _MISSING:
         table["accuracy"] = _accuracy(setting)
     verification = _build(Verification, table, "verification")
-    _check_unique(verification.offsets, "manipulator", "verification.offsets")
-    _check_unique(verification.step_errors, "step", "verification.step_errors")
+    for key, index in STAGE_LISTS:
+        _check_unique(getattr(verification, key), index, f"verification.{key}")
     return verification
 
 
@@ -209,9 +210,8 @@ def _check_stages(verification: Verification, kind: _Kind, design: dict) -> None
         limit, why = kind.plugin.stage_limit(asked)
         if stages > limit:
             raise _Invalid("verification.stages", f"an integer <= {limit} {why}", str(stages))
-    for key, items, attribute in (("offsets", verification.offsets, "manipulator"),
-                                  ("step_errors", verification.step_errors, "step")):
-        for i, item in enumerate(items):
+    for key, attribute in STAGE_LISTS:
+        for i, item in enumerate(getattr(verification, key)):
             if getattr(item, attribute) > stages:
                 raise _Invalid(f"verification.{key}[{i}].{attribute}", f"an integer <= "
                                f"verification.stages ({stages})", str(getattr(item, attribute)))

@@ -64,7 +64,7 @@ def at_bound(value: float, low: float, high: float) -> str | None:
 
 @checked(frozen=True, config=CONFIG)
 class ManipulatorOffset:
-    """Assembly offset of one manipulator's pivot (numbered from 1), in m, y up."""
+    """Assembly offset of one stage's pivot (the stage numbered from 1), in m, y up."""
 
     manipulator: Annotated[int, Strict(), Field(ge=1)]
     dx: Number = 0.0
@@ -82,16 +82,21 @@ class StepError:
 
 @checked(frozen=True, config=CONFIG)
 class Verification:
-    """How designs are verified in the simulator. stages: manipulators passed or bounces made."""
+    """How designs are verified in the simulator. stages: the stages a run must pass (what a
+    scene calls one: Scene.stage_noun)."""
 
     stages: Count = 6
     accuracy: AccuracyField = ACCURACY_PRESETS["default"]
     samples: SampleCount = 16
     offsets: tuple[ManipulatorOffset, ...] = ()
     step_errors: tuple[StepError, ...] = ()
-    # manipulators: a run whose object flies over a palm (lands on one further on) passes;
-    # by default it fails (`skipped_palm`)
+    # a run whose object skips a stage (lands on one further on) passes; by default it fails
+    # (a scene whose runs cannot skip refuses the key: Scene.verification_hints)
     allow_skips: Annotated[bool, Strict()] = False
+
+
+# [verification]'s per-stage lists, each with the field that numbers the stage of its items
+STAGE_LISTS = (("offsets", "manipulator"), ("step_errors", "step"))
 
 
 @checked(frozen=True, config=CONFIG)
@@ -127,7 +132,7 @@ class Spec:
     # sha256 of the spec's content (spec.loader.content_digest): a saved design names the spec
     # it was made from with it, so a sheet can refuse one whose spec has changed since
     digest: str = field(default="", compare=False)
-    # spec paths ("design.mass_ratio", "scene.palm.friction") a table varies: the NLP takes
+    # spec paths ("design.mass_ratio", "scene.body.width") a table varies: the NLP takes
     # those it can as parameters, one NLP for every point (formulation/parametric.py)
     nlp_parameters: tuple[str, ...] = field(default=(), compare=False)
 

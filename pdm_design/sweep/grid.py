@@ -1,7 +1,7 @@
 """Sweep axes and grids: `--sweep NAME=START:STOP:COUNT` resolved against a spec's TOML.
 
 NAME is a numeric parameter of the spec, by its key name (`mass_ratio`, `friction`, `gravity`) or
-by a dotted path (`scene.body.width`, `palm.width`); it must identify exactly one parameter. The
+by a dotted path (`scene.body.width`, `body.width`); it must identify exactly one parameter. The
 candidates are the numbers written in the spec file (outside `[verification]` and `[expect]`)
 plus every numeric scene, initial-state and design parameter its kind has, written or not (a
 parameter left at its default can be swept too). A design variable is one parameter whether it

@@ -19,31 +19,23 @@ from .tables import DESIGN, GEOMETRY, PERIODIC, TOLERANCE_AXES, number
 MAX_PANELS = 6
 MAX_LINES = 8
 SUCCESS = ("optimal", "evaluated")
-_LABELS = {  # (label, unit); a unit "m" is drawn in millimetres
+# (label, unit) of the shared columns; a scene's own over them (Scene.column_labels); a unit "m"
+# is drawn in millimetres
+_LABELS = {
     "objective": ("objective", ""), "tolerance": ("tolerance (smallest half-width)", "m"),
-    "min_margin": ("smallest margin", ""), "handover_speed": ("handover speed", "m/s"),
-    "pitch_x": ("pitch x", "m"), "pitch_y": ("pitch y, down", "m"), "rise": ("rise", "m"),
-    "tread": ("tread", "m"), "impact_speed": ("impact speed", "m/s"),
-    "alpha": ("alpha", "rad"), "beta": ("beta", "rad"), "link_length": ("link length", "m"),
-    "palm_mass": ("palm mass", "kg"), "landing_offset": ("landing offset", "m"),
-    "landing_speed": ("landing speed", "m/s"), "contraction": ("contraction factor", ""),
-    "drop_per_stage": ("drop per stage", "m"), "nose_clearance": ("nose clearance", "m"),
-    "flight_time": ("flight time", "s"), "launch_speed": ("launch speed", "m/s"),
-    "horizontal_speed": ("horizontal speed", "m/s"),
-    "vertical_impact_speed": ("vertical impact speed", "m/s"), "spin": ("spin", "rad/s"),
-    "first_pivot_x": ("first pivot x", "m"), "first_pivot_y": ("first pivot y", "m"),
-    "drift_per_bounce": ("drift per bounce", "m"),
-    "tolerance.dx": ("tolerance dx", "m"), "tolerance.dy": ("tolerance dy", "m"),
-    "tolerance.rise": ("tolerance rise", "m"), "tolerance.tread": ("tolerance tread", "m"),
+    "min_margin": ("smallest margin", ""), "contraction": ("contraction factor", ""),
+    "drop_per_stage": ("drop per stage", "m"),
 }
-# swept keys (by last name) that are lengths: drawn in millimetres on the x axis
-LENGTH_KEYS = {"link_length", "first_pivot_x", "first_pivot_y", "rise", "tread",
-               "landing_offset", "width", "height", "thickness", "radius", "drop_height"}
+# swept keys (by last name) that are lengths in any scene: drawn in millimetres on the x axis,
+# as is a key the scene's columns give in metres (Scene.column_labels) other than a requirement
+# (a margin, whatever its name)
+LENGTH_KEYS = {"width", "height", "thickness", "radius", "drop_height"}
 
 
 def sweep_figures(kind: str, axes: tuple[SweepAxis, ...], rows: list[dict[str, str]]
                   ) -> dict[str, bytes]:
     """{file name: bytes} of the optimum and tolerance figures (PNG and SVG each)."""
+    labels = labels_of(kind)
     swept = {a.path[1] for a in axes if a.path[0] == "design"}
     optimum = [c for c in (*DESIGN[kind], "objective", *GEOMETRY[kind], *PERIODIC[kind])
                if c not in swept and _varies(rows, c)][:MAX_PANELS]
@@ -54,7 +46,7 @@ def sweep_figures(kind: str, axes: tuple[SweepAxis, ...], rows: list[dict[str, s
         ("optimum", _distinct(rows, optimum), "no design quantity changes across this sweep"),
         ("tolerance", _distinct(rows, tolerance), ""),
     ):
-        figure = _figure(axes, rows, panels, empty, f"{name} across the sweep")
+        figure = _figure(axes, rows, panels, empty, f"{name} across the sweep", labels)
         if name == "tolerance" and len(tolerance) == 1:
             figure.axes[0].set_title("smallest margin (tolerance not computed: the spec's "
                                      "objective does not ask for max_offset_tolerance)",
@@ -62,6 +54,14 @@ def sweep_figures(kind: str, axes: tuple[SweepAxis, ...], rows: list[dict[str, s
         for fmt in ("png", "svg"):
             out[f"{name}.{fmt}"] = _render(figure, fmt)
     return out
+
+
+def labels_of(kind: str) -> dict[str, tuple[str, str]]:
+    """{column: (label, unit)} of a design table of a scene of `kind`: the shared ones with the
+    scene's own over them (Scene.column_labels)."""
+    from ..plugin import scene_kind
+
+    return {**_LABELS, **scene_kind(kind).column_labels}
 
 
 def _distinct(rows, columns) -> list[list[str]]:
@@ -78,17 +78,19 @@ def _distinct(rows, columns) -> list[list[str]]:
     return groups
 
 
-def _label(columns) -> tuple[str, float]:
+def _label(columns, labels: dict) -> tuple[str, float]:
     """(the y label of a panel showing `columns`, the factor its values are drawn with)."""
-    text, unit = _LABELS.get(columns[0], (columns[0], ""))
+    text, unit = labels.get(columns[0], (columns[0], ""))
     text = " = ".join([text, *(c.rsplit(".", 1)[-1] for c in columns[1:])])
     if unit == "m":
         return f"{text} (mm)", 1e3
     return (f"{text} ({unit})" if unit else text), 1.0
 
 
-def _x_axis(axis) -> tuple[str, float]:
-    if axis.path[-1] in LENGTH_KEYS:
+def _x_axis(axis, labels: dict) -> tuple[str, float]:
+    name = axis.path[-1]
+    metres = axis.path[0] != "requirements" and labels.get(name, (name, ""))[1] == "m"
+    if name in LENGTH_KEYS or metres:
         return f"{axis.column} (mm)", 1e3
     return axis.column, 1.0
 
@@ -123,8 +125,9 @@ def _series(axes, rows, column):
     return out
 
 
-def _figure(axes, rows, panels, empty, title):
-    """panels: groups of columns equal at every point, one panel each."""
+def _figure(axes, rows, panels, empty, title, labels=None):
+    """panels: groups of columns equal at every point, one panel each; labels: {column: (label,
+    unit)} (default: the shared ones)."""
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
@@ -137,7 +140,7 @@ def _figure(axes, rows, panels, empty, title):
     flat = [a for row in grid for a in row]
     for extra in flat[count:]:
         extra.set_visible(False)
-    xlabel, xscale = _x_axis(axes[0])
+    xlabel, xscale = _x_axis(axes[0], labels or _LABELS)
     if not panels:
         flat[0].text(0.5, 0.5, empty, ha="center", va="center", transform=flat[0].transAxes)
         flat[0].set_xlabel(xlabel)
@@ -146,7 +149,7 @@ def _figure(axes, rows, panels, empty, title):
     pad = 0.04 * (hi - lo) or 0.5 * max(abs(lo), 1e-12)
     failed = False
     for ax, columns in zip(flat, panels):
-        ylabel, yscale = _label(columns)
+        ylabel, yscale = _label(columns, labels or _LABELS)
         for label, xs, ys, ok in _series(axes, rows, columns[0]):
             xs = [x * xscale for x in xs]
             ys = [y * yscale for y in ys]

@@ -299,7 +299,7 @@ def _write_outputs(folder, spec, source, axes, header, rows, plots,
     from ..plugin import of
 
     for name, payload in of(spec).table_extras(spec, axes, plots=plots).items():
-        write_atomic(folder / name, payload)  # the scene's own (a walker's bifurcations)
+        write_atomic(folder / name, payload)  # the scene's own (Scene.table_extras)
         files.append(folder / name)
     return tuple(files)
 

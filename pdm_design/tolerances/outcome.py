@@ -15,7 +15,7 @@ if TYPE_CHECKING:  # the spec loader imports this package: numpy comes with the 
 class BuildOutcome:
     """N builds, one entry each.
 
-    stages_passed: stages (bounces, handovers) completed, int.
+    stages_passed: stages (steps, handovers) completed, int.
     failure: the failure's name as the event simulator names it; "" for a build that passed
         every stage asked.
     min_margin: the smallest margin over the run (the normalised slack of

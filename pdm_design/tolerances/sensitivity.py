@@ -5,10 +5,10 @@ of every deviation drawn. Sobol' indices split its variance among the tolerances
 index S1 of a quantity is the share of Var(Y) its deviations explain alone, the total-order index
 ST the share they take part in, interactions included (SALib: Saltelli's sampling on a scrambled
 Sobol' sequence, the estimators of Saltelli et al. 2010, bootstrap confidence intervals). A
-quantity toleranced per part (every step's rise, every manipulator's pivot) is one group: its
+quantity toleranced per part (every step's rise, every stage's pivot) is one group: its
 index is that of all its parts together, which is what a workshop tightens. The build map is
 any callable run(deviations, stages) -> BuildOutcome (`pdm_design.tolerances.run_builds` with
-its scene and design bound: the yield passes the manipulators' or the stairs' map), so the same
+its scene and design bound: the yield passes the scene's map, Scene.run_builds), so the same
 code serves every scene.
 
 Distributions, as the tolerance convention states them: "normal" draws N(0, (t/3)^2), "uniform"

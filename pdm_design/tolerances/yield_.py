@@ -138,7 +138,7 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
              progress=None, allow_skips: bool = False) -> YieldResult:
     """Yield of `design` built with `tolerances` (every one with a value), K = `stages`.
     scales: the tolerance scales of the yield curve (() for none); sensitivity_samples: the
-    Sobol' base sample (0: no sensitivity); allow_skips: a manipulators spec's [verification]
+    Sobol' base sample (0: no sensitivity); allow_skips: the spec's [verification]
     allow_skips. A build passes iff its run completes (failure "")."""
     missing = [t.quantity for t in tolerances if t.value is None]
     if missing or not len(tolerances):

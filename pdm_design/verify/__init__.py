@@ -15,13 +15,13 @@ from ..spec.model import Spec
 from ..units import counted
 
 
-def simulate_spec(spec: Spec, design, *, stages=None, offsets=None, step_errors=None,
-                  accuracy=None, record_trajectory=False):
-    """Run the event simulator on `design` with the spec's (or the given) settings."""
+def simulate_spec(spec: Spec, design, *, stages=None, errors=None, accuracy=None,
+                  record_trajectory=False):
+    """Run the event simulator on `design` with the spec's (or the given) settings. errors:
+    the per-stage build errors the scene takes (Scene.stage_errors; None: the spec's own)."""
     verification = spec.verification
     stages = verification.stages if stages is None else stages
     accuracy = accuracy_preset(accuracy or verification.accuracy)
-    errors = offsets if offsets is not None else step_errors
     return of(spec).simulate(spec, design, stages=stages, accuracy=accuracy, errors=errors,
                              record_trajectory=record_trajectory)
 

@@ -1,7 +1,8 @@
 """Verification of a claimed tolerance box by simulation.
 
-The optimizer claims that every manipulator's pivot may be off by up to (dx, dy), or every
-step's rise and tread by up to (rise, tread), and the device still works. We do not take its
+The optimizer claims that every stage's pair of build errors (Scene.box_axes: a pivot's
+(dx, dy), a step's (rise, tread)) may be off by up to the box's half-widths, and the device
+still works. We do not take its
 word: the simulator runs the device at the box's corner patterns and at random samples inside
 it, from the spec's initial state, and any run that does not complete refutes the claim.
 
@@ -60,12 +61,10 @@ def verify_tolerance(spec: Spec, design, tolerance: dict, *, samples: int, accur
                      seed: int = 0, lots=None) -> dict:
     """Simulate the corner patterns and `samples` uniform random builds inside the box (fewer
     on rows longer than RANDOM_ROW: `random_builds`). lots: an allocated tolerance list
-    (formulation/allocation.py); its quantities other than the pivots' or the steps' (feed_x,
-    feed_speed, friction, object_width, object_mass: one value a build; palm_mass, link_mass,
-    pivot_friction: every manipulator alike; on stairs the lots restitution, friction,
-    launch_speed, launch_x) take every sign corner with every pivot or step pattern, and a
-    uniform value in each random build (a part's quantity: one per manipulator); link_length
-    (BoxAxes.alternating) also alternately long and short."""
+    (formulation/allocation.py); its quantities other than the box's own (a lot: one value a
+    build; a part's quantity, BoxAxes.per_part: every part alike) take every sign corner with
+    every pattern of the box, and a uniform value in each random build (a part's quantity: one
+    per part); the quantities of BoxAxes.alternating also alternately high and low."""
     stages = spec.verification.stages
     half = _half_widths(spec, tolerance)
     rng = np.random.default_rng(seed)

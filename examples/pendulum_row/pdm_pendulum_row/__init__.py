@@ -45,6 +45,9 @@ class PendulumRow(Scene):
     margins = ("forward", "first_no_loop", "no_loop")
     objectives = ("max_min_margin", "fastest_convergence", "min_drop")
     table_periodic = ("bob_speed", "contraction")
+    # the units the reports print (pdm-design's own table knows only shared quantities)
+    quantity_units = {"bob_mass": "kg", "drop": "m", "rod_length": "m", "pitch": "m",
+                      "bob_speed": "m/s", "speed_after": "m/s"}
 
     def scene_class(self):
         from .model import PendulumRowScene

@@ -89,6 +89,10 @@ class CompassGait(Scene):
     dxf_layers = {"GROUND": 7, "WALKER": 5}  # scenes/compass_gait/dxf.py
     stage_columns = ("step", "time", "step_period", "step_length", "foot_x", "foot_y",
                      "stance", "swing", "stance_rate", "swing_rate")
+    quantity_units = {
+        "slope": "rad", "leg_length": "m", "step_length": "m", "step_period": "s",
+        "spectral_radius": "", "rise": "m", "tread": "m",
+    }
 
     @property
     def part_words(self):
@@ -140,3 +144,4 @@ class CompassGait(Scene):
 
     tolerance_axes = ("slope",)
     table_periodic = ("step_length", "step_period", "spectral_radius")
+    column_labels = {"rise": ("rise", "m"), "tread": ("tread", "m")}

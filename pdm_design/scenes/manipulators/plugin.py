@@ -16,6 +16,8 @@ MARGINS = (
     "first_over_the_top", "first_lift_off", "first_slip_impact", "first_tip_impact",
     "parked_palms",
 )
+# the geometry of the links and pivots as built (shown only where the row has them)
+MECHANISM = ("link_mass", "link_inertia", "link_count", "pivot_friction_torque", "pivot_damping")
 
 
 class Manipulators(Scene):
@@ -23,6 +25,9 @@ class Manipulators(Scene):
     title = "an object passed along a row of passive parallelogram manipulators"
     stage_noun = ("manipulator", "manipulators")
     margins = MARGINS
+    # one row measures each pair (formulation.SHARED_ROWS): either's requirement holds both
+    covered_by = {"over_the_top": ("first_over_the_top",), "first_over_the_top": ("over_the_top",),
+                  "lift_off": ("first_lift_off",), "first_lift_off": ("lift_off",)}
     outside_min_margin = ("parked_palms",)  # formulation.OUTSIDE_MIN_MARGIN
     verification_hints = {"step_errors": "step_errors are for stairs scenes; manipulators "
                                          "take offsets"}
@@ -139,12 +144,36 @@ class Manipulators(Scene):
         return {name: (what, advice, ()) for name, (what, advice) in CONDITIONS.items()}
 
     tolerance_refusal = lazily(".refusals:tolerance_refusal")
+    place_nouns = ("palm",)  # "palm 3 back, at its front stop" (formulation/rows.py)
 
     # ------------------------------------------------------ sheets, drawings, reports
     tolerance_axes = ("dx", "dy")
     dxf_layers = {"PIVOTS": 7, "LINKS": 5, "PALMS": 8, "STOPS": 1}  # scenes/manipulators/dxf.py
     stage_columns = ("manipulator", "landing_time", "landing_offset", "landing_speed",
                      "handover_speed", "handover_angle")
+    quantity_units = {
+        "alpha": "rad", "beta": "rad", "link_length": "m", "mass_ratio": "", "first_pivot_x": "m",
+        "first_pivot_y": "m", "landing_offset": "m", "pitch_x": "m", "pitch_y": "m",
+        "palm_mass": "kg", "handover_speed": "m/s", "landing_speed": "m/s", "contraction": "",
+        "drop_per_stage": "m", "effective_mass": "kg", "link_mass": "kg",
+        "link_inertia": "kg m^2", "link_count": "", "pivot_friction_torque": "N m",
+        "pivot_damping": "N m s/rad",
+    }
+    quantity_parts = {
+        "pivot_x": "every pivot bracket", "pivot_y": "every pivot bracket",
+        "feed_x": "the feed (start place)", "friction": "every palm's surface",
+        "object_width": "the objects carried", "feed_speed": "the feed (start speed)",
+        "palm_mass": "every palm", "object_mass": "the objects carried",
+        "link_length": "every link", "back_stop": "every back stop", "link_mass": "every link",
+        "pivot_friction": "every pivot bracket's joints",
+    }
+
+    def shown_geometry(self, geometry):
+        """The links' and pivots' rows only where the row has links or pivots (massless links
+        and free pivots show none)."""
+        if any(geometry.get(k) for k in MECHANISM if k != "link_count"):
+            return geometry
+        return {k: v for k, v in geometry.items() if k not in MECHANISM}
 
     @property
     def part_words(self):
@@ -200,6 +229,14 @@ class Manipulators(Scene):
 
     # ------------------------------------------------------ command line, tables, API
     table_geometry = ("pitch_x", "pitch_y", "palm_mass", "landing_offset")
+    column_labels = {
+        "handover_speed": ("handover speed", "m/s"), "pitch_x": ("pitch x", "m"),
+        "pitch_y": ("pitch y, down", "m"), "alpha": ("alpha", "rad"), "beta": ("beta", "rad"),
+        "link_length": ("link length", "m"), "palm_mass": ("palm mass", "kg"),
+        "landing_offset": ("landing offset", "m"), "landing_speed": ("landing speed", "m/s"),
+        "first_pivot_x": ("first pivot x", "m"), "first_pivot_y": ("first pivot y", "m"),
+        "tolerance.dx": ("tolerance dx", "m"), "tolerance.dy": ("tolerance dy", "m"),
+    }
     table_periodic = ("handover_speed", "landing_speed", "contraction",
                       "drop_per_stage")
     def infeasible_words(self, spec, design):

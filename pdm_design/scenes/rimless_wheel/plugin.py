@@ -117,6 +117,11 @@ class RimlessWheel(Scene):
     # ------------------------------------------------------ sheets, drawings, reports
     dxf_layers = {"GROUND": 7, "WHEEL": 5}  # scenes/rimless_wheel/dxf.py
     stage_columns = ("step", "impact_time", "speed_before", "speed_after", "foot_x", "foot_y")
+    quantity_parts = {"rise": "every step", "tread": "every step"}
+    quantity_units = {
+        "slope": "rad", "leg_length": "m", "spokes": "", "step_period": "s", "rise": "m",
+        "tread": "m", "landing_offset": "m", "nose_clearance": "m", "contraction": "",
+    }
 
     @property
     def part_words(self):
@@ -154,3 +159,5 @@ class RimlessWheel(Scene):
 
     # ------------------------------------------------------ command line, tables, API
     tolerance_axes = ("slope",)
+    column_labels = {"rise": ("rise", "m"), "tread": ("tread", "m"),
+                     "landing_offset": ("landing offset", "m")}

@@ -17,6 +17,8 @@ class Stairs(Scene):
     title = "a ball bouncing down a flight of stairs"
     stage_noun = ("step", "steps")
     margins = MARGINS
+    # a nose_clearance requirement holds the launch over the top landing too
+    covered_by = {"first_nose_clearance": ("nose_clearance",)}
     verification_hints = {"offsets": "offsets are for manipulators scenes; stairs take "
                                      "step_errors",
                           "allow_skips": "allow_skips is for manipulators scenes (a palm flown "
@@ -116,12 +118,22 @@ class Stairs(Scene):
                 for name, (what, advice) in CONDITIONS.items()}
 
     tolerance_refusal = lazily(".refusals:tolerance_refusal")
+    place_nouns = ("flight", "landing")  # "flight 3, ...", "landing 4" (formulation/)
 
     # ------------------------------------------------------ sheets, drawings, reports
     tolerance_axes = ("rise", "tread")
     dxf_layers = {"STEPS": 7}  # scenes/stairs/dxf.py
     stage_columns = ("step", "impact_time", "landing_x", "impact_speed", "vx", "spin_after")
-    quantity_parts = {"friction": "every tread's surface (the ball's grip)"}
+    quantity_parts = {"friction": "every tread's surface (the ball's grip)",
+                      "launch_x": "the launcher (release place)", "rise": "every step",
+                      "tread": "every step", "restitution": "every step's surface (the ball's "
+                      "bounce)", "launch_speed": "the launcher (launch speed)"}
+    quantity_units = {
+        "restitution": "", "launch_speed": "m/s", "rise": "m", "tread": "m",
+        "landing_offset": "m", "nose_clearance": "m", "impact_speed": "m/s",
+        "vertical_impact_speed": "m/s", "horizontal_speed": "m/s", "spin": "rad/s",
+        "flight_time": "s", "drift_per_bounce": "m",
+    }
 
     @property
     def part_words(self):
@@ -165,6 +177,15 @@ class Stairs(Scene):
     infeasible_cause = lazily(".words:flat_floor")
 
     table_geometry = ("nose_clearance",)
+    column_labels = {
+        "rise": ("rise", "m"), "tread": ("tread", "m"), "impact_speed": ("impact speed", "m/s"),
+        "landing_offset": ("landing offset", "m"), "nose_clearance": ("nose clearance", "m"),
+        "flight_time": ("flight time", "s"), "launch_speed": ("launch speed", "m/s"),
+        "horizontal_speed": ("horizontal speed", "m/s"),
+        "vertical_impact_speed": ("vertical impact speed", "m/s"), "spin": ("spin", "rad/s"),
+        "drift_per_bounce": ("drift per bounce", "m"),
+        "tolerance.rise": ("tolerance rise", "m"), "tolerance.tread": ("tolerance tread", "m"),
+    }
     table_periodic = ("impact_speed", "vertical_impact_speed", "horizontal_speed",
                       "spin", "flight_time", "drift_per_bounce")
     stage_errors = StageErrors("--step-error", "K:DRISE,DTREAD", "step_errors", "step",
