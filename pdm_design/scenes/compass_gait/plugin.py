@@ -72,6 +72,25 @@ class CompassGait(Scene):
         return model, bounds, None
 
     # ------------------------------------------------------ tolerances, yield, verification
+    def quantities(self):
+        from .quantities import QUANTITIES
+
+        return QUANTITIES
+
+    tolerance_refusal = lazily(".quantities:tolerance_refusal")
+    run_builds = lazily(".builds:build_outcome")
+    simulate_build = lazily(".builds:simulate_build")
+
+    def yield_extras(self, scene, design, tolerances, stages):
+        """The mean steps before a fall on rough ground by forward flux sampling (rough.mfpt),
+        when every step's own ground varies (its slope, or its rise on stairs)."""
+        if not any(t.applies_to == "each" for t in tolerances):
+            return {}
+        from .rough import mfpt
+
+        found = mfpt(scene, design, tolerances, seed=tolerances.seed)
+        return {"mfpt": {k: found[k] for k in ("estimate", "ci_low", "ci_high", "method")}}
+
     def box_axes_of(self, spec):
         """Every step's own slope (the NLP's max_slope_tolerance box)."""
         from ...plugin_tolerances import BoxAxes
