@@ -8,6 +8,19 @@ from ...plugin import Scene, lazily
 MARGINS = ("stance_contact", "no_slip", "stability", "hip_limit")
 
 
+def box_start(scene, design):
+    """Where a build of the slope box starts: the design's period-1 gait just after a heel
+    strike (the box holds the gait's rows against every step's slope error, the walker on its
+    gait: docs/compass_gait.md, section 5); the scene's initial state where it has none."""
+    from .gait import find_gait
+    from .stepmap import GaitNotFound
+
+    try:
+        return tuple(find_gait(scene, design).state)
+    except GaitNotFound:
+        return scene.initial.state()
+
+
 class CompassGait(Scene):
     kind = "compass_gait"
     title = "a compass-gait walker on a ramp or stairs"
@@ -98,11 +111,13 @@ class CompassGait(Scene):
         return BoxAxes((("slope", "slope"),))
 
     def simulate_box_build(self, spec, design, errors, deviations, accuracy):
-        """One build of the box: every step's slope error (the first of each pair)."""
+        """One build of the box: every step's slope error (the first of each pair), walked from
+        the design's periodic gait, the state the box is about (`box_start`)."""
         from .simulate import simulate_compass_gait
 
         return simulate_compass_gait(spec.scene, design, stages=spec.verification.stages,
-                                     accuracy=accuracy, step_errors=[e[0] for e in errors])
+                                     accuracy=accuracy, step_errors=[e[0] for e in errors],
+                                     start=box_start(spec.scene, design))
 
     # ------------------------------------------------------ sheets, drawings, reports
     dxf_layers = {"GROUND": 7, "WALKER": 5}  # scenes/compass_gait/dxf.py

@@ -1,0 +1,81 @@
+"""The robust compass-gait NLP (problems/compass_gait_robust.toml: the largest box of every
+step's slope error) at fewer RK4 substeps of its stance flow: CPU seconds to build and to solve,
+IPOPT's iterations, the box and design found, and the NLP's gait against the step map's
+(stepmap.fixed_point: 200 RK4 steps) at the design found. Writes results/bench_compass_gait_nlp.md.
+
+    python results/bench_compass_gait_nlp.py [SUBSTEPS ...]     (default 60 30 20)
+
+The margins are held at 6 nodes along the step whatever the substeps (every substeps / 6-th).
+CPU seconds (time.process_time): the machine is shared, wall clock is not this code's.
+"""
+
+from __future__ import annotations
+
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+import casadi as ca  # noqa: E402
+
+from pdm_design.formulation.common import assemble  # noqa: E402
+from pdm_design.scenes.compass_gait import formulation  # noqa: E402
+from pdm_design.scenes.compass_gait.gait import fixed_point  # noqa: E402
+from pdm_design.scenes.compass_gait.scene import CompassGaitDesign  # noqa: E402
+from pdm_design.solve.ipopt import SolverOptions  # noqa: E402
+from pdm_design.spec import load_spec  # noqa: E402
+
+SPEC = load_spec(str(HERE.parent / "problems" / "compass_gait_robust.toml"))
+STATE = ("stance", "swing", "stance_rate", "swing_rate")
+
+
+def run(substeps: int) -> dict:
+    formulation.NLP_SUBSTEPS, formulation.NODE_EVERY = substeps, substeps // 6
+    t0 = time.process_time()
+    model, bounds, _ = formulation.build(SPEC)
+    form = assemble(SPEC, model, key=f"bench{substeps}", bounds=bounds)
+    solver = ca.nlpsol("bench", "ipopt", form.nlp, SolverOptions().casadi())
+    t1 = time.process_time()
+    sol = solver(x0=form.start_vector({}), p=form.parameters(), lbx=form.lbx, ubx=form.ubx,
+                 lbg=form.lbg, ubg=form.ubg)
+    t2 = time.process_time()
+    x = dict(zip(form.x_names, np.asarray(sol["x"]).ravel()))
+    design = CompassGaitDesign(slope=SPEC.design["slope"], hip_mass=x["hip_mass"],
+                               leg_com=x["leg_com"])
+    point = fixed_point(SPEC.scene, design)["fixed_point"]
+    return {"substeps": substeps, "build": t1 - t0, "solve": t2 - t1,
+            "iterations": solver.stats()["iter_count"], "status": solver.stats()["return_status"],
+            "tau": x["tolerance"], "hip_mass": x["hip_mass"], "leg_com": x["leg_com"],
+            "gait_error": max(abs(x[k] - point[k]) for k in STATE)}
+
+
+def main(counts):
+    rows = [run(n) for n in counts]
+    base = rows[0]["tau"]
+    lines = [
+        "# Compass gait: the robust NLP against its RK4 substeps",
+        "",
+        f"`python results/bench_compass_gait_nlp.py {' '.join(map(str, counts))}` on "
+        f"{platform.processor() or platform.machine()}, Python {platform.python_version()}; "
+        "CPU seconds (the machine is shared); IPOPT with the project's options, exact Hessian.",
+        "",
+        "| RK4 substeps | build (CPU s) | solve (CPU s) | iterations | status | box tau (rad) | "
+        "tau - tau(first) | hip_mass, leg_com | NLP gait - fixed_point (max, rad or rad/s) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(f"| {r['substeps']} | {r['build']:.1f} | {r['solve']:.1f} | "
+                     f"{r['iterations']} | {r['status']} | {r['tau']:.6f} | "
+                     f"{r['tau'] - base:.1e} | {r['hip_mass']:.4f}, {r['leg_com']:.4f} | "
+                     f"{r['gait_error']:.1e} |")
+    (HERE / "bench_compass_gait_nlp.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main([int(a) for a in sys.argv[1:]] or [60, 30, 20])
