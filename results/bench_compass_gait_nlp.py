@@ -41,7 +41,8 @@ def run(substeps: int) -> dict:
     form = assemble(SPEC, model, key=f"bench{substeps}", bounds=bounds)
     solver = ca.nlpsol("bench", "ipopt", form.nlp, SolverOptions().casadi())
     t1 = time.process_time()
-    sol = solver(x0=form.start_vector({}), p=form.parameters(), lbx=form.lbx, ubx=form.ubx,
+    guess = {n: SPEC.design[n].guess for n in form.design_names}
+    sol = solver(x0=form.start_vector(guess), p=form.parameters(), lbx=form.lbx, ubx=form.ubx,
                  lbg=form.lbg, ubg=form.ubg)
     t2 = time.process_time()
     x = dict(zip(form.x_names, np.asarray(sol["x"]).ravel()))
