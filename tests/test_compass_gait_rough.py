@@ -77,3 +77,14 @@ def test_rare_falls_agree_with_the_yield_over_a_hundred_steps():
     se = math.sqrt(fell * (1 - fell) / 2000)
     most, least = (1 - math.exp(-100 / found[k]) for k in ("ci_low", "ci_high"))
     assert least - 3 * se <= fell <= most + 3 * se
+
+
+def test_no_mfpt_where_a_builds_ground_is_off_as_a_whole():
+    """A slope off once for a whole build (a lot) makes each build a walker of its own: the
+    yield's JSON then has no `mfpt`."""
+    from pdm_design.plugin import scene_kind
+    from pdm_design.tolerance_model import Tolerances
+
+    gait = scene_kind("compass_gait")
+    lot = Tolerances((Tolerance("slope", "each", 0.01), Tolerance("slope", "lot", 0.01)))
+    assert gait.yield_extras(SCENE, RAMP, lot, 10) == {}

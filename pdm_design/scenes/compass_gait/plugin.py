@@ -96,8 +96,14 @@ class CompassGait(Scene):
 
     def yield_extras(self, scene, design, tolerances, stages):
         """The mean steps before a fall on rough ground by forward flux sampling (rough.mfpt),
-        when every step's own ground varies (its slope, or its rise on stairs)."""
-        if not any(t.applies_to == "each" for t in tolerances):
+        when every step's own ground varies (its slope, or its rise on stairs) and nothing else
+        but the start state: a ground that is off once for a whole build (a lot) makes each
+        build a walker of its own, whose mean steps this does not average."""
+        from .quantities import START
+
+        each = [t for t in tolerances if t.applies_to == "each"]
+        if not each or any(t.applies_to != "each" and t.quantity not in START
+                           for t in tolerances):
             return {}
         from .rough import mfpt
 
