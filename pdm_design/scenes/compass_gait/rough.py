@@ -4,25 +4,28 @@ Warren & ten Wolde 2005), a multilevel splitting on the distance to failure.
 Every step's ground is drawn from the spec's tolerances (its slope; on stairs its rise), the
 walker's post-strike state is the chain's state, and a fall ends it. The distance of a state
 from the gait is its Mahalanobis distance lam(x) under the covariance of the states a flux run
-visits (its null directions dropped: the states lie on a 3-D section). A is lam < lam_A (the
-run's 90 % quantile).
+visits after BURN steps (its null directions dropped: the states lie on a 3-D section). A is
+lam < lam_A (the 90 % quantile of those states' distances).
 
-* The flux run: `walkers` walkers from the start state for `steps` steps, each fallen walker
-  restarted from the start (a renewal process: falls per step -> 1 / mean steps before a fall).
-  S its steps made, D its falls from a state in A (a restart counts as in A), E its exits from
-  A (a state in A followed by one with lam >= lam_A), whose states are kept.
+* The flux run: `walkers` walkers from the start state for `steps` steps (a fallen walker stays
+  down). At step s: N_s walkers standing, D_s of them falling from a state in A at step s + 1,
+  E_s leaving A then (a state in A followed by one with lam >= lam_A; the start counts as in
+  A), whose states are kept.
 * The levels: `trials` walkers from exit states drawn at random walk until they are back in A
   or fall. The next level is the 80 % quantile of the largest lam each reached (a fall counts as
   beyond every level); f_i: the fraction that fell before reaching it, r_i: that reached it
   (their first states there start the next stage). When a fifth of the trials fall first, the
-  last stage's f_n is its fraction of falls. P(fall before A | exit) = f_0 + r_0 (f_1 + r_1 (...
-  + r_{n-1} f_n)).
-* Falls per step k = (D + E P) / S; the mean steps before a fall is 1 / k: exact for a renewal
-  process in the limit of a long run, whatever the falls' rarity.
+  last stage's f_n is its fraction of falls. P = P(a fall before A | an exit) = f_0 + r_0 (f_1 +
+  r_1 (... + r_{n-1} f_n)).
+* The hazard of step s + 1, h_s = (D_s + E_s P) / N_s, over the first BURN steps; beyond, the
+  settled hazard k pooled over the rest of the run (the walkers standing then are spread as the
+  quasi-stationary law), geometric: survival S_t = prod_{s<t} (1 - h_s), and the mean steps
+  before a fall sum_{t>=1} S_t = sum_{t<BURN} S_t + S_BURN / k (`mean_steps`).
 
-`batches` independent runs (each its own flux run, distance and levels) give the estimate
-(1 / the mean of their k) and its 95 % interval (Student's t on the k). The levels are chosen
-from the trials they split (adaptive): a bias of the order of 1 / trials per level.
+`batches` independent runs (each its own flux run, distance and levels; the flux runs walked
+side by side) give the estimate (1 / the mean of their 1 / mean) and its 95 % interval
+(Student's t on those). The levels are chosen from the trials they split (adaptive): a bias of
+the order of 1 / trials per level.
 """
 
 from __future__ import annotations
