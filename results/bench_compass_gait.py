@@ -40,6 +40,15 @@ SCENE = CompassGaitScene(initial=CompassGaitInitial(-0.22, 0.32, 1.1, 0.4),
 DESIGN = CompassGaitDesign(slope=math.radians(3.0))
 
 
+OTHERS = """
+The robust NLP and rough ground have their own benchmarks: `results/bench_compass_gait_nlp.md`
+(`python results/bench_compass_gait_nlp.py`: the robust spec's NLP at 60 RK4 substeps, the old
+discretisation, against 30, the new, and 20, and a limited-memory Hessian, in one run) and
+`results/bench_compass_gait_rough.md` (`python results/bench_compass_gait_rough.py`: the mean
+steps before a fall by forward flux sampling against Monte Carlo).
+"""
+
+
 def timed(fn, repeats):
     fn()  # warm-up: builds the CasADi functions
     times = []
@@ -88,6 +97,8 @@ def main():
         f"{walk.falls() or 'none'}.",
         "",
         "![step length against slope](bench_compass_gait.png)",
+        "",
+        *OTHERS.strip("\n").split("\n"),
         "",
     ]
     (HERE / "bench_compass_gait.md").write_text("\n".join(lines))

@@ -20,7 +20,7 @@ def load(name):
 
 
 @pytest.mark.parametrize("name", ["compass_gait_ramp.toml", "simplest_walker.toml",
-                                  "compass_gait_robust.toml"])
+                                  "compass_gait_robust.toml", "compass_gait_rough.toml"])
 def test_problem_files_have_a_stable_gait(name):
     scene, design = load(name)
     gait = fixed_point(scene, design_at(design))
@@ -66,3 +66,18 @@ def test_bad_input_names_the_key(patch, key):
         read_tables(data, "x.toml")
     assert err.value.key.startswith(key)
     assert "x.toml" in str(err.value)
+
+
+@pytest.mark.parametrize("quantity, key", [("rise", "tolerances.rise"),
+                                           ("tread", "tolerances.tread")])
+def test_a_tolerance_the_ramp_has_not_names_its_key(quantity, key):
+    """A ramp has no rise; where a foot lands on a tread is not followed: both refused."""
+    from pdm_design.commands.yield_ import spec_tolerances
+    from pdm_design.spec import parse_spec
+
+    text = (PROBLEMS / "compass_gait_rough.toml").read_text().replace(
+        'slope = { value = 0.007, applies_to = "each" }',
+        f'{quantity} = {{ value = 0.001, applies_to = "each" }}')
+    with pytest.raises(SpecError) as err:
+        spec_tolerances(parse_spec(tomllib.loads(text), "x.toml"), "x.toml")
+    assert err.value.key.startswith(key)

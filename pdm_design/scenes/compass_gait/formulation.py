@@ -8,7 +8,9 @@ slope box, when maximised), t (margin epigraph)].
 
 Model rows (equalities): strike(phi(T, x)) = x and guard(phi(T, x)) = 0, the stance flow by
 NLP_SUBSTEPS RK4 steps (the same discretisation as stepmap.py at fewer steps: the NLP's gait is
-within ~1e-7 of fixed_point's; verification uses fixed_point and the simulator).
+within ~1e-6 of fixed_point's, 8e-7 at the robust spec's optimum, its box within 4e-8 of 60
+substeps' at a third of the CPU time: results/bench_compass_gait_nlp.md; verification uses
+fixed_point and the simulator).
 
 Stability: every multiplier inside the circle of radius rho (the requirement
 max_spectral_radius, or the variable rho minimised). The 4 x 4 Jacobian's characteristic
@@ -40,8 +42,8 @@ from ...formulation.common import MARGIN, MODEL, VALIDITY, Condition, SceneModel
 from . import physics as phys
 from .scene import CompassGaitDesign
 
-NLP_SUBSTEPS = 60
-NODE_EVERY = 10
+NLP_SUBSTEPS = 30
+NODE_EVERY = 5
 ROBUST_HORIZON = 12
 DEFAULTS = {k: None for k in CompassGaitDesign.VARIABLES}
 # This scene's objectives by the shared objective term that carries each (formulation.common.

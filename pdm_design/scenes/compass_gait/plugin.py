@@ -8,6 +8,19 @@ from ...plugin import Scene, lazily
 MARGINS = ("stance_contact", "no_slip", "stability", "hip_limit")
 
 
+def box_start(scene, design):
+    """Where a build of the slope box starts: the design's period-1 gait just after a heel
+    strike (the box holds the gait's rows against every step's slope error, the walker on its
+    gait: docs/compass_gait.md, section 5); the scene's initial state where it has none."""
+    from .gait import find_gait
+    from .stepmap import GaitNotFound
+
+    try:
+        return tuple(find_gait(scene, design).state)
+    except GaitNotFound:
+        return scene.initial.state()
+
+
 class CompassGait(Scene):
     kind = "compass_gait"
     title = "a compass-gait walker on a ramp or stairs"
@@ -72,6 +85,31 @@ class CompassGait(Scene):
         return model, bounds, None
 
     # ------------------------------------------------------ tolerances, yield, verification
+    def quantities(self):
+        from .quantities import QUANTITIES
+
+        return QUANTITIES
+
+    tolerance_refusal = lazily(".quantities:tolerance_refusal")
+    run_builds = lazily(".builds:build_outcome")
+    simulate_build = lazily(".builds:simulate_build")
+
+    def yield_extras(self, scene, design, tolerances, stages):
+        """The mean steps before a fall on rough ground by forward flux sampling (rough.mfpt),
+        when every step's own ground varies (its slope, or its rise on stairs) and nothing else
+        but the start state: a ground that is off once for a whole build (a lot) makes each
+        build a walker of its own, whose mean steps this does not average."""
+        from .quantities import START
+
+        each = [t for t in tolerances if t.applies_to == "each"]
+        if not each or any(t.applies_to != "each" and t.quantity not in START
+                           for t in tolerances):
+            return {}
+        from .rough import mfpt
+
+        found = mfpt(scene, design, tolerances, seed=tolerances.seed)
+        return {"mfpt": {k: found[k] for k in ("estimate", "ci_low", "ci_high", "method")}}
+
     def box_axes_of(self, spec):
         """Every step's own slope (the NLP's max_slope_tolerance box)."""
         from ...plugin_tolerances import BoxAxes
@@ -79,11 +117,13 @@ class CompassGait(Scene):
         return BoxAxes((("slope", "slope"),))
 
     def simulate_box_build(self, spec, design, errors, deviations, accuracy):
-        """One build of the box: every step's slope error (the first of each pair)."""
+        """One build of the box: every step's slope error (the first of each pair), walked from
+        the design's periodic gait, the state the box is about (`box_start`)."""
         from .simulate import simulate_compass_gait
 
         return simulate_compass_gait(spec.scene, design, stages=spec.verification.stages,
-                                     accuracy=accuracy, step_errors=[e[0] for e in errors])
+                                     accuracy=accuracy, step_errors=[e[0] for e in errors],
+                                     start=box_start(spec.scene, design))
 
     # ------------------------------------------------------ sheets, drawings, reports
     dxf_layers = {"GROUND": 7, "WALKER": 5}  # scenes/compass_gait/dxf.py

@@ -187,10 +187,11 @@ def _sample(sol, params, slope, stats, pieces):
 
 def simulate_compass_gait(scene, design, *, stages: int, accuracy: str | Accuracy = "default",
                           step_errors=(), record_trajectory: bool = False,
-                          start=None) -> SimulationResult:
+                          start=None, rise_errors=()) -> SimulationResult:
     """Simulate the walker from the scene's initial state (or `start`, a post-strike state) for
     `stages` steps (heel strikes). step_errors: per-step slope errors (rad), the k-th for the
-    ground under step k + 1 (missing ones 0). Stops at the first failure."""
+    ground under step k + 1 (missing ones 0); rise_errors: on stairs, per-step rise errors (m).
+    Stops at the first failure."""
     acc = accuracy_preset(accuracy)
     stages = int(stages)
     if stages < 0:
@@ -199,7 +200,7 @@ def simulate_compass_gait(scene, design, *, stages: int, accuracy: str | Accurac
     check_scales(("the leg length", params.l), {"leg_com": params.b})
     check_scales(("the gravity", params.g), {})
     x = np.array(scene.initial.state() if start is None else start, dtype=float)
-    errors = list(step_errors)
+    errors, rises = list(step_errors), list(rise_errors)
     records, events, traj = [], [], {}
     if record_trajectory:
         traj = {n: [] for n in ("time", *STATE_NAMES, *PLACE_NAMES)}
@@ -207,7 +208,8 @@ def simulate_compass_gait(scene, design, *, stages: int, accuracy: str | Accurac
     t_sum, failure, passed = 0.0, None, 0
     while passed < stages:
         error = float(errors[passed]) if passed < len(errors) else 0.0
-        ground = ground_of(design, params, error)
+        rise = float(rises[passed]) if passed < len(rises) else 0.0
+        ground = ground_of(design, params, error, rise)
         out = one_step(params, ground, x, scene.friction, acc)
         if record_trajectory:
             _append(traj, out.trajectory, t_sum, foot, params.l)
