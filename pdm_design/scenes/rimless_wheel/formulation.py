@@ -19,8 +19,9 @@ force conditions (no_flight, no_slip) are judged at both energy ends over the wi
 [beta - tau - alpha, beta + tau + alpha] at ARC_ROWS angles; impact_friction at the two chord
 ends. On stairs the footholds drift linearly: s_k = s_0 + sum_j (chord cos beta_j - tread_{j-1}),
 largest on (rise - tau, tread - tau), smallest on (rise + tau, tread + tau); the landing and
-nose rows take those at the first and the last step (a straight run's ends), with the nose's
-reach at the low chord (it grows with the chord angle).
+nose rows take those at the first and the last step (a straight run's ends), the nose's reach
+at the high chord: it shrinks as the chord steepens (a long rise of the step the spoke lands
+on), and the nose's distance does not depend on that step's rise.
 """
 
 from __future__ import annotations
@@ -228,7 +229,7 @@ class _Model:
                 equality=True)
         long_step = chord * ca.cos(low_beta) - tread + tau
         short_step = chord * ca.cos(high_beta) - tread - tau
-        reach = phys.nose_reach(self.leg, self.alpha, low_beta)
+        reach = phys.nose_reach(self.leg, self.alpha, high_beta)
         for k in sorted({1, max(self.stages, 1)}):
             longest = s0 + k * long_step - tau  # tread 0 is as designed
             shortest_before = s0 + (k - 1) * short_step + (tau if k > 1 else 0.0)
