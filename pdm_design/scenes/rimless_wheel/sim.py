@@ -168,22 +168,38 @@ class _Run:
                            if record_trajectory else {})
         self.samples, self.limit = samples, limit
         self.speeds = [math.inf, -math.inf]
+        th = ground.normal_angle()
+        self.normal_dir = (math.sin(th), math.cos(th))
+        self.stances: dict[tuple, tuple] = {}  # stance outcomes by their exact inputs
 
     # --- the stance -------------------------------------------------------------------
     def forces(self, phi, omega):
         """(normal, tangential) ground reaction on the stance tip, per unit mass, from Newton:
-        R = a_G - g with a_G = l phi'' e_t - l omega^2 e_r."""
-        wh, g = self.wh, self.wh.gravity
-        e_r = np.array([math.sin(phi), math.cos(phi)])  # tip to hub
-        e_t = np.array([math.cos(phi), -math.sin(phi)])  # the hub's direction of motion
-        accel = wh.leg * (0.5 * wh.rate * math.sin(phi)) * e_t - wh.leg * omega**2 * e_r
-        reaction = accel - np.array([0.0, -g])
-        th = self.ground.normal_angle()
-        return (float(reaction @ [math.sin(th), math.cos(th)]),
-                float(reaction @ [math.cos(th), -math.sin(th)]))
+        R = a_G - g with a_G = l phi'' e_t - l omega^2 e_r (e_r = (sin phi, cos phi) tip to
+        hub, e_t = (cos phi, -sin phi) the hub's direction of motion), on the ground's normal
+        (sin th, cos th) and tangent (cos th, -sin th)."""
+        wh = self.wh
+        s, c = math.sin(phi), math.cos(phi)
+        along, radial = wh.leg * 0.5 * wh.rate * s, wh.leg * omega * omega
+        rx = along * c - radial * s
+        ry = -along * s - radial * c + wh.gravity
+        sn, cn = self.normal_dir
+        return rx * sn + ry * cn, rx * cn - ry * sn
 
     def stance(self, phi0, phi1, omega0):
-        """Integrate from phi0 at omega0 to the first event: (kind, t, phi, omega, solution)."""
+        """Integrate from phi0 at omega0 to the first event: (kind, t, phi, omega, solution).
+        A stance whose inputs are bit for bit those of one integrated before has its outcome:
+        the integration is deterministic (a run on even ground settles on its orbit to the last
+        bit after some tens of steps, and repeats it)."""
+        key = (phi0, phi1, omega0)
+        if key not in self.stances:
+            if len(self.stances) > 4096:
+                self.stances.clear()
+            self.stances[key] = self.integrate(phi0, phi1, omega0)
+        return self.stances[key]
+
+    def integrate(self, phi0, phi1, omega0):
+        """The stance from phi0 at omega0, integrated to its first event."""
         from scipy.integrate import solve_ivp
 
         wh, mu = self.wh, self.scene.friction
@@ -298,19 +314,23 @@ class _Run:
         on tread k: (kind, detail) of a failure, or None."""
         wh, ground = self.wh, self.ground
         nose = ground.tread_length(k - 1) - s_prev  # ahead of the foothold, at its level
-        for phi in np.linspace(phi0, phi1, SWING_SAMPLES + 1):
-            hub = wh.leg * np.array([math.sin(phi), math.cos(phi)])
-            tip = hub - wh.leg * np.array([math.sin(phi - 2 * wh.alpha),
-                                           math.cos(phi - 2 * wh.alpha)])
-            if tip[1] <= 0.0 and tip[0] < nose:
+        phi = np.linspace(phi0, phi1, SWING_SAMPLES + 1)
+        hub_x, hub_y = wh.leg * np.sin(phi), wh.leg * np.cos(phi)
+        tip_x = hub_x - wh.leg * np.sin(phi - 2 * wh.alpha)
+        tip_y = hub_y - wh.leg * np.cos(phi - 2 * wh.alpha)
+        down = (tip_y <= 0.0) & (tip_x < nose)  # the tip on tread k - 1, before its nose
+        low, high = np.minimum(hub_x, tip_x), np.maximum(hub_x, tip_x)
+        across = (low <= nose) & (nose <= high) & (tip_x != hub_x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            height = hub_y + (tip_y - hub_y) * (nose - hub_x) / (tip_x - hub_x)
+        struck = across & (height < 0.0)
+        first = np.flatnonzero(down | struck)  # the first sampled angle that fails
+        if first.size:
+            i = first[0]
+            if down[i]:
                 return "missed_tread", (f"step {k}: the spoke comes down on tread {k - 1}, "
-                                        f"{nose - tip[0]:.4g} m before its nose")
-            low, high = sorted((hub[0], tip[0]))
-            if low <= nose <= high and tip[0] != hub[0]:
-                height = hub[1] + (tip[1] - hub[1]) * (nose - hub[0]) / (tip[0] - hub[0])
-                if height < 0.0:
-                    return "nose_hit", (f"step {k}: the landing spoke strikes the nose of tread "
-                                        f"{k - 1}")
+                                        f"{nose - tip_x[i]:.4g} m before its nose")
+            return "nose_hit", f"step {k}: the landing spoke strikes the nose of tread {k - 1}"
         tip_x = 2 * wh.leg * math.sin(wh.alpha) * math.cos(phi1 - wh.alpha)
         landing = tip_x - nose
         if landing >= ground.tread_length(k):
