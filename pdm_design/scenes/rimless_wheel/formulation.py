@@ -26,7 +26,6 @@ on), and the nose's distance does not depend on that step's rise.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import casadi as ca
@@ -43,30 +42,12 @@ from ...formulation.common import (
 )
 from ...spec.model import Bounds
 from . import physics as phys
+from .counts import spoke_counts, with_spokes  # noqa: F401 (the NLP's callers take them here)
 from .model import RimlessWheelDesign
 
 DEFAULTS = {"slope": None, "rise": None, "tread": None, "landing_offset": None}
 ARC_ROWS = 9  # angles of the widest stance arc at which the force rows are written
 MIN_SLOPE = 1e-6  # the chord slope's least value (rad): the ground goes down
-
-
-def spoke_counts(spec) -> list[int]:
-    """The spoke counts a spec asks for: its fixed count, or every integer in its bounds."""
-    entry = spec.design["spokes"]
-    if isinstance(entry, Bounds):
-        low, high = math.ceil(entry.min - 1e-9), math.floor(entry.max + 1e-9)
-        counts = [n for n in range(max(low, 3), high + 1)]
-        if not counts:
-            raise SpecError(spec.source or "<spec>", "design.spokes",
-                            "an integer range holding a count >= 3",
-                            found=f"[{entry.min:g}, {entry.max:g}]")
-        return counts
-    return [int(entry)]
-
-
-def with_spokes(spec, count: int):
-    """The spec with its spoke count fixed to `count`."""
-    return dataclasses.replace(spec, design={**spec.design, "spokes": int(count)})
 
 
 def build(spec):

@@ -35,9 +35,12 @@ class RimlessWheel(Scene):
     template = lazily(".template:rimless_wheel_template")
 
     def variants(self, spec):
-        """One spec per spoke count in the design's bounds (the count is an integer)."""
-        from .formulation import spoke_counts, with_spokes
+        """One spec per spoke count in the design's bounds (the count is an integer); the spec
+        itself for a search objective (max_mfpt: the search looks at every count at once)."""
+        from .counts import spoke_counts, with_spokes
 
+        if set(spec.objective) & set(self.search_objectives):
+            return (spec,)
         return tuple(with_spokes(spec, n) for n in spoke_counts(spec))
 
     def quantities(self):
