@@ -107,7 +107,7 @@ def test_the_search_finds_the_slope_a_bounded_scalar_search_finds():
     whole slope range on the same chain, for the count it chooses."""
     from scipy.optimize import minimize_scalar
 
-    from pdm_design.scenes.rimless_wheel.rough import longest_lasting, chain_mfpt
+    from pdm_design.scenes.rimless_wheel.rough import chain_mfpt, longest_lasting
 
     scene = scene_at(1.5)
     found = longest_lasting(scene, range(6, 13), (0.01, 0.4), 1.0, 0.15, bins=200)

@@ -79,15 +79,33 @@ class RimlessWheel(Scene):
                        record_trajectory=False, allow_skips=False):
         import dataclasses
 
-        from .builds import step_errors_of
+        from .builds import spoke_lengths_of, step_errors_of
         from .sim import simulate_rimless_wheel
 
         start = float(deviations.get("start_speed", [0.0])[0])
-        scene = dataclasses.replace(scene, initial=dataclasses.replace(
-            scene.initial, speed=scene.initial.speed + start))
+        mass = float(deviations.get("mass", [0.0])[0])
+        scene = dataclasses.replace(
+            scene, initial=dataclasses.replace(scene.initial, speed=scene.initial.speed + start),
+            wheel=dataclasses.replace(scene.wheel, mass=scene.wheel.mass + mass))
+        lengths = (spoke_lengths_of(deviations, design, int(design.spokes))[0]
+                   if "leg_length" in deviations else None)
         return simulate_rimless_wheel(scene, design, stages=stages, accuracy=accuracy,
                                       step_errors=step_errors_of(deviations, stages),
-                                      record_trajectory=record_trajectory)
+                                      record_trajectory=record_trajectory,
+                                      spoke_lengths=lengths)
+
+    def tolerance_refusal(self, spec, quantity):
+        """leg_length on each spoke draws one length a spoke from the steps' stream: it needs
+        [verification] stages >= the spoke count."""
+        from .counts import spoke_counts
+
+        tol = next((t for t in spec.tolerances if t.quantity == quantity), None)
+        most = max(spoke_counts(spec))
+        if (quantity == "leg_length" and tol is not None and tol.applies_to == "each"
+                and spec.verification.stages < most):
+            return ("verification.stages", f"an integer >= {most} (one leg length drawn a "
+                    "spoke, from the steps' draws)", str(spec.verification.stages))
+        return None
 
     def box_axes_of(self, spec):
         """Every step's own slope on a ramp; every step's rise and tread on stairs."""

@@ -97,15 +97,16 @@ class _Ground:
         else:
             self.slope = design.slope
 
-    def chord_angle(self, k):
-        """beta_k of step k (0: the ground as designed, where the wheel starts)."""
-        wh = self.wh
+    def chord_angle(self, k, chord=None):
+        """beta_k of step k (0: the ground as designed, where the wheel starts); chord: the
+        distance between the step's two tips (the design's when left out)."""
+        chord = self.wh.chord if chord is None else chord
         if not self.stairs:
             return self.slope + (self.errors["slope"][k] if k else 0.0)
         rise = self.rise + (self.errors["rise"][k] if k else 0.0)
-        if not 0.0 <= rise < wh.chord:
+        if not 0.0 <= rise < chord:
             return None
-        return math.asin(rise / wh.chord)
+        return math.asin(rise / chord)
 
     def tread_length(self, k):
         return self.tread + (self.errors["tread"][k] if k else 0.0)
@@ -119,9 +120,12 @@ def simulate_rimless_wheel(scene: RimlessWheelScene, design: RimlessWheelDesign,
                            record_trajectory: bool = False,
                            record_limit: int = DEFAULT_RECORD_LIMIT,
                            trajectory_samples: int = 48, trajectory_limit: int = 1000,
-                           ) -> RimlessWheelSimulationResult:
+                           spoke_lengths=None) -> RimlessWheelSimulationResult:
     """Roll the wheel from its start for `stages` steps (impacts). step_errors: objects or dicts
-    with step (from 1) and slope (rad; a ramp) or rise and tread (m; stairs)."""
+    with step (from 1) and slope (rad; a ramp) or rise and tread (m; stairs). spoke_lengths:
+    each spoke's own length (n of them, m; step k stands on spoke (k - 1) mod n and lands
+    spoke k mod n; the mass distribution as designed), the design's leg length when left
+    out."""
     acc = accuracy_preset(accuracy)
     stages = int(stages)
     if stages < 0:
@@ -133,6 +137,10 @@ def simulate_rimless_wheel(scene: RimlessWheelScene, design: RimlessWheelDesign,
     wh, geo, _ = resolve(scene, design)
     ground = _Ground(scene, design, wh, geo, _errors(step_errors, stages))
     run = _Run(scene, wh, ground, acc, record_trajectory, trajectory_samples, trajectory_limit)
+    if spoke_lengths is not None:
+        run.lengths = [float(v) for v in spoke_lengths]
+        if len(run.lengths) != wh.n or min(run.lengths) <= 0.0:
+            raise SimulationRefused(f"spoke_lengths: {wh.n} lengths > 0 (one a spoke)")
     failure = None
     beta_prev = ground.chord_angle(0)
     if beta_prev is None:
@@ -171,6 +179,7 @@ class _Run:
         th = ground.normal_angle()
         self.normal_dir = (math.sin(th), math.cos(th))
         self.stances: dict[tuple, tuple] = {}  # stance outcomes by their exact inputs
+        self.base, self.lengths, self.phi_start = wh, None, None
 
     # --- the stance -------------------------------------------------------------------
     def forces(self, phi, omega):
@@ -191,7 +200,7 @@ class _Run:
         A stance whose inputs are bit for bit those of one integrated before has its outcome:
         the integration is deterministic (a run on even ground settles on its orbit to the last
         bit after some tens of steps, and repeats it)."""
-        key = (phi0, phi1, omega0)
+        key = (phi0, phi1, omega0, self.wh.leg)
         if key not in self.stances:
             if len(self.stances) > 4096:
                 self.stances.clear()
@@ -242,13 +251,14 @@ class _Run:
         return names[i], t * unit, float(y[0]), float(y[1] / unit), sol
 
     # --- the impact ---------------------------------------------------------------------
-    def impact(self, phi, omega):
+    def impact(self, phi, omega, landing=None):
         """The rigid-body impact at the new foothold: (omega+, normal impulse, tangential
         impulse) per unit mass. Unknowns v+ (2), Omega+ (counter-clockwise), P (2):
         v+ - v- = P, k^2 (Omega+ - Omega-) = r x P, v+ + Omega+ x r = 0 (r: hub to new tip)."""
         wh = self.wh
+        b = wh.leg if landing is None else landing  # the landing spoke's length
         hub = wh.leg * np.array([math.sin(phi), math.cos(phi)])
-        tip = hub - wh.leg * np.array([math.sin(phi - 2 * wh.alpha), math.cos(phi - 2 * wh.alpha)])
+        tip = hub - b * np.array([math.sin(phi - 2 * wh.alpha), math.cos(phi - 2 * wh.alpha)])
         r = tip - hub
         spin = -omega  # counter-clockwise
         v = spin * np.array([-hub[1], hub[0]])  # Omega x (hub - old tip)
@@ -269,15 +279,33 @@ class _Run:
                 float(impulse @ [math.cos(th), -math.sin(th)]), tip)
 
     # --- one step -----------------------------------------------------------------------
+    def spokes(self, k):
+        """(stance spoke's length, landing spoke's length, chord between their tips) of step k;
+        the run's wheel set to the stance spoke (its length and stance rate)."""
+        import dataclasses
+
+        if self.lengths is None:
+            return None, None, None
+        n = len(self.lengths)
+        a, b = self.lengths[(k - 1) % n], self.lengths[k % n]
+        base = self.base
+        self.wh = dataclasses.replace(base, leg=a, rate=float(
+            phys.stance_rate(base.gravity, base.k2, a)))
+        return a, b, float(phys.chord_between(a, b, base.alpha))
+
     def step(self, k, omega, beta_prev, s_prev, keep):
+        a, b, chord = self.spokes(k)
         wh, ground = self.wh, self.ground
-        beta = ground.chord_angle(k)
-        phi0 = beta_prev - wh.alpha
+        beta = ground.chord_angle(k, chord)
+        phi0 = beta_prev - wh.alpha if self.phi_start is None else self.phi_start
         if beta is None:
             return self.fail(k, "missed_tread", phi0, omega,
                              f"step {k}'s rise is not below the spokes' chord: no spoke reaches "
                              "its tread"), omega, beta_prev, s_prev
-        phi1 = beta + wh.alpha
+        phi1 = (beta + wh.alpha if b is None
+                else float(phys.chord_offset(a, b, wh.alpha)) + beta)
+        if b is not None:
+            self.phi_start = phi1 - 2 * wh.alpha
         if phi1 <= phi0:
             return self.fail(k, "missed_tread", phi0, omega,
                              f"the ground of step {k} rises into the next spoke: it meets the "
@@ -288,10 +316,10 @@ class _Run:
         if kind != "impact":
             return self.fail(k, kind, phi, w, _stance_detail(kind, k, phi)), w, beta, s_prev
         if ground.stairs:
-            miss = self.stairs_check(k, phi0, phi1, s_prev)
+            miss = self.stairs_check(k, phi0, phi1, s_prev, b)
             if miss is not None:
                 return self.fail(k, miss[0], phi, w, miss[1]), w, beta, s_prev
-        w_after, p_n, p_t, tip = self.impact(phi, w)
+        w_after, p_n, p_t, tip = self.impact(phi, w, b)
         mu = self.scene.friction
         if p_n <= 0.0:
             return self.fail(k, "flight", phi, w, f"impact {k}'s impulse would pull the new "
@@ -309,15 +337,17 @@ class _Run:
         self.foot = self.foot + tip
         return None, w_after, beta, s_new
 
-    def stairs_check(self, k, phi0, phi1, s_prev):
+    def stairs_check(self, k, phi0, phi1, s_prev, landing=None):
         """The landing spoke's swing against the nose of tread k - 1 (sampled) and its landing
-        on tread k: (kind, detail) of a failure, or None."""
+        on tread k: (kind, detail) of a failure, or None. landing: that spoke's length (the
+        stance spoke's when left out)."""
         wh, ground = self.wh, self.ground
+        b = wh.leg if landing is None else landing
         nose = ground.tread_length(k - 1) - s_prev  # ahead of the foothold, at its level
         phi = np.linspace(phi0, phi1, SWING_SAMPLES + 1)
         hub_x, hub_y = wh.leg * np.sin(phi), wh.leg * np.cos(phi)
-        tip_x = hub_x - wh.leg * np.sin(phi - 2 * wh.alpha)
-        tip_y = hub_y - wh.leg * np.cos(phi - 2 * wh.alpha)
+        tip_x = hub_x - b * np.sin(phi - 2 * wh.alpha)
+        tip_y = hub_y - b * np.cos(phi - 2 * wh.alpha)
         down = (tip_y <= 0.0) & (tip_x < nose)  # the tip on tread k - 1, before its nose
         low, high = np.minimum(hub_x, tip_x), np.maximum(hub_x, tip_x)
         across = (low <= nose) & (nose <= high) & (tip_x != hub_x)
@@ -331,7 +361,8 @@ class _Run:
                 return "missed_tread", (f"step {k}: the spoke comes down on tread {k - 1}, "
                                         f"{nose - tip_x[i]:.4g} m before its nose")
             return "nose_hit", f"step {k}: the landing spoke strikes the nose of tread {k - 1}"
-        tip_x = 2 * wh.leg * math.sin(wh.alpha) * math.cos(phi1 - wh.alpha)
+        tip_x = (2 * wh.leg * math.sin(wh.alpha) * math.cos(phi1 - wh.alpha) if landing is None
+                 else wh.leg * math.sin(phi1) - b * math.sin(phi1 - 2 * wh.alpha))
         landing = tip_x - nose
         if landing >= ground.tread_length(k):
             return "missed_tread", (f"step {k}: the spoke lands {landing:.4g} m from the back "
