@@ -124,6 +124,9 @@ class RimlessWheel(Scene):
         return simulate_rimless_wheel(spec.scene, design, stages=spec.verification.stages,
                                       accuracy=accuracy, step_errors=steps)
 
+    linearised_yield = lazily(".statistical:linearised_yield")
+    linearised_rows = lazily(".statistical:placed_rows")
+
     def yield_extras(self, scene, design, tolerances, stages):
         """The mean steps before failure on a rough ramp by the Markov chain (rough.mfpt), when
         the only toleranced quantity is every step's own slope."""
