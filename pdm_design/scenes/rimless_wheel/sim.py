@@ -1,15 +1,16 @@
 """Event simulator of the rimless wheel, and its vectorised step map for long runs.
 
-The logged run (`simulate_rimless_wheel`) integrates each stance's equation of motion
-phi'' = (rate / 2) sin phi numerically (scipy's DOP853, in the time unit sqrt(2 / rate)), with
-events located by the integrator: the next spoke's tip reaching the next foothold (impact), the
-wheel stopping (stalled: it rolls back), the normal force reaching zero (flight) and friction
-reaching its limit (slip); the contact force is Newton's on the centre of mass. Each impact is
-solved as a general rigid-body impact (a linear system for the impulse and the velocities after
-it, the new tip stopped), not by the closed form eta; its impulse must push (else flight) inside
-the friction cone (else slip), and the wheel must go on forward (else stalled). On stairs the
-landing spoke's swing is checked against the nose it passes (nose_hit) and the tread it lands on
-(missed_tread). So the closed forms of `physics` are checked against it (tests).
+The logged run (`simulate_rimless_wheel`) integrates each stance's equation of motion phi'' =
+(rate / 2) sin phi numerically (the Dormand-Prince 5(4) pair of stance_rk.py, in the time unit
+sqrt(2 / rate)), with events located by the integrator: the next spoke's tip reaching the next
+foothold (impact), the wheel stopping (stalled: it rolls back), the normal force reaching zero
+(flight) and friction reaching its limit (slip); the contact force is Newton's on the centre of
+mass. Each impact is solved as a general rigid-body impact (a linear system for the impulse and
+the velocities after it, the new tip stopped), not by the closed form eta; its impulse must
+push (else flight) inside the friction cone (else slip), and the wheel must go on forward (else
+stalled). On stairs the landing spoke's swing is checked against the nose it passes (nose_hit)
+and the tread it lands on (missed_tread). So the closed forms of `physics` are checked against
+it (tests).
 
 Frame: x downhill, y up; foothold 0 at the origin. Step k (k >= 1) is the chord from foothold
 k - 1 to foothold k: on a ramp its slope is the design's plus the step's slope error; on stairs
@@ -208,47 +209,32 @@ class _Run:
         return self.stances[key]
 
     def integrate(self, phi0, phi1, omega0):
-        """The stance from phi0 at omega0, integrated to its first event."""
-        from scipy.integrate import solve_ivp
+        """The stance from phi0 at omega0, integrated to its first event (stance_rk: the
+        Dormand-Prince pair, events located to rounding)."""
+        from .stance_rk import integrate
 
         wh, mu = self.wh, self.scene.friction
         unit = math.sqrt(2.0 / wh.rate)  # time unit: phi'' = sin phi in it
 
-        def rhs(_, y):
-            return [y[1], math.sin(y[0])]
-
-        def impact(_, y):
-            return y[0] - phi1
-
-        def stall(_, y):
-            return y[1]
-
-        def flight(_, y):
+        def flight(y):
             return self.forces(y[0], y[1] / unit)[0]
 
-        def slip(_, y):
+        def slip(y):
             normal, tangential = self.forces(y[0], y[1] / unit)
             return mu * normal - abs(tangential)
 
-        events = [impact, stall, flight, slip]
-        for ev, direction in zip(events, (1, -1, -1, -1)):
-            ev.terminal, ev.direction = True, direction
+        events = [(lambda y: y[0] - phi1, 1), (lambda y: y[1], -1), (flight, -1), (slip, -1)]
         normal, tangential = self.forces(phi0, omega0)
         if normal <= 0.0:
             return "flight", 0.0, phi0, omega0, None
         if abs(tangential) > mu * normal:
             return "slip", 0.0, phi0, omega0, None
         span = 50.0 + 10.0 * (phi1 - phi0) / max(omega0 * unit, 1e-3)
-        sol = solve_ivp(rhs, (0.0, span), [phi0, omega0 * unit], method="DOP853",
-                        rtol=self.acc.rtol, atol=self.acc.atol, events=events,
-                        dense_output=bool(self.trajectory))
+        t, y, index, dense = integrate((phi0, omega0 * unit), span, events, self.acc.rtol,
+                                       self.acc.atol, dense=bool(self.trajectory))
         names = ("impact", "stalled", "flight", "slip")
-        hits = [(sol.t_events[i][0], i) for i in range(4) if len(sol.t_events[i])]
-        if not hits:
-            return "stalled", sol.t[-1] * unit, sol.y[0, -1], sol.y[1, -1] / unit, sol
-        t, i = min(hits)
-        y = sol.y_events[i][0]
-        return names[i], t * unit, float(y[0]), float(y[1] / unit), sol
+        kind = "stalled" if index is None else names[index]
+        return kind, t * unit, float(y[0]), float(y[1] / unit), dense
 
     # --- the impact ---------------------------------------------------------------------
     def impact(self, phi, omega, landing=None):
