@@ -371,25 +371,28 @@ def _lasting(scene, pairs, sigma, bins, look=None):
 def _zoom(scene, wheels, brackets, sigma, bins):
     """{count: (slope, mean steps)}: the largest mean steps in each count's bracket: ZOOMS
     rounds of ZOOM_SLOPES slopes spanning it on the chain of `bins` bins (every count at once),
-    each narrowing it to the best one's neighbours, then the vertex of the parabola through
-    log(mean steps) at the last round's best three (kept when it is better)."""
-    counts = list(brackets)
-    for _ in range(ZOOMS):
+    each narrowing it to the best one's neighbours (a count whose best falls below
+    REFINE_WITHIN of the round's best count's stops there), then the vertex of the parabola
+    through log(mean steps) at the last round's best three (kept when it is better)."""
+    counts, out, last = list(brackets), {}, {}
+    for round_ in range(ZOOMS):
         grids = {n: np.linspace(*brackets[n], ZOOM_SLOPES) for n in counts}
         values = _lasting(scene, [(wheels[n], s) for n in counts for s in grids[n]], sigma,
                           bins, ZOOM_LOOK).reshape(len(counts), ZOOM_SLOPES)
-        best = {}
         for n, row in zip(counts, values):
             i = int(np.argmax(row))
-            best[n] = (i, row)
+            out[n] = (float(grids[n][i]), float(row[i]))
+            last[n] = (i, row, grids[n])
             brackets[n] = (grids[n][max(i - 1, 0)], grids[n][min(i + 1, ZOOM_SLOPES - 1)])
-    out, vertices = {}, {}
-    for n, (i, row) in best.items():
-        out[n] = (float(grids[n][i]), float(row[i]))
+        if round_ + 1 < ZOOMS:
+            top = max(out[n][1] for n in counts)
+            counts = [n for n in counts if out[n][1] >= REFINE_WITHIN * top]
+    vertices = {}
+    for n in counts:
+        i, row, grid = last[n]
         y = np.log(row[max(i - 1, 0): i + 2])
         if 0 < i < ZOOM_SLOPES - 1 and (bend := y[0] - 2.0 * y[1] + y[2]) < 0.0:
-            h = grids[n][1] - grids[n][0]
-            vertices[n] = grids[n][i] + 0.5 * h * (y[0] - y[2]) / bend
+            vertices[n] = grid[i] + 0.5 * (grid[1] - grid[0]) * (y[0] - y[2]) / bend
     if vertices:
         values = _lasting(scene, [(wheels[n], v) for n, v in vertices.items()], sigma, bins)
         for (n, v), value in zip(vertices.items(), values):
