@@ -98,6 +98,12 @@ def test_the_impact_between_unequal_spokes():
         (wh.k2 + a * b * c2) / (wh.k2 + b * b), rel=1e-12)
     # and the landing tip on the ramp: the chord between the tips at the ramp's angle
     assert -rec["foot_y"] / rec["foot_x"] == pytest.approx(math.tan(0.08), rel=1e-9)
+    # the next stance on spoke b from phi1 - 2 alpha, phi1 = atan2(a - b c2, b sin 2 alpha) + beta
+    alpha = math.pi / 10
+    phi1 = math.atan2(a - b * c2, b * math.sin(2 * alpha)) + 0.08
+    rate_b = 2 * 9.81 * b / (wh.k2 + b * b)
+    assert rec["energy_after"] == pytest.approx(
+        rec["speed_after"]**2 - rate_b * (1 - math.cos(phi1 - 2 * alpha)), rel=1e-12)
 
 
 def test_a_point_mass_wheel_does_not_feel_its_mass():

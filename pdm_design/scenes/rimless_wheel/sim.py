@@ -369,10 +369,14 @@ class _Run:
         if not keep:
             return
         before = self.state(phi, w_before)
+        start, rate = beta - self.wh.alpha, self.wh.rate
+        if self.lengths is not None:  # the next stance: on the landing spoke, from phi1 - 2 alpha
+            landing = self.lengths[k % len(self.lengths)]
+            start = self.phi_start
+            rate = float(phys.stance_rate(self.base.gravity, self.base.k2, landing))
         rec = {"step": k, "impact_time": self.time, "speed_before": w_before,
                "speed_after": w_after, "friction_demand": abs(ratio),
-               "energy_after": float(phys.stance_energy(w_after, beta - self.wh.alpha,
-                                                        self.wh.rate)),
+               "energy_after": float(phys.stance_energy(w_after, start, rate)),
                "chord_angle": float(beta), "foot_x": float(self.foot[0] + tip[0]),
                "foot_y": float(self.foot[1] + tip[1])}
         if self.ground.stairs:
