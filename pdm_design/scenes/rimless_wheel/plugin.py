@@ -128,9 +128,16 @@ class RimlessWheel(Scene):
     linearised_rows = lazily(".statistical:placed_rows")
 
     def yield_extras(self, scene, design, tolerances, stages):
-        """The mean steps before failure on a rough ramp by the Markov chain (rough.mfpt), when
-        the only toleranced quantity is every step's own slope."""
+        """The mean steps before failure by the Markov chain: on a rough ramp (rough.mfpt) when
+        the only toleranced quantity is every step's own slope, on stairs (rough_stairs) when
+        they are every step's own rise and tread (normal)."""
         names = {t.quantity for t in tolerances}
+        each = all(t.applies_to == "each" and t.distribution == "normal" for t in tolerances)
+        if scene.ground == "stairs" and names == {"rise", "tread"} and each:
+            from .rough_stairs import mfpt_interval
+
+            value = {t.quantity: t.value for t in tolerances}
+            return {"mfpt": mfpt_interval(scene, design, value["rise"], value["tread"])}
         if scene.ground != "ramp" or names != {"slope"}:
             return {}
         from .rough import mfpt
