@@ -100,7 +100,11 @@ def main() -> None:
         "docs/rimless_wheel.md section 8), not a statistical one.",
         "",
     ]
-    (ROOT / "results" / "bench_rimless_wheel.md").write_text("\n".join(lines))
+    path = ROOT / "results" / "bench_rimless_wheel.md"
+    marker = "<!-- optimize: begin -->"  # bench_rimless_wheel_optimize.py's section, kept
+    kept = path.read_text() if path.exists() else ""
+    kept = kept[kept.index(marker):] if marker in kept else ""
+    path.write_text("\n".join(lines) + ("\n\n" + kept if kept else ""))
     print("\n".join(lines))
 
 

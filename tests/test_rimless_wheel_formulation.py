@@ -193,3 +193,34 @@ def test_the_same_design_at_any_size(ground, size):
 
     base, scaled = answer(1.0), answer(size)
     assert scaled == pytest.approx(base, rel=1e-7)
+
+
+def test_stairs_box_of_the_problem_holds_at_every_corner_and_is_tight():
+    """problems/rimless_wheel_stairs.toml: the box the NLP claims, in the event simulator at
+    every corner of (every rise, every tread, the start speed): all complete just inside it;
+    2 % beyond it the (+, +) corners fail at a nose (the landing spoke's reach
+    l sin 2 alpha / cos(alpha - beta) shrinks as a long rise steepens the chord) and the short
+    rises' orbit stalls (over_the_top)."""
+    from pdm_design.spec.loader import load_spec
+
+    spec = load_spec("problems/rimless_wheel_stairs.toml")
+    x = solve(spec)
+    tau = x["tolerance"]
+    fixed = RimlessWheelDesign(spokes=8, leg_length=1.0, rise=float(x["rise"]),
+                               landing_offset=float(x["landing_offset"]))
+
+    def corner_run(scale, rise_sign, tread_sign, speed_sign):
+        scene = spec_of({}, ground="stairs",
+                        speed=1.3 + speed_sign * 0.05 * min(scale, 1.0)).scene
+        errors = [{"step": k, "rise": rise_sign * scale * tau, "tread": tread_sign * scale * tau}
+                  for k in range(1, spec.verification.stages + 1)]
+        return simulate_rimless_wheel(scene, fixed, stages=spec.verification.stages,
+                                      step_errors=errors).outcome
+
+    signs = [(r, t, s) for r in (-1, 1) for t in (-1, 1) for s in (-1, 1)]
+    assert all(corner_run(1 - 1e-4, *c).completed for c in signs)
+    beyond = {c: corner_run(1.02, *c) for c in signs}
+    failed = {c: o.failure.kind for c, o in beyond.items() if not o.completed}
+    # the (+, +) corner: the landing spoke strikes a nose; short rises: their orbit stalls
+    assert {failed.get((1, 1, s)) for s in (-1, 1)} == {"nose_hit"}
+    assert {failed.get((-1, t, s)) for t in (-1, 1) for s in (-1, 1)} == {"stalled"}

@@ -99,3 +99,27 @@ def test_a_start_too_slow_to_vault_lasts_no_step():
     assert rough.mfpt(scene_at(slow), DESIGN, 0.03)["estimate"] == 0.0
     mc = rough.monte_carlo(scene_at(slow), DESIGN, 0.03, steps=5, samples=100)
     assert mc["mean"] == 0.0 and mc["failures"] == {"stalled": 100}
+
+
+def test_the_search_finds_the_slope_a_bounded_scalar_search_finds():
+    """longest_lasting (a coarse look over every count at once, then a zoom and a parabola's
+    vertex on the chain at bins / 2) against scipy's bounded scalar search of log mfpt over the
+    whole slope range on the same chain, for the count it chooses."""
+    from scipy.optimize import minimize_scalar
+
+    from pdm_design.scenes.rimless_wheel.rough import chain_mfpt, longest_lasting
+
+    scene = scene_at(1.5)
+    found = longest_lasting(scene, range(6, 13), (0.01, 0.4), 1.0, 0.15, bins=200)
+    n = found["spokes"]
+    assert n in found["refined"]
+
+    def minus_log(slope):
+        wh = rough._wheel_at(scene, n, 1.0, slope)
+        start = 1.5**2 - wh.rate * (1 - math.cos(slope - wh.alpha))
+        return -math.log(max(chain_mfpt(wh, start, 0.05, 100), 1e-300))
+
+    best = minimize_scalar(minus_log, bounds=(0.01, 0.4), method="bounded",
+                           options={"xatol": 1e-6})
+    assert found["slope"] == pytest.approx(best.x, abs=5e-4)
+    assert found["by_count"][n][1] == pytest.approx(math.exp(-best.fun), rel=1e-3)

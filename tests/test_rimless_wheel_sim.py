@@ -188,3 +188,24 @@ def test_any_size_simulates_the_same_wheel(scale):
                                                                      rel=1e-9)
     assert scaled["impact_time"] / math.sqrt(scale) == pytest.approx(base["impact_time"],
                                                                      rel=1e-9)
+
+
+@pytest.mark.parametrize("rtol,within", [(1e-9, 1e-8), (1e-12, 1e-11)])
+def test_stance_integrator_against_the_elliptic_integral(rtol, within):
+    """stance_rk (the Dormand-Prince pair, events located on fresh steps): phi'' = sin phi from
+    phi0 = -0.3 at phi' = w0 to the event phi = 0.35; the time is the incomplete elliptic
+    integral (docs/rimless_wheel.md section 3; with E = w0^2 - 2 (1 - cos phi0) and u = phi / 2,
+    T = (2 / sqrt(E)) [F(u1 | -4 / E) - F(u0 | -4 / E)]), and the speed there the energy's."""
+    from scipy.special import ellipkinc
+
+    from pdm_design.scenes.rimless_wheel.stance_rk import integrate
+
+    phi0, phi1, w0 = -0.3, 0.35, 0.5
+    energy = w0**2 - 2.0 * (1.0 - math.cos(phi0))
+    m = -4.0 / energy
+    exact = 2.0 / math.sqrt(energy) * (ellipkinc(phi1 / 2, m) - ellipkinc(phi0 / 2, m))
+    t, y, index, _ = integrate((phi0, w0), 50.0, [(lambda y: y[0] - phi1, 1),
+                                                  (lambda y: y[1], -1)], rtol, rtol * 1e-2)
+    assert index == 0
+    assert t == pytest.approx(exact, rel=within)
+    assert y[1] == pytest.approx(math.sqrt(energy + 2.0 * (1.0 - math.cos(phi1))), rel=within)

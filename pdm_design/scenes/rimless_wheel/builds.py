@@ -101,7 +101,7 @@ def build_outcome(scene, design, deviations: dict, stages: int):
         raise ValueError("; ".join(problems))
     builds = len(next(iter(deviations.values())))
     speed = scene.initial.speed + np.asarray(deviations.get("start_speed", np.zeros(builds)))
-    stairs, shape = None, (builds, stages)
+    stairs, shape, rises = None, (builds, stages), None
 
     def per_step(name):  # a lot: one value for every step of a build
         value = np.asarray(deviations.get(name, np.zeros(shape)), dtype=float)
@@ -118,12 +118,42 @@ def build_outcome(scene, design, deviations: dict, stages: int):
         treads = geo["tread"] + per_step("tread")
         treads = np.concatenate([np.full((builds, 1), geo["tread"]), treads], axis=1)
         stairs = {"tread": treads, "landing_offset": geo["landing_offset"]}
-    run = step_map(wh, speed, betas, ground=wh.ground, stairs=stairs)
+    if "leg_length" in deviations or "mass" in deviations:
+        run = _spoke_run(scene, design, wh, deviations, speed, betas,
+                         stairs and {**stairs, "rise": rises})
+    else:
+        run = step_map(wh, speed, betas, ground=wh.ground, stairs=stairs)
     passed = np.minimum(run.passed, stages)
     failure = np.array(["" if p >= stages else CODES[c] for p, c in zip(passed, run.failure)],
                        dtype=object)
     return BuildOutcome(passed, failure, np.where(passed >= stages, 0.0, -1.0),
                         np.ones(builds, dtype=bool))
+
+
+def spoke_lengths_of(deviations: dict, design, spokes: int):
+    """Each spoke's length of every build (builds, spokes): the design's plus leg_length's
+    deviation, spoke j taking step j's draw (a tolerance on each part: one a spoke; the
+    yield needs stages >= spokes) or the build's one (a lot)."""
+    value = np.asarray(deviations["leg_length"], dtype=float)
+    value = value[:, None] if value.ndim == 1 else value[:, :spokes]
+    return design.leg_length + np.broadcast_to(value, (value.shape[0], spokes))
+
+
+def _spoke_run(scene, design, wh, deviations, speed, betas, stairs):
+    """The step map of builds whose spokes have their own lengths (leg_length) or whose hub its
+    own mass (mass): steps.spoke_map."""
+    from .steps import spoke_map
+
+    n, builds = wh.n, len(speed)
+    lengths = (spoke_lengths_of(deviations, design, n) if "leg_length" in deviations
+               else np.full((builds, n), wh.leg))
+    w = scene.wheel
+    mass = np.maximum(w.mass + np.asarray(deviations.get("mass", np.zeros(builds)), float),
+                      1e-300)
+    k2 = phys.gyration_squared(mass, w.gyration, w.spoke_mass, n, design.leg_length)
+    if stairs is None:
+        return spoke_map(wh, speed, lengths, k2, ground=wh.ground, betas=betas)
+    return spoke_map(wh, speed, lengths, k2, ground=0.0, stairs=stairs)
 
 
 def step_errors_of(deviations: dict, stages: int) -> list[dict]:

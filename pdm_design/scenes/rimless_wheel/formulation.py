@@ -19,13 +19,13 @@ force conditions (no_flight, no_slip) are judged at both energy ends over the wi
 [beta - tau - alpha, beta + tau + alpha] at ARC_ROWS angles; impact_friction at the two chord
 ends. On stairs the footholds drift linearly: s_k = s_0 + sum_j (chord cos beta_j - tread_{j-1}),
 largest on (rise - tau, tread - tau), smallest on (rise + tau, tread + tau); the landing and
-nose rows take those at the first and the last step (a straight run's ends), with the nose's
-reach at the low chord (it grows with the chord angle).
+nose rows take those at the first and the last step (a straight run's ends), the nose's reach
+at the high chord: it shrinks as the chord steepens (a long rise of the step the spoke lands
+on), and the nose's distance does not depend on that step's rise.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import casadi as ca
@@ -42,30 +42,12 @@ from ...formulation.common import (
 )
 from ...spec.model import Bounds
 from . import physics as phys
+from .counts import spoke_counts, with_spokes  # noqa: F401 (the NLP's callers take them here)
 from .model import RimlessWheelDesign
 
 DEFAULTS = {"slope": None, "rise": None, "tread": None, "landing_offset": None}
 ARC_ROWS = 9  # angles of the widest stance arc at which the force rows are written
 MIN_SLOPE = 1e-6  # the chord slope's least value (rad): the ground goes down
-
-
-def spoke_counts(spec) -> list[int]:
-    """The spoke counts a spec asks for: its fixed count, or every integer in its bounds."""
-    entry = spec.design["spokes"]
-    if isinstance(entry, Bounds):
-        low, high = math.ceil(entry.min - 1e-9), math.floor(entry.max + 1e-9)
-        counts = [n for n in range(max(low, 3), high + 1)]
-        if not counts:
-            raise SpecError(spec.source or "<spec>", "design.spokes",
-                            "an integer range holding a count >= 3",
-                            found=f"[{entry.min:g}, {entry.max:g}]")
-        return counts
-    return [int(entry)]
-
-
-def with_spokes(spec, count: int):
-    """The spec with its spoke count fixed to `count`."""
-    return dataclasses.replace(spec, design={**spec.design, "spokes": int(count)})
 
 
 def build(spec):
@@ -228,7 +210,7 @@ class _Model:
                 equality=True)
         long_step = chord * ca.cos(low_beta) - tread + tau
         short_step = chord * ca.cos(high_beta) - tread - tau
-        reach = phys.nose_reach(self.leg, self.alpha, low_beta)
+        reach = phys.nose_reach(self.leg, self.alpha, high_beta)
         for k in sorted({1, max(self.stages, 1)}):
             longest = s0 + k * long_step - tau  # tread 0 is as designed
             shortest_before = s0 + (k - 1) * short_step + (tau if k > 1 else 0.0)

@@ -210,3 +210,44 @@ def stance_conditions(energy, phi0, phi1, ground, leg, gravity, k2, rate, fricti
         out.append((phi, (normal + centripetal, centripetal), (friction * normal,
                                                                 fabs(tangential))))
     return out
+
+
+# --- spokes of their own lengths (a build's): the stance spoke a, the landing spoke b ---------
+# The chord from the stance tip to the landing tip is fixed in the wheel: at phi = 0 it is
+# (b sin 2 alpha, a - b cos 2 alpha), so its angle below the horizontal is phi - theta0, and the
+# landing spoke lands on ground of chord angle beta at phi1 = theta0 + beta. With a = b = l:
+# theta0 = alpha, the chord 2 l sin alpha (the equal spokes' forms above).
+
+
+def chord_offset(a, b, alpha):
+    """theta0 = atan2(a - b cos 2 alpha, b sin 2 alpha): the impact angle less the chord's."""
+    return np.arctan2(a - b * np.cos(2.0 * alpha), b * np.sin(2.0 * alpha))
+
+
+def chord_between(a, b, alpha):
+    """The distance between the tips of spokes a and b, 2 alpha apart."""
+    return np.hypot(b * np.sin(2.0 * alpha), a - b * np.cos(2.0 * alpha))
+
+
+def impact_ratio_between(k2, a, b, alpha):
+    """omega+ / omega- when spoke b lands as spoke a leaves: angular momentum about b's tip,
+    (k^2 + a b cos 2 alpha) / (k^2 + b^2) (`impact_ratio` when a = b)."""
+    return (k2 + a * b * np.cos(2.0 * alpha)) / (k2 + b**2)
+
+
+def impact_impulses_between(eta, a, b, alpha, phi1, ground):
+    """(normal, tangential) impulse at b's tip per unit m omega- (m/s per rad/s): the centre of
+    mass's velocity change b omega+ e_t(phi1 - 2 alpha) - a omega- e_t(phi1), e_t(t) =
+    (cos t, -sin t), on the ground's normal (sin g, cos g) and tangent (cos g, -sin g). With
+    a = b = l it is l times `impact_impulses`."""
+    normal = a * np.sin(phi1 - ground) + eta * b * np.sin(ground - phi1 + 2.0 * alpha)
+    tangential = eta * b * np.cos(phi1 - 2.0 * alpha - ground) - a * np.cos(phi1 - ground)
+    return normal, tangential
+
+
+def nose_reach_between(a, alpha, phi1):
+    """Where the landing spoke crosses the level of the stance foothold at the impact, ahead of
+    it: a sin 2 alpha / cos(phi1 - 2 alpha) (the farthest a nose may be; the swing's worst
+    moment is the impact while phi1 <= 2 alpha, else the spoke's pass through 2 alpha).
+    `nose_reach` when a = b."""
+    return a * np.sin(2.0 * alpha) / np.cos(np.minimum(phi1 - 2.0 * alpha, 0.0))

@@ -35,9 +35,12 @@ class RimlessWheel(Scene):
     template = lazily(".template:rimless_wheel_template")
 
     def variants(self, spec):
-        """One spec per spoke count in the design's bounds (the count is an integer)."""
-        from .formulation import spoke_counts, with_spokes
+        """One spec per spoke count in the design's bounds (the count is an integer); the spec
+        itself for a search objective (max_mfpt: the search looks at every count at once)."""
+        from .counts import spoke_counts, with_spokes
 
+        if set(spec.objective) & set(self.search_objectives):
+            return (spec,)
         return tuple(with_spokes(spec, n) for n in spoke_counts(spec))
 
     def quantities(self):
@@ -76,15 +79,33 @@ class RimlessWheel(Scene):
                        record_trajectory=False, allow_skips=False):
         import dataclasses
 
-        from .builds import step_errors_of
+        from .builds import spoke_lengths_of, step_errors_of
         from .sim import simulate_rimless_wheel
 
         start = float(deviations.get("start_speed", [0.0])[0])
-        scene = dataclasses.replace(scene, initial=dataclasses.replace(
-            scene.initial, speed=scene.initial.speed + start))
+        mass = float(deviations.get("mass", [0.0])[0])
+        scene = dataclasses.replace(
+            scene, initial=dataclasses.replace(scene.initial, speed=scene.initial.speed + start),
+            wheel=dataclasses.replace(scene.wheel, mass=scene.wheel.mass + mass))
+        lengths = (spoke_lengths_of(deviations, design, int(design.spokes))[0]
+                   if "leg_length" in deviations else None)
         return simulate_rimless_wheel(scene, design, stages=stages, accuracy=accuracy,
                                       step_errors=step_errors_of(deviations, stages),
-                                      record_trajectory=record_trajectory)
+                                      record_trajectory=record_trajectory,
+                                      spoke_lengths=lengths)
+
+    def tolerance_refusal(self, spec, quantity):
+        """leg_length on each spoke draws one length a spoke from the steps' stream: it needs
+        [verification] stages >= the spoke count."""
+        from .counts import spoke_counts
+
+        tol = next((t for t in spec.tolerances if t.quantity == quantity), None)
+        most = max(spoke_counts(spec))
+        if (quantity == "leg_length" and tol is not None and tol.applies_to == "each"
+                and spec.verification.stages < most):
+            return ("verification.stages", f"an integer >= {most} (one leg length drawn a "
+                    "spoke, from the steps' draws)", str(spec.verification.stages))
+        return None
 
     def box_axes_of(self, spec):
         """Every step's own slope on a ramp; every step's rise and tread on stairs."""
@@ -103,10 +124,20 @@ class RimlessWheel(Scene):
         return simulate_rimless_wheel(spec.scene, design, stages=spec.verification.stages,
                                       accuracy=accuracy, step_errors=steps)
 
+    linearised_yield = lazily(".statistical:linearised_yield")
+    linearised_rows = lazily(".statistical:placed_rows")
+
     def yield_extras(self, scene, design, tolerances, stages):
-        """The mean steps before failure on a rough ramp by the Markov chain (rough.mfpt), when
-        the only toleranced quantity is every step's own slope."""
+        """The mean steps before failure by the Markov chain: on a rough ramp (rough.mfpt) when
+        the only toleranced quantity is every step's own slope, on stairs (rough_stairs) when
+        they are every step's own rise and tread (normal)."""
         names = {t.quantity for t in tolerances}
+        each = all(t.applies_to == "each" and t.distribution == "normal" for t in tolerances)
+        if scene.ground == "stairs" and names == {"rise", "tread"} and each:
+            from .rough_stairs import mfpt_interval
+
+            value = {t.quantity: t.value for t in tolerances}
+            return {"mfpt": mfpt_interval(scene, design, value["rise"], value["tread"])}
         if scene.ground != "ramp" or names != {"slope"}:
             return {}
         from .rough import mfpt

@@ -9,4 +9,8 @@ QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
     quantity("rise", "m", EACH_OR_LOT, "a stair's rise"),
     quantity("tread", "m", EACH_OR_LOT, "a stair's tread"),
     quantity("start_speed", "rad/s", LOT, "the angular speed just after the first impact"),
+    quantity("leg_length", "m", EACH_OR_LOT, "each spoke's own length (the steps take the "
+             "spokes in turn), or one length for every spoke (lot)"),
+    quantity("mass", "kg", LOT, "the hub's mass (with a radius of gyration or spoke masses it "
+             "moves k^2: the impact and the stance)"),
 )}

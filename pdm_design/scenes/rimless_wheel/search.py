@@ -10,7 +10,7 @@ from ...spec.model import Bounds
 
 def longest_lasting_design(spec) -> tuple[dict, float]:
     """({spokes, slope}, the mean steps before failure) of the longest-lasting wheel."""
-    from .formulation import spoke_counts
+    from .counts import spoke_counts
     from .rough import longest_lasting
 
     scene, design = spec.scene, spec.design

@@ -1,15 +1,16 @@
 """Event simulator of the rimless wheel, and its vectorised step map for long runs.
 
-The logged run (`simulate_rimless_wheel`) integrates each stance's equation of motion
-phi'' = (rate / 2) sin phi numerically (scipy's DOP853, in the time unit sqrt(2 / rate)), with
-events located by the integrator: the next spoke's tip reaching the next foothold (impact), the
-wheel stopping (stalled: it rolls back), the normal force reaching zero (flight) and friction
-reaching its limit (slip); the contact force is Newton's on the centre of mass. Each impact is
-solved as a general rigid-body impact (a linear system for the impulse and the velocities after
-it, the new tip stopped), not by the closed form eta; its impulse must push (else flight) inside
-the friction cone (else slip), and the wheel must go on forward (else stalled). On stairs the
-landing spoke's swing is checked against the nose it passes (nose_hit) and the tread it lands on
-(missed_tread). So the closed forms of `physics` are checked against it (tests).
+The logged run (`simulate_rimless_wheel`) integrates each stance's equation of motion phi'' =
+(rate / 2) sin phi numerically (the Dormand-Prince 5(4) pair of stance_rk.py, in the time unit
+sqrt(2 / rate)), with events located by the integrator: the next spoke's tip reaching the next
+foothold (impact), the wheel stopping (stalled: it rolls back), the normal force reaching zero
+(flight) and friction reaching its limit (slip); the contact force is Newton's on the centre of
+mass. Each impact is solved as a general rigid-body impact (a linear system for the impulse and
+the velocities after it, the new tip stopped), not by the closed form eta; its impulse must
+push (else flight) inside the friction cone (else slip), and the wheel must go on forward (else
+stalled). On stairs the landing spoke's swing is checked against the nose it passes (nose_hit)
+and the tread it lands on (missed_tread). So the closed forms of `physics` are checked against
+it (tests).
 
 Frame: x downhill, y up; foothold 0 at the origin. Step k (k >= 1) is the chord from foothold
 k - 1 to foothold k: on a ramp its slope is the design's plus the step's slope error; on stairs
@@ -97,15 +98,16 @@ class _Ground:
         else:
             self.slope = design.slope
 
-    def chord_angle(self, k):
-        """beta_k of step k (0: the ground as designed, where the wheel starts)."""
-        wh = self.wh
+    def chord_angle(self, k, chord=None):
+        """beta_k of step k (0: the ground as designed, where the wheel starts); chord: the
+        distance between the step's two tips (the design's when left out)."""
+        chord = self.wh.chord if chord is None else chord
         if not self.stairs:
             return self.slope + (self.errors["slope"][k] if k else 0.0)
         rise = self.rise + (self.errors["rise"][k] if k else 0.0)
-        if not 0.0 <= rise < wh.chord:
+        if not 0.0 <= rise < chord:
             return None
-        return math.asin(rise / wh.chord)
+        return math.asin(rise / chord)
 
     def tread_length(self, k):
         return self.tread + (self.errors["tread"][k] if k else 0.0)
@@ -119,9 +121,12 @@ def simulate_rimless_wheel(scene: RimlessWheelScene, design: RimlessWheelDesign,
                            record_trajectory: bool = False,
                            record_limit: int = DEFAULT_RECORD_LIMIT,
                            trajectory_samples: int = 48, trajectory_limit: int = 1000,
-                           ) -> RimlessWheelSimulationResult:
+                           spoke_lengths=None) -> RimlessWheelSimulationResult:
     """Roll the wheel from its start for `stages` steps (impacts). step_errors: objects or dicts
-    with step (from 1) and slope (rad; a ramp) or rise and tread (m; stairs)."""
+    with step (from 1) and slope (rad; a ramp) or rise and tread (m; stairs). spoke_lengths:
+    each spoke's own length (n of them, m; step k stands on spoke (k - 1) mod n and lands
+    spoke k mod n; the mass distribution as designed), the design's leg length when left
+    out."""
     acc = accuracy_preset(accuracy)
     stages = int(stages)
     if stages < 0:
@@ -133,6 +138,10 @@ def simulate_rimless_wheel(scene: RimlessWheelScene, design: RimlessWheelDesign,
     wh, geo, _ = resolve(scene, design)
     ground = _Ground(scene, design, wh, geo, _errors(step_errors, stages))
     run = _Run(scene, wh, ground, acc, record_trajectory, trajectory_samples, trajectory_limit)
+    if spoke_lengths is not None:
+        run.lengths = [float(v) for v in spoke_lengths]
+        if len(run.lengths) != wh.n or min(run.lengths) <= 0.0:
+            raise SimulationRefused(f"spoke_lengths: {wh.n} lengths > 0 (one a spoke)")
     failure = None
     beta_prev = ground.chord_angle(0)
     if beta_prev is None:
@@ -168,71 +177,74 @@ class _Run:
                            if record_trajectory else {})
         self.samples, self.limit = samples, limit
         self.speeds = [math.inf, -math.inf]
+        th = ground.normal_angle()
+        self.normal_dir = (math.sin(th), math.cos(th))
+        self.stances: dict[tuple, tuple] = {}  # stance outcomes by their exact inputs
+        self.base, self.lengths, self.phi_start = wh, None, None
 
     # --- the stance -------------------------------------------------------------------
     def forces(self, phi, omega):
         """(normal, tangential) ground reaction on the stance tip, per unit mass, from Newton:
-        R = a_G - g with a_G = l phi'' e_t - l omega^2 e_r."""
-        wh, g = self.wh, self.wh.gravity
-        e_r = np.array([math.sin(phi), math.cos(phi)])  # tip to hub
-        e_t = np.array([math.cos(phi), -math.sin(phi)])  # the hub's direction of motion
-        accel = wh.leg * (0.5 * wh.rate * math.sin(phi)) * e_t - wh.leg * omega**2 * e_r
-        reaction = accel - np.array([0.0, -g])
-        th = self.ground.normal_angle()
-        return (float(reaction @ [math.sin(th), math.cos(th)]),
-                float(reaction @ [math.cos(th), -math.sin(th)]))
+        R = a_G - g with a_G = l phi'' e_t - l omega^2 e_r (e_r = (sin phi, cos phi) tip to
+        hub, e_t = (cos phi, -sin phi) the hub's direction of motion), on the ground's normal
+        (sin th, cos th) and tangent (cos th, -sin th)."""
+        wh = self.wh
+        s, c = math.sin(phi), math.cos(phi)
+        along, radial = wh.leg * 0.5 * wh.rate * s, wh.leg * omega * omega
+        rx = along * c - radial * s
+        ry = -along * s - radial * c + wh.gravity
+        sn, cn = self.normal_dir
+        return rx * sn + ry * cn, rx * cn - ry * sn
 
     def stance(self, phi0, phi1, omega0):
-        """Integrate from phi0 at omega0 to the first event: (kind, t, phi, omega, solution)."""
-        from scipy.integrate import solve_ivp
+        """Integrate from phi0 at omega0 to the first event: (kind, t, phi, omega, solution).
+        A stance whose inputs are bit for bit those of one integrated before has its outcome:
+        the integration is deterministic (a run on even ground settles on its orbit to the last
+        bit after some tens of steps, and repeats it)."""
+        key = (phi0, phi1, omega0, self.wh.leg)
+        if key not in self.stances:
+            if len(self.stances) > 4096:
+                self.stances.clear()
+            self.stances[key] = self.integrate(phi0, phi1, omega0)
+        return self.stances[key]
+
+    def integrate(self, phi0, phi1, omega0):
+        """The stance from phi0 at omega0, integrated to its first event (stance_rk: the
+        Dormand-Prince pair, events located to rounding)."""
+        from .stance_rk import integrate
 
         wh, mu = self.wh, self.scene.friction
         unit = math.sqrt(2.0 / wh.rate)  # time unit: phi'' = sin phi in it
 
-        def rhs(_, y):
-            return [y[1], math.sin(y[0])]
-
-        def impact(_, y):
-            return y[0] - phi1
-
-        def stall(_, y):
-            return y[1]
-
-        def flight(_, y):
+        def flight(y):
             return self.forces(y[0], y[1] / unit)[0]
 
-        def slip(_, y):
+        def slip(y):
             normal, tangential = self.forces(y[0], y[1] / unit)
             return mu * normal - abs(tangential)
 
-        events = [impact, stall, flight, slip]
-        for ev, direction in zip(events, (1, -1, -1, -1)):
-            ev.terminal, ev.direction = True, direction
+        events = [(lambda y: y[0] - phi1, 1), (lambda y: y[1], -1), (flight, -1), (slip, -1)]
         normal, tangential = self.forces(phi0, omega0)
         if normal <= 0.0:
             return "flight", 0.0, phi0, omega0, None
         if abs(tangential) > mu * normal:
             return "slip", 0.0, phi0, omega0, None
         span = 50.0 + 10.0 * (phi1 - phi0) / max(omega0 * unit, 1e-3)
-        sol = solve_ivp(rhs, (0.0, span), [phi0, omega0 * unit], method="DOP853",
-                        rtol=self.acc.rtol, atol=self.acc.atol, events=events,
-                        dense_output=bool(self.trajectory))
+        t, y, index, dense = integrate((phi0, omega0 * unit), span, events, self.acc.rtol,
+                                       self.acc.atol, dense=bool(self.trajectory))
         names = ("impact", "stalled", "flight", "slip")
-        hits = [(sol.t_events[i][0], i) for i in range(4) if len(sol.t_events[i])]
-        if not hits:
-            return "stalled", sol.t[-1] * unit, sol.y[0, -1], sol.y[1, -1] / unit, sol
-        t, i = min(hits)
-        y = sol.y_events[i][0]
-        return names[i], t * unit, float(y[0]), float(y[1] / unit), sol
+        kind = "stalled" if index is None else names[index]
+        return kind, t * unit, float(y[0]), float(y[1] / unit), dense
 
     # --- the impact ---------------------------------------------------------------------
-    def impact(self, phi, omega):
+    def impact(self, phi, omega, landing=None):
         """The rigid-body impact at the new foothold: (omega+, normal impulse, tangential
         impulse) per unit mass. Unknowns v+ (2), Omega+ (counter-clockwise), P (2):
         v+ - v- = P, k^2 (Omega+ - Omega-) = r x P, v+ + Omega+ x r = 0 (r: hub to new tip)."""
         wh = self.wh
+        b = wh.leg if landing is None else landing  # the landing spoke's length
         hub = wh.leg * np.array([math.sin(phi), math.cos(phi)])
-        tip = hub - wh.leg * np.array([math.sin(phi - 2 * wh.alpha), math.cos(phi - 2 * wh.alpha)])
+        tip = hub - b * np.array([math.sin(phi - 2 * wh.alpha), math.cos(phi - 2 * wh.alpha)])
         r = tip - hub
         spin = -omega  # counter-clockwise
         v = spin * np.array([-hub[1], hub[0]])  # Omega x (hub - old tip)
@@ -253,15 +265,33 @@ class _Run:
                 float(impulse @ [math.cos(th), -math.sin(th)]), tip)
 
     # --- one step -----------------------------------------------------------------------
+    def spokes(self, k):
+        """(stance spoke's length, landing spoke's length, chord between their tips) of step k;
+        the run's wheel set to the stance spoke (its length and stance rate)."""
+        import dataclasses
+
+        if self.lengths is None:
+            return None, None, None
+        n = len(self.lengths)
+        a, b = self.lengths[(k - 1) % n], self.lengths[k % n]
+        base = self.base
+        self.wh = dataclasses.replace(base, leg=a, rate=float(
+            phys.stance_rate(base.gravity, base.k2, a)))
+        return a, b, float(phys.chord_between(a, b, base.alpha))
+
     def step(self, k, omega, beta_prev, s_prev, keep):
+        a, b, chord = self.spokes(k)
         wh, ground = self.wh, self.ground
-        beta = ground.chord_angle(k)
-        phi0 = beta_prev - wh.alpha
+        beta = ground.chord_angle(k, chord)
+        phi0 = beta_prev - wh.alpha if self.phi_start is None else self.phi_start
         if beta is None:
             return self.fail(k, "missed_tread", phi0, omega,
                              f"step {k}'s rise is not below the spokes' chord: no spoke reaches "
                              "its tread"), omega, beta_prev, s_prev
-        phi1 = beta + wh.alpha
+        phi1 = (beta + wh.alpha if b is None
+                else float(phys.chord_offset(a, b, wh.alpha)) + beta)
+        if b is not None:
+            self.phi_start = phi1 - 2 * wh.alpha
         if phi1 <= phi0:
             return self.fail(k, "missed_tread", phi0, omega,
                              f"the ground of step {k} rises into the next spoke: it meets the "
@@ -272,10 +302,10 @@ class _Run:
         if kind != "impact":
             return self.fail(k, kind, phi, w, _stance_detail(kind, k, phi)), w, beta, s_prev
         if ground.stairs:
-            miss = self.stairs_check(k, phi0, phi1, s_prev)
+            miss = self.stairs_check(k, phi0, phi1, s_prev, b)
             if miss is not None:
                 return self.fail(k, miss[0], phi, w, miss[1]), w, beta, s_prev
-        w_after, p_n, p_t, tip = self.impact(phi, w)
+        w_after, p_n, p_t, tip = self.impact(phi, w, b)
         mu = self.scene.friction
         if p_n <= 0.0:
             return self.fail(k, "flight", phi, w, f"impact {k}'s impulse would pull the new "
@@ -293,25 +323,32 @@ class _Run:
         self.foot = self.foot + tip
         return None, w_after, beta, s_new
 
-    def stairs_check(self, k, phi0, phi1, s_prev):
+    def stairs_check(self, k, phi0, phi1, s_prev, landing=None):
         """The landing spoke's swing against the nose of tread k - 1 (sampled) and its landing
-        on tread k: (kind, detail) of a failure, or None."""
+        on tread k: (kind, detail) of a failure, or None. landing: that spoke's length (the
+        stance spoke's when left out)."""
         wh, ground = self.wh, self.ground
+        b = wh.leg if landing is None else landing
         nose = ground.tread_length(k - 1) - s_prev  # ahead of the foothold, at its level
-        for phi in np.linspace(phi0, phi1, SWING_SAMPLES + 1):
-            hub = wh.leg * np.array([math.sin(phi), math.cos(phi)])
-            tip = hub - wh.leg * np.array([math.sin(phi - 2 * wh.alpha),
-                                           math.cos(phi - 2 * wh.alpha)])
-            if tip[1] <= 0.0 and tip[0] < nose:
+        phi = np.linspace(phi0, phi1, SWING_SAMPLES + 1)
+        hub_x, hub_y = wh.leg * np.sin(phi), wh.leg * np.cos(phi)
+        tip_x = hub_x - b * np.sin(phi - 2 * wh.alpha)
+        tip_y = hub_y - b * np.cos(phi - 2 * wh.alpha)
+        down = (tip_y <= 0.0) & (tip_x < nose)  # the tip on tread k - 1, before its nose
+        low, high = np.minimum(hub_x, tip_x), np.maximum(hub_x, tip_x)
+        across = (low <= nose) & (nose <= high) & (tip_x != hub_x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            height = hub_y + (tip_y - hub_y) * (nose - hub_x) / (tip_x - hub_x)
+        struck = across & (height < 0.0)
+        first = np.flatnonzero(down | struck)  # the first sampled angle that fails
+        if first.size:
+            i = first[0]
+            if down[i]:
                 return "missed_tread", (f"step {k}: the spoke comes down on tread {k - 1}, "
-                                        f"{nose - tip[0]:.4g} m before its nose")
-            low, high = sorted((hub[0], tip[0]))
-            if low <= nose <= high and tip[0] != hub[0]:
-                height = hub[1] + (tip[1] - hub[1]) * (nose - hub[0]) / (tip[0] - hub[0])
-                if height < 0.0:
-                    return "nose_hit", (f"step {k}: the landing spoke strikes the nose of tread "
-                                        f"{k - 1}")
-        tip_x = 2 * wh.leg * math.sin(wh.alpha) * math.cos(phi1 - wh.alpha)
+                                        f"{nose - tip_x[i]:.4g} m before its nose")
+            return "nose_hit", f"step {k}: the landing spoke strikes the nose of tread {k - 1}"
+        tip_x = (2 * wh.leg * math.sin(wh.alpha) * math.cos(phi1 - wh.alpha) if landing is None
+                 else wh.leg * math.sin(phi1) - b * math.sin(phi1 - 2 * wh.alpha))
         landing = tip_x - nose
         if landing >= ground.tread_length(k):
             return "missed_tread", (f"step {k}: the spoke lands {landing:.4g} m from the back "
@@ -332,10 +369,14 @@ class _Run:
         if not keep:
             return
         before = self.state(phi, w_before)
+        start, rate = beta - self.wh.alpha, self.wh.rate
+        if self.lengths is not None:  # the next stance: on the landing spoke, from phi1 - 2 alpha
+            landing = self.lengths[k % len(self.lengths)]
+            start = self.phi_start
+            rate = float(phys.stance_rate(self.base.gravity, self.base.k2, landing))
         rec = {"step": k, "impact_time": self.time, "speed_before": w_before,
                "speed_after": w_after, "friction_demand": abs(ratio),
-               "energy_after": float(phys.stance_energy(w_after, beta - self.wh.alpha,
-                                                        self.wh.rate)),
+               "energy_after": float(phys.stance_energy(w_after, start, rate)),
                "chord_angle": float(beta), "foot_x": float(self.foot[0] + tip[0]),
                "foot_y": float(self.foot[1] + tip[1])}
         if self.ground.stairs:

@@ -103,3 +103,66 @@ def _landing_failures(wh: WheelNumbers, betas, stairs):
     nose = treads[:, :-1] - s_prev
     reach = phys.nose_reach(wh.leg, wh.alpha, betas)
     return np.where(nose > reach, NOSE, np.where(s >= treads[:, 1:], MISSED, OK))
+
+
+def spoke_map(wh: WheelNumbers, start_speed, lengths, k2, *, ground: float, betas=None,
+              stairs: dict | None = None) -> StepRun:
+    """The step map of builds whose spokes have their own lengths and whose mass distribution
+    its own k^2: lengths (N, n) spoke j's length (step k stands on spoke (k - 1) mod n and
+    lands spoke k mod n), k2 (N,). A loop over the steps, each on every build at once (the
+    map's coefficients change from step to step: no linear filter). The ground: betas (N, K),
+    each step's chord angle (a ramp); or stairs {rise (N, K), tread (N, K + 1), landing_offset}
+    where a step's chord angle is asin(rise / the distance between the two tips). The wheel
+    starts as `step_map`'s: its stance spoke at wh.beta - alpha, at start_speed."""
+    import dataclasses
+
+    lengths = np.asarray(lengths, float)
+    n_builds, n = lengths.shape
+    k2 = np.broadcast_to(np.asarray(k2, float), (n_builds,))
+    steps = (betas if stairs is None else stairs["rise"]).shape[1]
+    alpha, g = wh.alpha, wh.gravity
+    omega = np.broadcast_to(np.asarray(start_speed, float), (n_builds,)).copy()
+    phi0 = np.full(n_builds, wh.beta - alpha)
+    passed = np.full(n_builds, steps)
+    failure = np.zeros(n_builds, dtype=int)
+    alive = np.ones(n_builds, dtype=bool)
+    s_prev = np.full(n_builds, stairs["landing_offset"]) if stairs else None
+    for k in range(1, steps + 1):
+        a, b = lengths[:, (k - 1) % n], lengths[:, k % n]
+        rate = 2.0 * g * a / (k2 + a**2)
+        at = dataclasses.replace(wh, leg=a, k2=k2, rate=rate)
+        code = np.full(n_builds, OK)
+        if stairs is None:
+            beta = betas[:, k - 1]
+        else:
+            chord = phys.chord_between(a, b, alpha)
+            ratio = stairs["rise"][:, k - 1] / chord
+            code = np.where((ratio < 0.0) | (ratio >= 1.0), MISSED, code)
+            beta = np.arcsin(np.clip(ratio, 0.0, 1.0 - 1e-15))
+        phi1 = phys.chord_offset(a, b, alpha) + beta
+        energy = phys.stance_energy(omega, phi0, rate)
+        code = np.where((code == OK) & (phi1 <= phi0), MISSED, code)
+        code = np.where((code == OK) & (phi0 < 0.0) & (energy <= 0.0), STALLED, code)
+        top = np.where((phi0 < 0.0) & (phi1 > 0.0), 0.0, phi0)
+        for phi in (phi0, top, phi1):
+            code = np.where(code == OK, point_failures(at, energy, phi, ground), code)
+        if stairs is not None:
+            nose = stairs["tread"][:, k - 1] - s_prev
+            s_new = s_prev + chord * np.cos(beta) - stairs["tread"][:, k - 1]
+            code = np.where((code == OK) & (nose > phys.nose_reach_between(a, alpha, phi1)),
+                            NOSE, code)
+            code = np.where((code == OK) & (s_new >= stairs["tread"][:, k]), MISSED, code)
+            s_prev = s_new
+        eta = phys.impact_ratio_between(k2, a, b, alpha)
+        normal, tangential = phys.impact_impulses_between(eta, a, b, alpha, phi1, ground)
+        impact = np.where(normal <= 0.0, FLIGHT,
+                          np.where(np.abs(tangential) > wh.friction * normal, SLIP,
+                                   np.where(eta <= 0.0, STALLED, OK)))
+        code = np.where(code == OK, impact, code)
+        fails = alive & (code != OK)
+        passed = np.where(fails, k - 1, passed)
+        failure = np.where(fails, code, failure)
+        alive &= ~fails
+        omega = eta * np.sqrt(np.maximum(phys.speed_squared(energy, phi1, rate), 0.0))
+        phi0 = phi1 - 2.0 * alpha
+    return StepRun(passed, failure)

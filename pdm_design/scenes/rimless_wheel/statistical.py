@@ -1,0 +1,142 @@
+"""The rimless wheel's linearised yield (docs/rimless_wheel.md, section 13): every condition the
+step map judges, written as a continuous row g(d) >= 0 of the build's deviations d (every
+step's slope on a ramp, every step's rise and tread on stairs, the start speed), linearised at
+the nominal build: with d normal (sigma = t / 3, independent), row i fails with probability
+Phi(-g_i / sd_i), sd_i^2 = sum_j (dg_i / dd_j)^2 sigma_j^2, and a build fails with at most the
+sum over the rows and the steps (the union bound). The gradients are central differences of
+the rows, every perturbed build at once on the vectorised closed forms.
+
+Rows of stance k (k = 1..K, on chord k - 1 from phi0 = beta_{k-1} - alpha to phi1 =
+beta_k + alpha, energy E_{k-1} from the step map's linear filter), each in its own unit divided
+by a nominal scale: over the top (E_{k-1} / rate, where the stance starts behind the vertical),
+the normal force and mu N - |F| at phi0, the top and phi1 (per unit g), the impact's normal
+impulse and mu P_n - |P_t|; on stairs the nose (reach(beta_k) less the nose's distance ahead
+of foothold k - 1) and the landing (tread k less foothold k's place), per unit tread.
+
+The uniform distribution and the leg_length and mass tolerances are not linearised here: a
+spec with them is refused in words (ValueError).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import physics as phys
+from .analysis import resolve
+from .steps import energies
+
+LINEARISED = {"ramp": ("slope", "start_speed"), "stairs": ("rise", "tread", "start_speed")}
+STEP = 1e-6  # central differences, in sigmas of each deviation
+
+
+def _sigmas(scene, tolerances, stages):
+    """(per-step sigmas {quantity: sigma}, start speed sigma); ValueError for what is not
+    linearised."""
+    from ...tolerance_model import SIGMAS_PER_TOLERANCE
+
+    allowed = LINEARISED[scene.ground]
+    each, start = {}, 0.0
+    for t in tolerances:
+        if t.quantity not in allowed or t.distribution != "normal" or t.value is None:
+            raise ValueError("the rimless wheel's linearised yield takes normal "
+                             f"{', '.join(allowed)} tolerances with values; not {t.quantity} "
+                             f"({t.distribution})")
+        sigma = t.value / SIGMAS_PER_TOLERANCE
+        if t.quantity == "start_speed":
+            start = sigma
+        elif t.applies_to == "lot":
+            raise ValueError(f"the rimless wheel's linearised yield takes {t.quantity} on each "
+                             "step, not as a lot")
+        else:
+            each[t.quantity] = sigma
+    return each, start
+
+
+def rows(scene, design, deviations, stages):
+    """(names, g (builds, rows)): every row of every build (deviations {quantity: (builds,
+    stages)}, start_speed (builds,)), on the closed forms."""
+    wh, geo, problems = resolve(scene, design)
+    if problems:
+        raise ValueError("; ".join(problems))
+    builds = len(deviations["start_speed"])
+    zero = np.zeros((builds, stages))
+    speed = scene.initial.speed + deviations["start_speed"]
+    if scene.ground == "ramp":
+        betas = wh.beta + deviations.get("slope", zero)
+    else:
+        rises = geo["rise"] + deviations.get("rise", zero)
+        betas = np.arcsin(np.clip(rises / wh.chord, -1.0, 1.0))
+    e0 = phys.stance_energy(speed, wh.beta - wh.alpha, wh.rate)
+    e = energies(wh, e0, betas)[:, :-1]  # E_{k-1} of stance k
+    prev = np.concatenate([np.full((builds, 1), wh.beta), betas[:, :-1]], axis=1)
+    phi0, phi1 = prev - wh.alpha, betas + wh.alpha
+    names, out = [], []
+
+    def add(name, value):
+        names.append(name)
+        out.append(value)
+
+    if wh.beta - wh.alpha < 0.0:
+        add("over_the_top", e / wh.rate)
+    top = np.where((phi0 < 0.0) & (phi1 > 0.0), 0.0, phi0)
+    for where, phi in (("start", phi0), ("top", top), ("end", phi1)):
+        w2 = phys.speed_squared(e, phi, wh.rate)
+        normal, tangential = phys.stance_forces(phi, w2, wh.ground, wh.leg, wh.gravity, wh.k2)
+        add(f"no_flight ({where})", normal / wh.gravity)
+        add(f"no_slip ({where})", (wh.friction * normal - np.abs(tangential)) / wh.gravity)
+    p_n, p_t = phys.impact_impulses(wh.eta, wh.alpha, betas, wh.ground)
+    add("impact_friction (pushes)", p_n)
+    add("impact_friction", wh.friction * p_n - np.abs(p_t))
+    if scene.ground == "stairs":
+        treads = np.concatenate([np.full((builds, 1), geo["tread"]),
+                                 geo["tread"] + deviations.get("tread", zero)], axis=1)
+        s = geo["landing_offset"] + np.cumsum(wh.chord * np.cos(betas) - treads[:, :-1], axis=1)
+        s_prev = np.concatenate([np.full((builds, 1), geo["landing_offset"]), s[:, :-1]],
+                                axis=1)
+        reach = phys.nose_reach(wh.leg, wh.alpha, betas)
+        add("nose_clearance", (reach - (treads[:, :-1] - s_prev)) / geo["tread"])
+        add("landing", (treads[:, 1:] - s) / geo["tread"])
+    return names, np.stack(out, axis=2)  # (builds, stages, rows)
+
+
+def row_reliability(scene, design, tolerances, stages: int):
+    """(g, sd, names, step) of every row of every step at the nominal build, flattened."""
+    each, start = _sigmas(scene, tolerances, stages)
+    per_step = [q for q in LINEARISED[scene.ground] if q != "start_speed"]
+    axes = [(q, k) for q in per_step for k in range(stages)] + [("start_speed", None)]
+    sigma = np.array([each.get(q, 0.0) if k is not None else start for q, k in axes])
+    count = 2 * len(axes) + 1
+    dev = {q: np.zeros((count, stages)) for q in per_step}
+    dev["start_speed"] = np.zeros(count)
+    for i, (q, k) in enumerate(axes):
+        h = STEP * max(sigma[i], 1e-12)
+        for sign, row in ((1.0, 1 + 2 * i), (-1.0, 2 + 2 * i)):
+            if k is None:
+                dev[q][row] = sign * h
+            else:
+                dev[q][row, k] = sign * h
+    names, g = rows(scene, design, dev, stages)
+    g0 = g[0]
+    slopes = np.stack([(g[1 + 2 * i] - g[2 + 2 * i]) / (2.0 * STEP * max(sigma[i], 1e-12))
+                       for i in range(len(axes))])  # (axes, stages, rows)
+    sd = np.sqrt(np.einsum("a,asr->sr", sigma**2, slopes**2))
+    step = np.repeat(np.arange(1, stages + 1)[:, None], len(names), axis=1)
+    return (g0.ravel(), sd.ravel(), tuple(names) * stages, step.ravel())
+
+
+def linearised_yield(scene, design, tolerances, stages: int) -> dict:
+    """1 - the union bound of every row of every step: {yield, failure_bound, min_beta, rows}
+    (Scene.linearised_yield)."""
+    from ...formulation.chain_moments import summary
+
+    g, sd, names, _ = row_reliability(scene, design, tolerances, stages)
+    moved = (sd > 0.0) | (g <= 0.0)  # a row no deviation moves and that holds never fails
+    return summary(g, np.where(sd > 0.0, sd, 1e-300), moved)
+
+
+def placed_rows(scene, design, tolerances, stages: int):
+    """The rows placed along the run, place k the stance k (plugin_tolerances.PlacedRows)."""
+    from ...plugin_tolerances import PlacedRows
+
+    g, sd, names, step = row_reliability(scene, design, tolerances, stages)
+    return PlacedRows(g, sd, names, np.ones(len(g)), step, ("step", "steps", None))
