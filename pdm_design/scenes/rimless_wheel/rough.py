@@ -15,8 +15,6 @@ both resolutions and the extrapolation, widened by their difference.
 
 from __future__ import annotations
 
-import contextlib
-import functools
 import math
 
 import numpy as np
@@ -275,39 +273,14 @@ def chain_mfpts(wheels, start_energies, sigma: float, bins: int, look=None):
     return np.where(vaults, np.einsum("kb,kb->k", q0, 1.0 + m) + post0, 0.0)
 
 
-@contextlib.contextmanager
 def _blas_one_thread():
-    """numpy's OpenBLAS on one thread for the chain's solve, then as it was: a system of a few
-    hundred unknowns gains nothing from a second thread, and a woken worker that spins after
-    the call takes a core from the numpy work that follows (several times slower on a busy
-    machine). Nothing is changed where numpy's BLAS is not its bundled OpenBLAS."""
-    lib = _openblas()
-    if lib is None:
-        yield
-        return
-    before = lib.scipy_openblas_get_num_threads64_()
-    lib.scipy_openblas_set_num_threads64_(1)
-    try:
-        yield
-    finally:
-        lib.scipy_openblas_set_num_threads64_(before)
+    """numpy's BLAS on one thread for the chain's solve, then as it was (threadpoolctl): a
+    system of a few hundred unknowns gains nothing from a second thread, and a woken worker
+    that spins after the call takes a core from the numpy work that follows (several times
+    slower on a busy machine)."""
+    from threadpoolctl import threadpool_limits
 
-
-@functools.cache
-def _openblas():
-    """numpy's bundled OpenBLAS (ctypes), or None."""
-    import ctypes
-
-    try:
-        with open("/proc/self/maps") as maps:
-            paths = {line.split()[-1] for line in maps if "scipy_openblas" in line}
-        for path in sorted(paths):
-            lib = ctypes.CDLL(path)
-            if hasattr(lib, "scipy_openblas_set_num_threads64_"):
-                return lib
-    except OSError:
-        return None
-    return None
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 def _orbit(wh, beta):
