@@ -1,0 +1,153 @@
+"""The event simulator over many builds of a yield run: in this process, in local worker
+processes (default: one per core), or on a Dask distributed cluster.
+
+A build's outcome depends on its seed, index and tolerances only (tolerances.draw draws it
+alone, reproducibly), so the builds are cut into chunks in their order, the chunks run anywhere,
+and the answers are put back in that order: the same outcomes, and the same JSON, whatever
+the number of workers or the scheduler.
+
+The run's fixed part (scene, design, the tolerances of every scale, seed, stages, accuracy) is
+sent once to each worker (a local pool's initializer; scattered to a Dask cluster's workers);
+a chunk travels as a tuple of (scale, build index) pairs and comes back as a tuple of
+(stages passed, failure name) pairs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+CHUNKS_PER_WORKER = 8  # chunks per worker: small enough to even out slow builds at the end
+MAX_CHUNK = 32  # builds in one chunk, at most
+MIN_PER_WORKER = 2  # builds per worker below which they run in this process
+
+
+@dataclass(frozen=True)
+class BuildRun:
+    """What every build of a yield run shares (plain data: it travels by pickle)."""
+
+    scene: object
+    design: object
+    tolerances: dict  # scale -> the Tolerances drawn at that scale
+    seed: int
+    stages: int
+    accuracy: object
+    allow_skips: bool = False
+
+
+def simulate_builds(run: BuildRun, tasks, *, workers=None, scheduler=None,
+                    progress=None) -> list[tuple[int, str]]:
+    """(stages passed, failure name or "") of every (scale, index) in `tasks`, in their order.
+    workers: local processes (None: the machine's cores; 1: this process); scheduler: the
+    address of a Dask scheduler to run on instead; progress: called once a build."""
+    tasks = list(tasks)
+    if scheduler:
+        return _on_dask(run, tasks, scheduler, progress)
+    from ..sweep.run import default_workers
+
+    workers = default_workers() if workers is None else int(workers)
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    if workers == 1 or len(tasks) < MIN_PER_WORKER * workers:
+        return _chunk(run, tasks, progress)
+    return _on_pool(run, tasks, workers, progress)
+
+
+def chunks_of(tasks: list, workers: int) -> list[tuple]:
+    """`tasks` cut in order into about CHUNKS_PER_WORKER chunks a worker (MAX_CHUNK at most)."""
+    size = max(1, min(MAX_CHUNK, -(-len(tasks) // (CHUNKS_PER_WORKER * workers))))
+    return [tuple(tasks[i:i + size]) for i in range(0, len(tasks), size)]
+
+
+def _chunk(run: BuildRun, tasks, progress=None) -> list[tuple[int, str]]:
+    from .yield_ import simulated
+
+    out = []
+    for scale, index in tasks:
+        out.append(simulated(run.scene, run.design, run.tolerances[scale], run.seed, index,
+                             run.stages, run.accuracy, run.allow_skips))
+        if progress is not None:
+            progress()
+    return out
+
+
+# ------------------------------------------------------------------ local worker processes
+
+_RUN: BuildRun | None = None  # a worker process' run (set by its initializer)
+
+
+def _start_worker(run: BuildRun) -> None:
+    global _RUN
+    import signal
+
+    _RUN = run
+    # Ctrl-C is the main process' to handle: it shuts the pool down
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _worker_chunk(tasks) -> list[tuple[int, str]]:
+    return _chunk(_RUN, tasks)
+
+
+def _on_pool(run, tasks, workers, progress):
+    """A local process pool: forked (fast start, the modules already imported) when this
+    process runs no other thread, else started from a fork server."""
+    import multiprocessing
+    import threading
+    from concurrent.futures import ProcessPoolExecutor
+
+    methods = multiprocessing.get_all_start_methods()
+    if "fork" in methods and threading.active_count() == 1:
+        context = multiprocessing.get_context("fork")
+    elif "forkserver" in methods:
+        context = multiprocessing.get_context("forkserver")
+    else:
+        context = multiprocessing.get_context("spawn")
+    chunks = chunks_of(tasks, workers)
+    out: list[tuple[int, str]] = []
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=context,
+                               initializer=_start_worker, initargs=(run,))
+    try:
+        for answers in pool.map(_worker_chunk, chunks):
+            out.extend(answers)
+            if progress is not None:
+                for _ in answers:
+                    progress()
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+    return out
+
+
+# ------------------------------------------------------------------ a Dask cluster
+
+def _dask_chunk(run: BuildRun, tasks) -> list[tuple[int, str]]:
+    return _chunk(run, tasks)
+
+
+def _on_dask(run, tasks, address, progress):
+    """An existing Dask distributed cluster, by its scheduler's address (the run scattered to
+    its workers once; chunks gathered in order)."""
+    try:
+        import distributed
+    except ImportError:  # pragma: no cover - a dependency of the package
+        from ..errors import SpecError
+
+        raise SpecError("command line", "--scheduler", "Dask distributed installed "
+                        "(pip install 'dask[distributed]')", "it is not") from None
+    from ..sweep.run import _dask_client
+
+    client = _dask_client(distributed, address)
+    try:
+        workers = max(1, sum(client.nthreads().values()))  # threads: chunks run at once
+        shared = client.scatter(run, broadcast=True)
+        futures = [client.submit(_dask_chunk, shared, chunk, pure=False)
+                   for chunk in chunks_of(tasks, workers)]
+        out: list[tuple[int, str]] = []
+        for future in futures:
+            answers = future.result()
+            out.extend(answers)
+            if progress is not None:
+                for _ in answers:
+                    progress()
+        return out
+    finally:
+        client.close()
