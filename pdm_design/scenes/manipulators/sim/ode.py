@@ -265,9 +265,9 @@ class OdePhases:
                 direction = math.copysign(1.0, omega)
             physics = [(lambda t_, z: z[0] + back, "back_stop"),
                        (lambda t_, z: self.fs - z[0], "front_stop"),
-                       (lambda t_, z: direction * z[1], "turn")]
+                       (lambda t_, z, way=direction: way * z[1], "turn")]
             te, z, kind, _ = self._integrate(
-                lambda t_, y: [y[1], ph.swing_acceleration(y[0], y[1], sw, direction)],
+                lambda t_, y, way=direction: [y[1], ph.swing_acceleration(y[0], y[1], sw, way)],
                 t, [theta, omega], physics, [])
             theta, omega, t = float(z[0]), float(z[1]), te
             if kind in ("back_stop", "front_stop"):
