@@ -37,14 +37,20 @@ class BuildRun:
 def simulate_builds(run: BuildRun, tasks, *, workers=None, scheduler=None,
                     progress=None) -> list[tuple[int, str]]:
     """(stages passed, failure name or "") of every (scale, index) in `tasks`, in their order.
-    workers: local processes (None: the machine's cores; 1: this process); scheduler: the
-    address of a Dask scheduler to run on instead; progress: called once a build."""
+    workers: local processes (None: the machine's cores, or 1 in a process that is itself a
+    worker; 1: this process); scheduler: the address of a Dask scheduler to run on instead;
+    progress: called once a build."""
     tasks = list(tasks)
     if scheduler:
         return _on_dask(run, tasks, scheduler, progress)
     from ..sweep.run import default_workers
 
-    workers = default_workers() if workers is None else int(workers)
+    if workers is None:  # one process per core; in a worker process of its own (a table's
+        # row, a Dask worker) the builds stay in it: its siblings have the other cores
+        import multiprocessing
+
+        workers = default_workers() if multiprocessing.parent_process() is None else 1
+    workers = int(workers)
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     if workers == 1 or len(tasks) < MIN_PER_WORKER * workers:
@@ -102,6 +108,10 @@ def _on_pool(run, tasks, workers, progress):
         context = multiprocessing.get_context("forkserver")
     else:
         context = multiprocessing.get_context("spawn")
+    if context.get_start_method() == "fork":  # the integrator's tableaux, imported once here
+        from ..sim.rk import tableau
+
+        tableau("DOP853"), tableau("RK45")
     chunks = chunks_of(tasks, workers)
     out: list[tuple[int, str]] = []
     pool = ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=context,
