@@ -92,3 +92,22 @@ def test_a_scheduler_that_does_not_answer_is_bad_input():
     result = CliRunner().invoke(main, ["yield", str(SPEC), "--builds", "8", "--scheduler",
                                        "tcp://127.0.0.1:1"])
     assert result.exit_code == 2 and "--scheduler" in result.stderr
+
+
+def test_a_chunks_deviations_are_each_builds_own_draw():
+    import numpy as np
+
+    from pdm_design.tolerances.yield_ import one_build
+
+    spec = load_spec(str(SPEC))
+    tolerances = spec.tolerances
+    run = parallel.BuildRun(spec.scene, spec.design_at(), {1.0: tolerances,
+                                                           2.0: tolerances.scaled(2.0)},
+                            5, spec.verification.stages, "default")
+    tasks = [(1.0, 3), (1.0, 4), (1.0, 9), (2.0, 0), (2.0, 700), (1.0, 2)]
+    for (scale, index), got in zip(tasks, parallel._drawn(run, tasks, span=8)):
+        alone = one_build(run.tolerances[scale], 5, index, run.stages)
+        assert got.keys() == alone.keys()
+        for key in alone:
+            assert got[key].shape == alone[key].shape
+            np.testing.assert_array_equal(got[key], alone[key])

@@ -65,15 +65,34 @@ def chunks_of(tasks: list, workers: int) -> list[tuple]:
 
 
 def _chunk(run: BuildRun, tasks, progress=None) -> list[tuple[int, str]]:
+    """The builds of `tasks` one by one, their deviations drawn together (_drawn)."""
     from .yield_ import simulated
 
     out = []
-    for scale, index in tasks:
+    for (scale, index), deviations in zip(tasks, _drawn(run, tasks)):
         out.append(simulated(run.scene, run.design, run.tolerances[scale], run.seed, index,
-                             run.stages, run.accuracy, run.allow_skips))
+                             run.stages, run.accuracy, run.allow_skips, deviations))
         if progress is not None:
             progress()
     return out
+
+
+def _drawn(run: BuildRun, tasks, span: int = 4 * MAX_CHUNK):
+    """Each task's deviations as yield_.one_build draws them (1-row arrays): the builds of one
+    scale drawn together from the lowest index to the highest, at most `span` at once, and
+    the task's row taken (a build's numbers sit at a fixed place in each stream: the same)."""
+    from .draw import draw
+
+    block, first = {}, None
+    for scale, index in tasks:
+        if first is None or (scale, index) not in block:
+            last = max((i for s, i in tasks if s == scale and index <= i < index + span),
+                       default=index)
+            first, count = index, last - index + 1
+            drawn = draw(run.tolerances[scale], count, run.stages, run.seed, start=first)
+            block = {(scale, first + n): n for n in range(count)}
+        n = block[(scale, index)]
+        yield {k: v[n:n + 1] for k, v in drawn.items()}
 
 
 # ------------------------------------------------------------------ local worker processes

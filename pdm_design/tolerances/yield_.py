@@ -222,14 +222,16 @@ def _confirm(got, sample, open_builds, passed, failure) -> dict:
 
 
 def simulated(scene, design, tolerances, seed, index, stages, accuracy,
-              allow_skips=False) -> tuple[int, str]:
+              allow_skips=False, deviations=None) -> tuple[int, str]:
     """(stages passed, failure name or "") of one build in the event simulator: "" exactly
-    when the run completed."""
+    when the run completed. deviations: the build's own (one_build's, drawn already)."""
     from ..sim.core import SimulationRefused
 
+    if deviations is None:
+        deviations = one_build(tolerances, seed, index, stages)
     try:
-        result = simulate_one(scene, design, tolerances, seed, index, stages, accuracy=accuracy,
-                              allow_skips=allow_skips)
+        result = of(scene).simulate_build(scene, design, deviations, stages,
+                                          accuracy=accuracy, allow_skips=allow_skips)
     except SimulationRefused:  # a build the simulator cannot hold is no part a workshop makes
         return 0, "invalid_part"
     outcome = result.outcome
