@@ -267,6 +267,8 @@ def _active(g, g_new, directions):
     """ivp.find_active_events."""
     out = []
     for i, (a, b, d) in enumerate(zip(g, g_new, directions)):
+        if (a > 0 and b > 0) or (a < 0 and b < 0):  # no sign change: the common case
+            continue
         up, down = a <= 0 and b >= 0, a >= 0 and b <= 0
         if (up and d > 0) or (down and d < 0) or ((up or down) and d == 0):
             out.append(i)

@@ -36,10 +36,18 @@ class BuildRun:
 
 def simulate_builds(run: BuildRun, tasks, *, workers=None, scheduler=None,
                     progress=None) -> list[tuple[int, str]]:
-    """(stages passed, failure name or "") of every (scale, index) in `tasks`, in their order.
-    workers: local processes (None: the machine's cores, or 1 in a process that is itself a
-    worker; 1: this process); scheduler: the address of a Dask scheduler to run on instead;
-    progress: called once a build."""
+    """(stages passed, failure name or "") of every (scale, index) in `tasks`, in their order
+    (start_builds, then its answers)."""
+    return start_builds(run, tasks, workers=workers, scheduler=scheduler,
+                        progress=progress).answers()
+
+
+def start_builds(run: BuildRun, tasks, *, workers=None, scheduler=None, progress=None):
+    """The builds of `tasks` ((scale, index) pairs) started on the workers: a Started whose
+    answers() waits for them (this process is free meanwhile; with one worker they run in
+    answers()). workers: local processes (None: the machine's cores, or 1 in a process that is
+    itself a worker; 1: this process); scheduler: the address of a Dask scheduler to run on
+    instead; progress: called once a build."""
     tasks = list(tasks)
     if scheduler:
         return _on_dask(run, tasks, scheduler, progress)
@@ -54,8 +62,33 @@ def simulate_builds(run: BuildRun, tasks, *, workers=None, scheduler=None,
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     if workers == 1 or len(tasks) < MIN_PER_WORKER * workers:
-        return _chunk(run, tasks, progress)
+        return Started(lambda: [_chunk(run, tasks, progress)], progress=None)
     return _on_pool(run, tasks, workers, progress)
+
+
+class Started:
+    """Builds under way: answers() gathers them chunk by chunk, in order, and closes what ran
+    them; close() ends them unanswered (an error meanwhile)."""
+
+    def __init__(self, chunks, progress=None, close=None):
+        self._chunks, self._progress, self._close = chunks, progress, close
+
+    def answers(self) -> list[tuple[int, str]]:
+        out: list[tuple[int, str]] = []
+        try:
+            for answers in self._chunks():
+                out.extend(answers)
+                if self._progress is not None:
+                    for _ in answers:
+                        self._progress()
+        finally:
+            self.close()
+        return out
+
+    def close(self) -> None:
+        if self._close is not None:
+            self._close()
+            self._close = None
 
 
 def chunks_of(tasks: list, workers: int) -> list[tuple]:
@@ -132,18 +165,11 @@ def _on_pool(run, tasks, workers, progress):
 
         tableau("DOP853"), tableau("RK45")
     chunks = chunks_of(tasks, workers)
-    out: list[tuple[int, str]] = []
     pool = ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=context,
                                initializer=_start_worker, initargs=(run,))
-    try:
-        for answers in pool.map(_worker_chunk, chunks):
-            out.extend(answers)
-            if progress is not None:
-                for _ in answers:
-                    progress()
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
-    return out
+    futures = [pool.submit(_worker_chunk, chunk) for chunk in chunks]
+    return Started(lambda: (f.result() for f in futures), progress,
+                   lambda: pool.shutdown(wait=True, cancel_futures=True))
 
 
 # ------------------------------------------------------------------ a Dask cluster
@@ -170,13 +196,7 @@ def _on_dask(run, tasks, address, progress):
         shared = client.scatter(run, broadcast=True)
         futures = [client.submit(_dask_chunk, shared, chunk, pure=False)
                    for chunk in chunks_of(tasks, workers)]
-        out: list[tuple[int, str]] = []
-        for future in futures:
-            answers = future.result()
-            out.extend(answers)
-            if progress is not None:
-                for _ in answers:
-                    progress()
-        return out
-    finally:
+    except BaseException:
         client.close()
+        raise
+    return Started(lambda: (f.result() for f in futures), progress, client.close)

@@ -155,15 +155,22 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     # every build the event simulator runs, the headline's and the curve's, in one batch
     tasks = [(1.0, int(i)) for i in sample] + [(1.0, int(i)) for i in open_builds]
     tasks += [(scale, int(i)) for scale, o in curve for i in np.flatnonzero(~o.closed_form)]
-    from .parallel import BuildRun, simulate_builds
+    from .parallel import BuildRun, start_builds
 
     run = BuildRun(scene, design, {1.0: tolerances} | {
         scale: tolerances.scaled(scale) for scale, _ in curve}, seed, stages, accuracy,
         allow_skips)
     if workers is None:
         workers = getattr(tolerances, "workers", None)
-    got = dict(zip(tasks, simulate_builds(run, tasks, workers=workers, scheduler=scheduler,
-                                          progress=progress)))
+    started = start_builds(run, tasks, workers=workers, scheduler=scheduler, progress=progress)
+    try:  # the sensitivity and the scene's extras while the workers simulate
+        sensitivity, note = _sensitivity(scene, design, tolerances, stages, seed,
+                                         sensitivity_samples)
+        extras = of(scene).yield_extras(scene, design, tolerances, stages)
+    except BaseException:
+        started.close()
+        raise
+    got = dict(zip(tasks, started.answers()))
     confirmed = _confirm(got, sample, open_builds, passed, failure)
     whole = failure == ""
     low, high = wilson(whole.sum(), builds)
@@ -173,8 +180,6 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     shown = tuple({"index": int(i), "stages_passed": int(passed[i]), "failure": failure[i],
                    "command": build_command(source, seed, int(i), stages)}
                   for i in failing[:SHOWN_COMMANDS])
-    sensitivity, note = _sensitivity(scene, design, tolerances, stages, seed,
-                                     sensitivity_samples)
     return YieldResult(
         kind=scene.kind, builds=builds, stages=stages, seed=seed,
         estimate=float(whole.mean()), ci_low=float(low), ci_high=float(high),
@@ -186,7 +191,7 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
         sensitivity=tuple(sensitivity), sensitivity_note=note,
         scale_curve=tuple(_scale_curve(curve, got, builds, scales,
                                        headline=(int(whole.sum()), confirmed))),
-        source=source, extras=of(scene).yield_extras(scene, design, tolerances, stages))
+        source=source, extras=extras)
 
 
 def _to_confirm(outcome, seed, confirm):
