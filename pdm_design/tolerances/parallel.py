@@ -8,8 +8,8 @@ the number of workers or the scheduler.
 
 The run's fixed part (scene, design, the tolerances of every scale, seed, stages, accuracy) is
 sent once to each worker (a local pool's initializer; scattered to a Dask cluster's workers);
-a chunk travels as a tuple of (scale, build index) pairs and comes back as a tuple of
-(stages passed, failure name) pairs.
+a chunk travels as a tuple of (scale, build index) pairs and comes back as a list of
+(stages passed, failure name) pairs. The builds of a chunk are drawn together (_drawn).
 """
 
 from __future__ import annotations
