@@ -561,8 +561,15 @@ def sheet(source, out, count, no_tolerance, no_drawing):
               "to this folder.")
 @ACCURACY
 @FORMAT
+@click.option("--workers", type=_Count(1, 4096), default=None,
+              help="Local worker processes the event simulator runs the builds on (default: "
+              "the spec's tolerances.workers, else the machine's cores; 1: in this process). "
+              "The results do not depend on it.")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Run the simulated builds on an existing Dask distributed cluster "
+              "(scheduler address, e.g. tcp://10.0.0.5:8786) instead of local workers.")
 @_guarded
-def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
+def yield_command(spec, builds, stages, seed, out, accuracy, fmt, workers, scheduler):
     """Monte Carlo yield of SPEC's design under its [tolerances]: the fraction of builds that
     pass every stage (95 % interval), survival by stage, failures by name, the tolerances'
     Sobol' indices, each failing build as one `simulate --build` command; the event simulator
@@ -573,7 +580,8 @@ def yield_command(spec, builds, stages, seed, out, accuracy, fmt):
     if out is not None:
         out = _out_folder(out, spec, "yield")
     loaded = load_spec(spec)
-    result = run_yield(loaded, spec, builds=builds, stages=stages, seed=seed, accuracy=accuracy)
+    result = run_yield(loaded, spec, builds=builds, stages=stages, seed=seed, accuracy=accuracy,
+                       workers=workers, scheduler=scheduler)
     if out:  # its failing builds rerun with the design saved there (simulate --from)
         result = commands_from(result, out)
     files = write_outputs(result, out) if out else []

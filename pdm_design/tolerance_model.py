@@ -113,6 +113,9 @@ class Tolerances:
     seed: int = 0
     confirm: int = 20
     yield_target: float | None = None  # the yield allocated tolerances are sized for
+    # local processes the event simulator runs a yield's builds on (None: one per core); the
+    # builds' outcomes do not depend on it
+    workers: int | None = None
 
     def __iter__(self):
         return iter(self.items)
@@ -125,7 +128,7 @@ class Tolerances:
 
     def scaled(self, factor: float) -> Tolerances:
         return Tolerances(tuple(t.scaled(factor) for t in self.items), self.builds, self.seed,
-                          self.confirm, self.yield_target)
+                          self.confirm, self.yield_target, self.workers)
 
 
 def allocation_shares(tolerances) -> dict[str, float]:

@@ -93,8 +93,9 @@ def sized_tolerances(spec, source, point, stages, *, accuracy=None, answer=None)
 
 
 def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accuracy=None,
-              scales=None) -> YieldResult:
-    """The yield of the spec's design (the Python API of `pdm-design yield`)."""
+              scales=None, workers=None, scheduler=None) -> YieldResult:
+    """The yield of the spec's design (the Python API of `pdm-design yield`); workers and
+    scheduler: where the simulated builds run (tolerances.parallel), the result the same."""
     from ..accuracy import accuracy as resolve
 
     spec_tolerances(spec, source)
@@ -107,7 +108,8 @@ def run_yield(spec, source: str, *, builds=None, stages=None, seed=None, accurac
     kwargs = {} if scales is None else {"scales": scales}
     result = yield_of(spec.scene, point, tolerances, builds=builds, stages=stages, seed=seed,
                       confirm=tolerances.confirm, accuracy=acc, source=source,
-                      allow_skips=spec.verification.allow_skips, **kwargs)
+                      allow_skips=spec.verification.allow_skips, workers=workers,
+                      scheduler=scheduler, **kwargs)
     return dataclasses.replace(result, identity=yield_identity(spec, source, point))
 
 

@@ -299,11 +299,14 @@ TOLERANCE_SETTINGS = {"distribution": "the default distribution of every quantit
                       "builds": "builds drawn by `pdm-design yield`",
                       "seed": "the random seed of the builds drawn",
                       "confirm": "random builds the event simulator confirms",
-                      "yield_target": "the yield the allocated tolerances are sized for"}
+                      "yield_target": "the yield the allocated tolerances are sized for",
+                      "workers": "local processes the event simulator runs the builds on "
+                                 "(default: the machine's cores)"}
 TOLERANCE_KEYS = ("value", "allocate", "weight", "applies_to", "distribution")
 _COUNT = TypeAdapter(Annotated[int, Strict(), Field(ge=1, le=10_000_000)], config=CONFIG)
 _SEED = TypeAdapter(Annotated[int, Strict(), Field(ge=0, le=2**63 - 1)], config=CONFIG)
 _CONFIRM = TypeAdapter(Annotated[int, Strict(), Field(ge=0, le=100_000)], config=CONFIG)
+_WORKERS = TypeAdapter(Annotated[int, Strict(), Field(ge=1, le=4096)], config=CONFIG)
 _PLUS_MINUS = TypeAdapter(Annotated[float, Strict(), Field(gt=0, le=1e6)], config=CONFIG)
 _STRICT_BOOL = TypeAdapter(Annotated[bool, Strict()], config=CONFIG)
 _FRACTION = TypeAdapter(Annotated[float, Strict(), Field(gt=0, lt=1)], config=CONFIG)
@@ -344,7 +347,7 @@ def _tolerances(table: dict, scene: plugin.Scene):
     default = _choice(table, "distribution", DISTRIBUTIONS, "tolerances", "normal")
     settings = {key: _setting(table, key, adapter) for key, adapter in
                 (("builds", _COUNT), ("seed", _SEED), ("confirm", _CONFIRM),
-                 ("yield_target", _FRACTION)) if key in table}
+                 ("yield_target", _FRACTION), ("workers", _WORKERS)) if key in table}
     items = []
     for name, quantity in quantities.items():
         if name not in table:

@@ -135,11 +135,14 @@ def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int) -
 def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int, seed: int = 0,
              confirm: int = 20, accuracy="default", source: str = "SPEC",
              scales=SCALES, sensitivity_samples: int = SOBOL_SAMPLES,
-             progress=None, allow_skips: bool = False) -> YieldResult:
+             progress=None, allow_skips: bool = False, workers: int | None = None,
+             scheduler: str | None = None) -> YieldResult:
     """Yield of `design` built with `tolerances` (every one with a value), K = `stages`.
     scales: the tolerance scales of the yield curve (() for none); sensitivity_samples: the
     Sobol' base sample (0: no sensitivity); allow_skips: the spec's [verification]
-    allow_skips. A build passes iff its run completes (failure "")."""
+    allow_skips. A build passes iff its run completes (failure "").
+    workers, scheduler: where the event simulator runs the builds (tolerances.parallel;
+    default: the tolerances' workers, else one process per core); the result is the same."""
     missing = [t.quantity for t in tolerances if t.value is None]
     if missing or not len(tolerances):
         raise ValueError("a yield needs tolerances with values" + (
@@ -147,9 +150,28 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     outcome = map_builds(scene, design, tolerances, builds, stages, seed)
     passed = outcome.stages_passed.copy()
     failure = outcome.failure.copy()
-    confirmed = _confirm(scene, design, tolerances, outcome, passed, failure, seed=seed,
-                         stages=stages, confirm=confirm, accuracy=accuracy, progress=progress,
-                         allow_skips=allow_skips)
+    sample, open_builds = _to_confirm(outcome, seed, confirm)
+    curve = _scale_maps(scene, design, tolerances, builds, stages, seed, scales)
+    # every build the event simulator runs, the headline's and the curve's, in one batch
+    tasks = [(1.0, int(i)) for i in sample] + [(1.0, int(i)) for i in open_builds]
+    tasks += [(scale, int(i)) for scale, o in curve for i in np.flatnonzero(~o.closed_form)]
+    from .parallel import BuildRun, start_builds
+
+    run = BuildRun(scene, design, {1.0: tolerances} | {
+        scale: tolerances.scaled(scale) for scale, _ in curve}, seed, stages, accuracy,
+        allow_skips)
+    if workers is None:
+        workers = getattr(tolerances, "workers", None)
+    started = start_builds(run, tasks, workers=workers, scheduler=scheduler, progress=progress)
+    try:  # the sensitivity and the scene's extras while the workers simulate
+        sensitivity, note = _sensitivity(scene, design, tolerances, stages, seed,
+                                         sensitivity_samples)
+        extras = of(scene).yield_extras(scene, design, tolerances, stages)
+    except BaseException:
+        started.close()
+        raise
+    got = dict(zip(tasks, started.answers()))
+    confirmed = _confirm(got, sample, open_builds, passed, failure)
     whole = failure == ""
     low, high = wilson(whole.sum(), builds)
     alive = np.array([(passed >= j).sum() for j in range(1, stages + 1)])
@@ -158,8 +180,6 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     shown = tuple({"index": int(i), "stages_passed": int(passed[i]), "failure": failure[i],
                    "command": build_command(source, seed, int(i), stages)}
                   for i in failing[:SHOWN_COMMANDS])
-    sensitivity, note = _sensitivity(scene, design, tolerances, stages, seed,
-                                     sensitivity_samples)
     return YieldResult(
         kind=scene.kind, builds=builds, stages=stages, seed=seed,
         estimate=float(whole.mean()), ci_low=float(low), ci_high=float(high),
@@ -169,48 +189,54 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
         failures=dict(Counter(failure[failing]).most_common()), failing=shown,
         confirmed=confirmed, tolerances=tuple(t.to_json(scene.kind) for t in tolerances),
         sensitivity=tuple(sensitivity), sensitivity_note=note,
-        scale_curve=tuple(_scale_curve(scene, design, tolerances, builds, stages, seed,
-                                       scales, accuracy, headline=(int(whole.sum()), confirmed),
-                                       allow_skips=allow_skips)),
-        source=source, extras=of(scene).yield_extras(scene, design, tolerances, stages))
+        scale_curve=tuple(_scale_curve(curve, got, builds, scales,
+                                       headline=(int(whole.sum()), confirmed))),
+        source=source, extras=extras)
 
 
-def _confirm(scene, design, tolerances, outcome, passed, failure, *, seed, stages, confirm,
-             accuracy, progress, allow_skips=False) -> dict:
-    """Simulate every build outside the closed-form regime (their verdicts replace the map's)
-    and `confirm` random closed-form builds (agreement counted); passed and failure are
-    updated in place."""
+def _to_confirm(outcome, seed, confirm):
+    """(the `confirm` closed-form builds picked at random, sorted; every build outside the
+    closed-form regime)."""
     open_builds = np.flatnonzero(~outcome.closed_form)
     closed = np.flatnonzero(outcome.closed_form)
     rng = np.random.default_rng([seed, 1])
     sample = rng.choice(closed, size=min(confirm, len(closed)), replace=False) \
         if len(closed) else closed
+    return np.sort(sample), open_builds
+
+
+def _confirm(got, sample, open_builds, passed, failure) -> dict:
+    """The simulator's verdicts (got: (scale, index) -> (stages passed, failure)) on every
+    build outside the closed-form regime (they replace the map's) and on the random
+    closed-form sample (agreement counted); passed and failure are updated in place."""
     agreed, disagreements = 0, []
-    todo = [(int(i), True) for i in np.sort(sample)] + [(int(i), False) for i in open_builds]
-    for i, is_sample in todo:
-        got = _simulated(scene, design, tolerances, seed, i, stages, accuracy, allow_skips)
-        if progress is not None:
-            progress()
-        if is_sample:
-            same = got == (int(passed[i]), failure[i])
-            agreed += same
-            if not same:
-                disagreements.append({"index": i, "closed_form": [int(passed[i]), failure[i]],
-                                      "simulated": list(got)})
-        passed[i], failure[i] = got
-    return {"simulated": len(todo), "agreed": int(agreed), "random": len(sample),
-            "left_closed_form": len(open_builds), "disagreements": disagreements}
+    for i in sample:
+        i = int(i)
+        result = got[(1.0, i)]
+        same = result == (int(passed[i]), failure[i])
+        agreed += same
+        if not same:
+            disagreements.append({"index": i, "closed_form": [int(passed[i]), failure[i]],
+                                  "simulated": list(result)})
+        passed[i], failure[i] = result
+    for i in open_builds:
+        passed[i], failure[i] = got[(1.0, int(i))]
+    return {"simulated": len(sample) + len(open_builds), "agreed": int(agreed),
+            "random": len(sample), "left_closed_form": len(open_builds),
+            "disagreements": disagreements}
 
 
-def _simulated(scene, design, tolerances, seed, index, stages, accuracy,
-               allow_skips=False) -> tuple[int, str]:
+def simulated(scene, design, tolerances, seed, index, stages, accuracy,
+              allow_skips=False, deviations=None) -> tuple[int, str]:
     """(stages passed, failure name or "") of one build in the event simulator: "" exactly
-    when the run completed."""
+    when the run completed. deviations: the build's own (one_build's, drawn already)."""
     from ..sim.core import SimulationRefused
 
+    if deviations is None:
+        deviations = one_build(tolerances, seed, index, stages)
     try:
-        result = simulate_one(scene, design, tolerances, seed, index, stages, accuracy=accuracy,
-                              allow_skips=allow_skips)
+        result = of(scene).simulate_build(scene, design, deviations, stages,
+                                          accuracy=accuracy, allow_skips=allow_skips)
     except SimulationRefused:  # a build the simulator cannot hold is no part a workshop makes
         return 0, "invalid_part"
     outcome = result.outcome
@@ -220,13 +246,20 @@ def _simulated(scene, design, tolerances, seed, index, stages, accuracy,
             outcome.failure.kind if outcome.failure else "incomplete")
 
 
-def _scale_curve(scene, design, tolerances, builds, stages, seed, scales, accuracy, *,
-                 headline, allow_skips=False) -> list[dict]:
-    """Yield against a common scale of every tolerance, on the first SCALE_BUILDS builds (at
-    most): the closed-form map, and the event simulator for every build outside its regime.
-    At scale 1 the point is the headline's own (headline: builds that passed, its
-    confirmation), on all its builds."""
+def _scale_maps(scene, design, tolerances, builds, stages, seed, scales) -> list:
+    """[(scale, the closed-form outcome of the first SCALE_BUILDS builds (at most) with every
+    tolerance scaled)] of the yield curve's scales other than 1."""
     count = min(builds, SCALE_BUILDS)
+    return [(scale, map_builds(scene, design, tolerances.scaled(scale), count, stages, seed))
+            for scale in scales if scale != 1.0]
+
+
+def _scale_curve(curve, got, builds, scales, *, headline) -> list[dict]:
+    """Yield against a common scale of every tolerance, on the first SCALE_BUILDS builds (at
+    most): the closed-form map (curve: _scale_maps), and the event simulator for every build
+    outside its regime (got: (scale, index) -> its verdict). At scale 1 the point is the
+    headline's own (headline: builds that passed, its confirmation), on all its builds."""
+    maps = dict(curve)
     out = []
     for scale in scales:
         if scale == 1.0:
@@ -235,12 +268,11 @@ def _scale_curve(scene, design, tolerances, builds, stages, seed, scales, accura
                         "ci_high": float(high), "builds": builds,
                         "simulated": headline[1]["left_closed_form"]})
             continue
-        scaled = tolerances.scaled(scale)
-        o = map_builds(scene, design, scaled, count, stages, seed)
-        passed, failure = o.stages_passed.copy(), o.failure.copy()
+        o = maps[scale]
+        failure = o.failure.copy()
         for i in np.flatnonzero(~o.closed_form):
-            passed[i], failure[i] = _simulated(scene, design, scaled, seed, int(i), stages,
-                                               accuracy, allow_skips)
+            failure[i] = got[(scale, int(i))][1]
+        count = len(failure)
         ok = int((failure == "").sum())
         low, high = wilson(ok, count)
         out.append({"scale": scale, "estimate": ok / count, "ci_low": float(low),

@@ -36,28 +36,27 @@ class OdePhases:
         for fun, kind in physics:
             if fun(t0, z0) < 0.0:
                 return t0, np.asarray(z0, dtype=float), kind, None
-        from scipy.integrate import solve_ivp  # 0.4 s to import: only when a phase needs it
+        from ....sim.rk import solve  # solve_ivp's RK45 / DOP853 in plain floats
 
-        events = [_event(fun, -1, True) for fun, _ in physics]
-        events += [_event(fun, direction, False) for fun, direction, _, _ in faces]
+        events = [(fun, -1, True) for fun, _ in physics]
+        events += [(fun, direction, False) for fun, direction, _, _ in faces]
         # Free steps (the sliding carry): DOP853 from rtol 1e-6 down - at 1e-8 RK45 took twice
         # its steps and more time than DOP853 at 1e-9. Steps capped by max_step (bouncing):
         # RK45 down to 1e-8, its cheaper steps win there (results/bench_accuracy.py).
         loosest = 1e-6 if max_step == math.inf else 1e-9
         method = "DOP853" if self.acc.rtol <= loosest else "RK45"
         t_end = t0 + self.phase_time if t_end is None else min(t_end, t0 + self.phase_time)
-        sol = solve_ivp(rhs, (t0, t_end), z0, method=method, rtol=self.acc.rtol,
-                        atol=self.acc.atol, events=events, dense_output=self.record,
-                        max_step=max_step)
-        best = (sol.t[-1], np.asarray(sol.y[:, -1]), None)
+        sol = solve(rhs, t0, t_end, z0, method=method, rtol=self.acc.rtol, atol=self.acc.atol,
+                    events=events, dense_output=self.record, max_step=max_step)
+        best = (sol.t_last, np.asarray(sol.y_last), None)
         if sol.status == 1:
             i = next(i for i in range(len(physics)) if len(sol.t_events[i]))
-            best = (sol.t_events[i][0], sol.y_events[i][0], physics[i][1])
+            best = (sol.t_events[i][0], np.asarray(sol.y_events[i][0]), physics[i][1])
         for n, (_, _, valid, kind) in enumerate(faces):
             i = len(physics) + n
             for t, z in zip(sol.t_events[i], sol.y_events[i]):
                 if t < best[0] and valid(z):
-                    best = (t, z, kind)
+                    best = (t, np.asarray(z), kind)
         return best[0], best[1], best[2], sol
 
     # ------------------------------------------------------------ sliding carry
@@ -266,9 +265,9 @@ class OdePhases:
                 direction = math.copysign(1.0, omega)
             physics = [(lambda t_, z: z[0] + back, "back_stop"),
                        (lambda t_, z: self.fs - z[0], "front_stop"),
-                       (lambda t_, z: direction * z[1], "turn")]
+                       (lambda t_, z, way=direction: way * z[1], "turn")]
             te, z, kind, _ = self._integrate(
-                lambda t_, y: [y[1], ph.swing_acceleration(y[0], y[1], sw, direction)],
+                lambda t_, y, way=direction: [y[1], ph.swing_acceleration(y[0], y[1], sw, way)],
                 t, [theta, omega], physics, [])
             theta, omega, t = float(z[0]), float(z[1]), te
             if kind in ("back_stop", "front_stop"):
@@ -380,10 +379,3 @@ class OdePhases:
                                       f"empty palm {k + 1} stopped"))
         return lambda: self._flight(t, *obj, stage=k + 1)
 
-
-def _event(fun, direction, terminal):
-    def ev(t, z):
-        return fun(t, z)
-
-    ev.direction, ev.terminal = direction, terminal
-    return ev
