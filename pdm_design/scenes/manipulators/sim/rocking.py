@@ -303,8 +303,10 @@ class RockingPhases:
         for box in self._obstacles(t0, k):
             slab = Box(box.palm, box.cx, 0.5 * self.row.palm_width,
                        box.y_high - self.row.palm_thickness, box.y_high)
-            for bx in BASE_CORNERS:
-                def point(z, bx=bx * self.row.body_width):
+            for frac in BASE_CORNERS:
+                bx = frac * self.row.body_width
+
+                def point(z, bx=bx):
                     return body_point(z[0], z[2], bx, 0.0, r)
 
                 faces += [(f, dr, v, (kind, box.palm, bx))
@@ -375,14 +377,15 @@ class RockingPhases:
         it; else it lies flat and the carry goes on."""
         theta, omega, _, phid = z
         lo, hi = self.row.support(s)
-        other = lo if d == hi else hi
+        at_hi = abs(d - hi) <= abs(d - lo)
+        other = lo if at_hi else hi
         vx, vy = centre_velocity(theta, omega, 0.0, phid, r)
         hold = None
         if held:
             hold = "back" if theta <= -self.alphas[k] else "front"
         r2 = self._rocker(k, s, other)
         th1, phi1, held2, _ = impact_onto_pin(vx, vy, phid, theta, omega, 0.0, r2, hold)
-        side = 1.0 if other == hi else -1.0
+        side = -1.0 if at_hi else 1.0
         if side * phi1 * max(self.h, self.row.body_width) > self.zeno_speed:
             self._log(t, "rock", k + 1, state, self._rock_state(k, (theta, th1, 0.0, phi1), r2),
                       f"comes down on the other end of its base: rocks about it at "
