@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import phases as ph
-from .geometry import Box, face_guards
+from .geometry import Box, face_guards, support_words
 
 START_ATOLS = 100.0  # rocking from rest on its edge starts at this many atol of edge speed
 # corners of the object's base (the two that can come down on a palm), from its base centre
@@ -220,9 +220,12 @@ class RockingPhases:
         return {"x": x, "y": y, "vx": cx + phid * by, "vy": cy - phid * bx, "theta": theta,
                 "omega": omega, "offset": r.e - r.d, "phi": phi, "spin": phid}
 
-    def _rock_landing(self, t, j, theta, w, vx, vy, offset, d, before, held_at, rec):
-        """A landing (or handover) whose impulse leaves the supported base: a plastic impact
-        about the support's end d, the object turning about it from then on."""
+    def _rock_landing(self, t, j, theta, w, vx, vy, offset, point, before, held_at, rec):
+        """A landing (or handover) whose impulse line meets the base at `point`, outside the
+        supported base: a plastic impact about the support's end beyond which it passes, the
+        object turning about it from then on."""
+        lo, hi = self.row.support(offset)
+        d = hi if point > hi else lo
         r = self._rocker(j, offset, d)
         th1, phi1, held, (px, py) = impact_onto_pin(vx, vy, 0.0, theta, w / r.link_length, 0.0,
                                                     r, held_at)
@@ -233,7 +236,7 @@ class RockingPhases:
         if rec is not None:
             rec["landing_speed"] = r.link_length * th1
         self._log(t, "rock", j + 1, before, state,
-                  f"the impulse leaves the supported base: the object turns about the "
+                  f"the impulse {support_words(point, (lo, hi))}: the object turns about the "
                   f"{'palm' if r.edge else 'base'}'s {'front' if side > 0 else 'rear'} edge at "
                   f"{phi1:+.4g} rad/s")
         if held:
@@ -251,9 +254,8 @@ class RockingPhases:
         r = self._rocker(k, s, d)
         phid = side * START_ATOLS * self.acc.atol / self.h
         self._log(t, "rock", k + 1, state, state,
-                  f"the contact force reaches the {'front' if side > 0 else 'rear'} edge of the "
-                  f"supported base: the object turns about the "
-                  f"{'palm' if r.edge else 'base'}'s edge")
+                  f"the contact force {support_words(point, support)}: the object turns about "
+                  f"the {'palm' if r.edge else 'base'}'s {'front' if side > 0 else 'rear'} edge")
         return lambda: self._rock(t, k, s, d, (theta, omega, 0.0, phid), False)
 
     def _rock(self, t0, k, s, d, z0, held):

@@ -332,8 +332,7 @@ class Run(OdePhases, LiftOffPhases, RockingPhases):
                 hold = None
                 if at_rest or held:
                     hold = "back" if theta <= -self.alphas[j] else "front"
-                step = self._rock_landing(t, j, theta, w, vx, vy, offset, hi if xb > hi else lo,
-                                          after, hold, rec)
+                step = self._rock_landing(t, j, theta, w, vx, vy, offset, xb, after, hold, rec)
                 if step is not None:
                     return step
             return self._fail(t, "tip", j + 1, after,
