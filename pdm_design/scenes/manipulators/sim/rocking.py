@@ -229,7 +229,7 @@ class RockingPhases:
         r = self._rocker(j, offset, d)
         th1, phi1, held, (px, py) = impact_onto_pin(vx, vy, 0.0, theta, w / r.link_length, 0.0,
                                                     r, held_at)
-        side = 1.0 if d > 0.0 else -1.0
+        side = 1.0 if point > hi else -1.0
         if side * phi1 <= 0.0 or py <= 0.0 or abs(px) > self.mu * py:
             return None  # (no rocking landing: the impulse slides, or does not lift the base)
         state = self._rock_state(j, (theta, th1, 0.0, phi1), r)
