@@ -258,7 +258,7 @@ class RockingPhases:
                   f"the {'palm' if r.edge else 'base'}'s {'front' if side > 0 else 'rear'} edge")
         return lambda: self._rock(t, k, s, d, (theta, omega, 0.0, phid), False)
 
-    def _rock(self, t0, k, s, d, z0, held):
+    def _rock(self, t0, k, s, d, z0, held, way=None):
         """The object turning about its pin on palm k (offset s, pin d along its base), state
         z = (th, th', phi, phi'); held: palm k rests on a stop. Guards (positive while the phase
         holds): phi back to 0 (`settle`), phi at pi/2 on its side (`tipped_over`: its base
@@ -269,7 +269,8 @@ class RockingPhases:
         r = self._rocker(k, s, d)
         side = 1.0 if z0[3] > 0.0 or (z0[3] == 0.0 and z0[2] > 0.0) else -1.0
         theta0, omega0 = z0[0], z0[1]
-        way = 1.0 if omega0 >= 0.0 else -1.0
+        if way is None:  # the sign of th' the pivots' Coulomb torque opposes
+            way = 1.0 if omega0 >= 0.0 else -1.0
         at_back = held and theta0 <= -self.alphas[k]
 
         def acc(z):
@@ -325,9 +326,15 @@ class RockingPhases:
         state = self._rock_state(k, z, r)
         if kind is None and t_split is not None and te >= t_split:
             return lambda: self._rock(te, k, s, d, z, held)
-        if kind == "turn":
+        if kind == "turn":  # the palm stops: it moves on the way its acceleration takes it
             z[1] = 0.0
-            return lambda: self._rock(te, k, s, d, z, held)
+            ahead = accelerations(z[0], 0.0, z[2], z[3], r, direction=1.0)[0]
+            back = accelerations(z[0], 0.0, z[2], z[3], r, direction=-1.0)[0]
+            if ahead <= 0.0 <= back:
+                return self._fail(te, "stall", k + 1, state,
+                                  f"palm {k + 1} stops where its pivot friction holds it, the "
+                                  "object rocking on it (not followed)")
+            return lambda: self._rock(te, k, s, d, z, held, 1.0 if ahead > 0.0 else -1.0)
         if kind == "release":
             self.rest_since[k] = math.inf
             self._log(te, "release", k + 1, state, state,
