@@ -455,10 +455,12 @@ def test_a_stage_is_the_closed_form_stage_map_or_a_named_failure(alpha, span, q,
     if lift >= -1e-9 * G * l:
         predicted.add("lift_off")
     if abs(px) >= (1 - 1e-9) * w_over_h * py or math.tan(beta) >= (1 - 1e-9) * w_over_h:
-        predicted.add("tip")
+        predicted |= {"tip", "rock"}  # the onset: the object rocks from there (rocking.py)
     first = result.stages[0] if result.stages else {}
-    # a lift-off is an event the run goes on from: the first failure or lift-off is judged
-    stop = next((e for e in result.events if e.failure or e.kind == "lift_off"), None)
+    # a lift-off or a tip onset is an event the run goes on from: the first failure, lift-off
+    # or onset is judged
+    stop = next((e for e in result.events if e.failure or e.kind in ("lift_off", "rock")),
+                None)
     if math.isnan(expected):  # cannot pass the top: a stall, unless something comes first
         assert stop.kind in predicted | {"stall"}, stop
     elif predicted:

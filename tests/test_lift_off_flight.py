@@ -372,8 +372,23 @@ def test_runs_that_never_lift_off_are_unchanged_bit_for_bit(before_and_after):
     assert {0, 1, 3, 4} <= set(never) and len(never) >= 50  # the paper's runs among them
     for i in never:  # json keeps every float's repr: equal text is equal bits (the events'
         # words are left out: their wording is not the physics, and it has been improved since)
+        if _tipped(old[i]) and cases[i]["eps"] == 0.0:
+            # a tip onset no longer ends the run: the object rocks (sim/rocking.py) - the run is
+            # the same up to it, where a `rock` event starts (or a tip the model does not follow)
+            events_old = _numbers(old[i])["events"][:-1]
+            events_new = _numbers(new[i])["events"]
+            assert json.dumps(events_new[:len(events_old)], sort_keys=True) == \
+                json.dumps(events_old, sort_keys=True), i
+            follow = events_new[len(events_old)]
+            assert follow["kind"] in ("rock", "tip"), i
+            assert follow["time"] == old[i]["events"][-1]["time"], i
+            continue
         assert json.dumps(_numbers(new[i]), sort_keys=True) == \
             json.dumps(_numbers(_failing_stage(old[i])), sort_keys=True), i
+
+
+def _tipped(run: dict) -> bool:
+    return bool(run["events"]) and run["events"][-1]["kind"] == "tip"
 
 
 def _failing_stage(run: dict) -> dict:

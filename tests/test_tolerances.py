@@ -17,7 +17,7 @@ from pdm_design.scenes.manipulators.tolerances import meets_another_palm, simula
 from pdm_design.spec import load_spec
 from pdm_design.tolerances import Tolerance, Tolerances, run_builds
 from pdm_design.tolerances.draw import draw
-from pdm_design.tolerances.yield_ import wilson, yield_of
+from pdm_design.tolerances.yield_ import map_builds, wilson, yield_of
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 PAPER = str(PROBLEMS / "paper_manipulators.toml")
@@ -117,11 +117,17 @@ def test_yield_of_a_one_quantity_interval_is_its_exact_probability(paper, distri
         exact = (high + t) / (2 * t)
         assert t < reach
     tols = Tolerances((Tolerance("feed_x", "lot", t, 1.0, distribution),))
-    r = yield_of(scene, design, tols, builds=20_000, stages=stages, seed=3, confirm=0,
-                 scales=())
-    assert r.ci_low <= exact <= r.ci_high
-    assert r.ci_high - r.ci_low < 0.015
-    assert set(r.failures) == {"tip"}
+    # the closed-form map judges the onset of tipping exactly (its builds are then left to the
+    # event simulator, where the object rocks: the yield is at least the onset's probability)
+    out = map_builds(scene, design, tols, 20_000, stages, 3)
+    low, high = wilson((out.failure == "").sum(), 20_000)
+    assert low <= exact <= high
+    assert high - low < 0.015
+    assert set(out.failure) - {""} == {"tip"}
+    assert not out.closed_form[out.failure == "tip"].any()
+    r = yield_of(scene, design, tols, builds=2000, stages=stages, seed=3, confirm=0, scales=(),
+                 sensitivity_samples=0)
+    assert r.estimate >= (out.failure[:2000] == "").mean()
 
 
 @pytest.mark.parametrize("dominant, feed, link", [("feed_x", 0.3, 1e-5),
@@ -158,7 +164,8 @@ def test_vectorised_map_and_event_simulator_agree_build_by_build(paper):
     dev = draw(ALL, builds, stages, seed=11)
     out = run_builds(scene, design, dev, stages)
     closed = np.flatnonzero(out.closed_form)
-    assert len(closed) > 100 and {"", "tip"} <= set(out.failure[closed])
+    assert len(closed) > 50 and "" in set(out.failure[closed])
+    assert "tip" not in set(out.failure[closed])  # a tip onset is the simulator's to follow
     for i in closed:
         one = {k: v[i:i + 1] for k, v in dev.items()}
         sim = simulate_build(scene, design, one, stages).outcome
@@ -377,7 +384,9 @@ def test_at_large_tolerances_the_map_judges_alone_only_what_it_follows(tolerance
             name = "" if run.outcome.completed else run.outcome.failure.kind
             assert (run.outcome.stages_passed, name) == (out.stages_passed[i], out.failure[i]), i
     assert others > (0 if scale == 1.0 else 10)  # the sample holds such builds
-    assert out.closed_form.sum() >= 5  # and builds the map judges alone
+    # and builds the map judges alone (at 2 and 3 times the tolerance every build meets another
+    # palm or reaches a tip onset, which the simulator follows: none)
+    assert out.closed_form.sum() >= (5 if scale == 1.0 else 0)
 
 
 def test_a_feed_passing_over_a_low_palm_is_left_to_the_simulator():

@@ -218,9 +218,12 @@ class _Builds:
                                                                       0.5 * self.W - offset)
 
     def tips(self, point, offset, w):
+        """The tip onset: the force line reaches an end of the supported base. The object then
+        rocks (sim/rocking.py): it may settle, be caught or tip over, which the event simulator
+        judges (closed form False; with restitution > 0 no build is closed form anyway)."""
         lo, hi = self.support(offset, w)
-        return [("tip", (hi - point) / self.half_w, True), ("tip", (point - lo) / self.half_w,
-                                                             True)]
+        return [("tip", (hi - point) / self.half_w, False), ("tip", (point - lo) / self.half_w,
+                                                              False)]
 
     def meets(self, passed, offset, w):
         """The object comes down on a palm's top (else it passes it or hits its side)."""

@@ -39,6 +39,11 @@ EVENT_KINDS = {
     "back_stop": "an empty palm swings back onto its back stop",
     "pivot_friction_stop": "an empty palm stops mid-swing where pivot friction holds it",
     "complete": "the last manipulator carried the object to its handover angle",
+    "rock": "the object starts to turn about an edge of its supported base (the force or "
+            "impulse line reached it), or rocks on to the base's other end",
+    "settle": "the rocking object comes back down flat on its palm and is carried on",
+    "catch": "a corner of the rocking object comes down on another palm, which carries it on",
+    "release": "the rocking object drags its palm off the stop it rested on",
     "lift_off": "the palm's normal force vanished (v^2 >= g l cos th): the object flies on and "
                 "the empty palm swings alone",
 }
@@ -46,7 +51,11 @@ FAILURE_KINDS = {
     "blocked": "the object hits the side or underside of a palm (outside the model)",
     "fell_clear": "the object fell past the row",
     "missed": "the object lifted off and fell past the row without landing on a palm",
-    "tip": "the contact force leaves the object's supported base: it tips (outside the model)",
+    "tip": "the object tips in a way the model does not follow: with restitution > 0, while "
+           "sliding, or while it rocks it slides on or leaves its edge, or comes to rest across "
+           "two palms",
+    "tipped_over": "the rocking object turned to pi/2 about its edge, or left its edge with its "
+                   "centre of mass past the edge's vertical: it fell off",
     "stall": "the carry stops before the top: the palm swings back to its back stop",
     "slid_off": "the object's centre slid off the end of its palm",
     "stranded": "the palm reached its front stop still carrying the object (no handover)",

@@ -238,6 +238,9 @@ class OdePhases:
             return self._lift_off(te, k, theta, omega, s, 0.0,
                                   f"the normal force vanishes at th = {theta:.6g} rad")
         fx, fn = force(z)
+        if kind == "tip" and self.eps == 0.0:  # the object turns about its edge (rocking.py)
+            return self._rock_onset(te, k, theta, omega, s, -half_h * fx / fn, (lo, hi),
+                                    state)
         held = ph.held_by_friction(theta, sw)
         details = {
             "tip": f"the contact force crosses the base at {-half_h * fx / fn:+.4g} m, outside "

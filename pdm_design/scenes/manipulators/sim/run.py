@@ -19,6 +19,7 @@ from . import phases as ph
 from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
+from .rocking import RockingPhases
 
 FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object is given up
 ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact
@@ -26,7 +27,7 @@ PHASE_TIME = 200.0  # longest integrated phase, in units of sqrt(l / g)
 EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chattering)
 
 
-class Run(OdePhases, LiftOffPhases):
+class Run(OdePhases, LiftOffPhases, RockingPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record, parts=None,
@@ -327,6 +328,13 @@ class Run(OdePhases, LiftOffPhases):
         lo, hi = self.row.support(offset)
         xb = ph.impact_force_point(imp.pt, imp.pn, self.h) if imp.pn > 0.0 else 0.0
         if not lo <= xb <= hi:
+            if self.eps == 0.0:  # the object turns about the support's end (rocking.py)
+                hold = None
+                if at_rest or held:
+                    hold = "back" if theta <= -self.alphas[j] else "front"
+                step = self._rock_landing(t, j, theta, w, vx, vy, offset, xb, after, hold, rec)
+                if step is not None:
+                    return step
             return self._fail(t, "tip", j + 1, after,
                               f"the impulse {support_words(xb, (lo, hi))}")
         if bounce:
@@ -556,6 +564,9 @@ class Run(OdePhases, LiftOffPhases):
         if kind == "lift_off":  # the object flies on (liftoff.py)
             return self._lift_off(te, k, theta_e, omega_e, s, 0.0,
                                   f"v^2 = g l cos th at th = {theta_e:.6g} rad")
+        if kind == "tip" and self.eps == 0.0:  # the object turns about its edge (rocking.py)
+            return self._rock_onset(te, k, theta_e, omega_e, s,
+                                    ph.stuck_force_point(theta_e, self.h), (lo, hi), state)
         details = {
             "tip": f"the contact force "
                    f"{support_words(ph.stuck_force_point(theta_e, self.h), (lo, hi))}, "
