@@ -6,7 +6,8 @@ collected tests. Figures in results/bench_test_suite.md.
 
 `run` runs `python3 -m pytest -q -p no:cacheprovider` under /usr/bin/time -v with
 PDM_TEST_MEMLOG set (tests/conftest.py): each pytest process (the pytest-xdist workers and the
-controller) writes its peak resident memory (ru_maxrss), summed here: the suite's peak memory is
+controller) writes its peak resident memory (ru_maxrss) to a log (kept at PDM_TEST_MEMLOG
+when that is set, with each module's figures), summed here: the suite's peak memory is
 at most that sum (the workers' peaks need not fall at the same moment). /usr/bin/time's own
 "Maximum resident set size" is the largest single process of the tree, not a sum.
 `ids` writes the sorted node ids of `pytest --collect-only` (distribution off) for the default
@@ -33,12 +34,14 @@ TIME_FIELDS = {
 
 def run(args: list[str]) -> None:
     with tempfile.TemporaryDirectory() as folder:
-        log = Path(folder) / "memory.log"
+        log = Path(os.environ.get("PDM_TEST_MEMLOG") or Path(folder) / "memory.log")
+        log.unlink(missing_ok=True)
         env = {**os.environ, "PDM_TEST_MEMLOG": str(log)}
         out = subprocess.run(["/usr/bin/time", "-v", sys.executable, "-m", "pytest", "-q",
                               "-p", "no:cacheprovider", *args],
                              cwd=ROOT, env=env, capture_output=True, text=True)
         lines = log.read_text().splitlines() if log.exists() else []
+    print(out.stdout[out.stdout.find("slowest"):][:4000] if "slowest" in out.stdout else "")
     summary = [ln for ln in out.stdout.splitlines() if re.search(r" (passed|failed)", ln)]
     print(summary[-1] if summary else out.stdout[-2000:])
     for name, pattern in TIME_FIELDS.items():
