@@ -235,12 +235,10 @@ def _series(blocks, eps):
 def second_order_term(pieces: ChainPieces, reduce, args):
     """reduce(g, sd[, cross]) (an MX scalar of every row's mean, sd and cross term: a bound,
     nines) at the SX arguments args = [x, sigma_each, sigma_lot] (expressions of a few free
-    symbols, or numbers: then a DM), as an SX expression with its value, gradient and Hessian
-    in those free symbols v: one node of the SX graph at any number of calls. The node
-    computes the three together, carrying second-order Taylor coefficients in v along the
-    chain (ChainPieces.taylor), and is held fixed under differentiation; the expression is
-    its Taylor polynomial about the point evaluated, b + G d + d' H d / 2 with
-    d = v - held(v): 0 in value, the identity under differentiation."""
+    symbols v, or numbers: then a DM), as one node of the SX graph at any number of calls:
+    its value the plain chain's (ChainPieces.compose), its first and second derivatives in v
+    those of one pass carrying second-order Taylor coefficients in v along the chain
+    (ChainPieces.taylor), remembered between the NLP's gradient and Hessian at one point."""
     u = ca.vertcat(*[ca.vec(ca.SX(a)) for a in args])
     free = ca.symvar(u)
     if not free:
@@ -258,12 +256,46 @@ def second_order_term(pieces: ChainPieces, reduce, args):
     b = reduce(g, ca.sqrt(var + VARIANCE_FLOOR), *cross)
     grad = ca.jacobian(b, eps)
     at = ca.substitute([b, grad.T, ca.jacobian(grad, eps)], [eps], [ca.DM.zeros(nv)])
-    memo = _Remembered(ca.Function("chain_taylor", [vm], at))
-    _REMEMBERED.append(memo)  # a Callback lives as long as the Python object does
-    node = _fixed("chain_taylor_node", vm, memo(vm))
-    value, gradient, hessian = node(v)
-    d = v - _fixed("held", vm, [vm])(v)
-    return value + ca.dot(gradient, d) + 0.5 * ca.bilin(hessian, d, d)
+    taylor = _Remembered(ca.Function("chain_taylor", [vm], at))
+    _REMEMBERED.append(taylor)  # a Callback lives as long as the Python object does
+    plain = [o[0] for o in pieces.compose(series(vm)[:u.numel()])]
+    value = reduce(plain[0], ca.sqrt(plain[1] + VARIANCE_FLOOR), *plain[2:])
+    return _differentiated(vm, value, taylor)(v)
+
+
+def _differentiated(v, value, taylor):
+    """Function v -> value (MX of the MX symbol v, a scalar) whose first and second
+    derivatives are taylor(v)'s gradient and Hessian: its forward and reverse derivatives,
+    and theirs, given as such (one direction at a time), so that an SX graph calling it as one
+    node evaluates the value alone and its derivative functions the Taylor coefficients."""
+    n = v.numel()
+    _, G, H = taylor(v)
+
+    def sym(name, size=n):
+        return ca.MX.sym(name, size)
+
+    def fn(name, ins, outs, cache=()):
+        opts = {"never_inline": True, "max_num_dir": 1, "cache": {f.name(): f for f in cache}}
+        return ca.Function(name, [v, *ins.values()], list(outs.values()), ["i0", *ins],
+                           list(outs), opts)
+
+    o, a, oa, fa, fo = sym("out_o0", 1), sym("adj_o0", 1), sym("out_adj_i0"), \
+        sym("fwd_adj_o0", 1), sym("fwd_out_o0", 1)
+    f1, f2, ff, ofo, afo, aa = sym("fwd_i0"), sym("fwd_i0_"), sym("fwd_fwd_i0"), \
+        sym("out_fwd_o0", 1), sym("adj_fwd_o0", 1), sym("adj_adj_i0")
+    adj = fn("adj1_V", {"out_o0": o, "adj_o0": a}, {"adj_i0": G * a}, [
+        fn("fwd1_adj1_V", {"out_o0": o, "adj_o0": a, "out_adj_i0": oa, "fwd_i0": f1,
+                           "fwd_out_o0": fo, "fwd_adj_o0": fa},
+           {"fwd_adj_i0": H @ f1 * a + G * fa}),
+        fn("adj1_adj1_V", {"out_o0": o, "adj_o0": a, "out_adj_i0": oa, "adj_adj_i0": aa},
+           {"adj_i0": H @ aa * a, "adj_out_o0": ca.MX(1, 1), "adj_adj_o0": ca.dot(G, aa)})])
+    fwd = fn("fwd1_V", {"out_o0": o, "fwd_i0": f1}, {"fwd_o0": ca.dot(G, f1)}, [
+        fn("fwd1_fwd1_V", {"out_o0": o, "fwd_i0": f1, "out_fwd_o0": ofo, "fwd_fwd_i0_": f2,
+                           "fwd_out_o0": fo, "fwd_fwd_i0": ff},
+           {"fwd_fwd_o0": ca.bilin(H, f1, f2) + ca.dot(G, ff)}),
+        fn("adj1_fwd1_V", {"out_o0": o, "fwd_i0": f1, "out_fwd_o0": ofo, "adj_fwd_o0": afo},
+           {"adj_i0": H @ f1 * afo, "adj_out_o0": ca.MX(1, 1), "adj_fwd_i0": G * afo})])
+    return fn("V", {}, {"o0": value}, [fwd, adj])
 
 
 _REMEMBERED: list = []  # every _Remembered made: an NLP may call it as long as the process runs
@@ -298,26 +330,6 @@ class _Remembered(ca.Callback):
             answer = list(answer) if isinstance(answer, (list, tuple)) else [answer]
             self.last = (key, answer)
         return answer
-
-
-def _fixed(name, v, outs):
-    """Function v -> outs (MX of the MX symbol v) held fixed under differentiation: its
-    derivatives 0 (its forward and reverse derivatives given as such, one direction at a
-    time), a node never inlined into an SX graph."""
-    names = [f"o{k}" for k in range(len(outs))]
-    values = [ca.MX.sym(n, o.sparsity()) for n, o in zip(names, outs, strict=True)]
-    fwd = ca.Function(f"fwd1_{name}", [v, *values, ca.MX.sym("seed", v.sparsity())],
-                      [ca.MX.zeros(o.sparsity().size()) for o in outs],
-                      ["i0", *[f"out_{n}" for n in names], "fwd_i0"],
-                      [f"fwd_{n}" for n in names])
-    adj = ca.Function(f"adj1_{name}", [v, *values, *[ca.MX.sym(f"seed_{n}", o.sparsity())
-                                                      for n, o in zip(names, outs)]],
-                      [ca.MX.zeros(v.sparsity().size())],
-                      ["i0", *[f"out_{n}" for n in names], *[f"adj_{n}" for n in names]],
-                      ["adj_i0"])
-    return ca.Function(name, [v], outs, ["i0"], names,
-                       {"never_inline": True, "max_num_dir": 1,
-                        "cache": {fwd.name(): fwd, adj.name(): adj}})
 
 
 def _pack(parts):
