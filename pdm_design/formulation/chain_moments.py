@@ -16,6 +16,12 @@ a row's variance Gs R Gs^T + |(Gs C + G_k) S_e^1/2|^2 + |G_{k+1} S_e^1/2|^2
 O(stages). Means are second order, g + tr(H Sz) / 2, and Q (and each row's extra variance)
 the quadratic terms' own covariance, tr(H_a Sz H_b Sz) / 2 (exact for a quadratic of normal z).
 
+The chain is three SX Functions (the first stage, a call that carries the state on, the last
+call) with the middle one iterated by mapaccum (ChainPieces): one graph at any number of
+stages. In an NLP the scene's bound is one node of the free symbols (second_order_term): its
+value the plain chain's, its gradient and Hessian carried along the chain as second-order
+Taylor coefficients (docs/optimizer.md section 10, "Cost").
+
 The failure probability: the union bound sum_i Phi(-beta_i) (failure_bound, nines), or
 Hunter's bound over each row and its own one call before (tree_nines, log_new_failure), in
 logarithms with a tail-accurate log Phi (log_tail).
