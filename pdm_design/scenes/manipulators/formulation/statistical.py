@@ -20,8 +20,9 @@ and one L on the lot; one stage is
 and a row's variance Gs R Gs^T + |(Gs C + G_k) S_e^1/2|^2 + |G_{k+1} S_e^1/2|^2
 + |(Gs L + G_L) S_L^1/2|^2: exact first-order covariance in O(stages), each stage a small
 CasADi Function (built once) of the design, iterated (chain_moments.ChainPieces), so the
-yield is a smooth function of the design for IPOPT, one node of its NLP at any row length. A quantity toleranced per lot that is a part's (every link alike, say) is a lot
-deviation added to every part.
+yield is a smooth function of the design for IPOPT, one node of its NLP at any row length.
+A quantity toleranced per lot that is a part's (every link alike, say) is a lot deviation
+added to every part.
 
 The landing place's drift along the row is partly second order (the concave handover map's
 r(delta), docs/optimizer.md section 4, which the worst case accumulates linearly): it enters
