@@ -158,13 +158,15 @@ class ChainPieces:
         outs[1] = ca.sqrt(outs[1] + VARIANCE_FLOOR)
         return ca.Function("chain_rows", args, outs)
 
-    def taylor(self, nv: int):
+    def taylor(self, nv: int, moving: tuple[bool, ...]):
         """(head, step, tail) carrying every input's, state's and output's second-order Taylor
-        coefficients in nv directions (_taylor), built once per nv."""
-        if nv not in self._taylor:
-            self._taylor[nv] = tuple(None if f is None else _taylor(f, nv)
-                                     for f in (self.head, self.step, self.tail))
-        return self._taylor[nv]
+        coefficients in nv directions (_taylor; moving: the entries of u that depend on the
+        directions, the others' derivatives 0), built once per nv and moving."""
+        key = (nv, moving)
+        if key not in self._taylor:
+            self._taylor[key] = tuple(None if f is None else _taylor(f, nv, moving)
+                                      for f in (self.head, self.step, self.tail))
+        return self._taylor[key]
 
 
 def _block(o, k, blocks):
@@ -202,16 +204,20 @@ def _call(fn, layout, crossed, carries, first=False):
     return ca.Function("stage_call", [u] if first else [state, u], ca.cse(outs))
 
 
-def _taylor(fn, nv):
-    """fn (SX, column inputs and outputs) on second-order Taylor coefficients in nv
-    directions: each input and output the stack [value; d/dv_i (i < nv); d2/dv_i dv_j
-    (i <= j)], so that a chain of such calls carries its outputs' first and second
-    derivatives in those directions (forward-mode AD, symbolic on one call)."""
+def _taylor(fn, nv, moving):
+    """fn (SX, column inputs and outputs, u the last input) on second-order Taylor
+    coefficients in nv directions: each input and output the stack [value; d/dv_i (i < nv);
+    d2/dv_i dv_j (i <= j)], so that a chain of such calls carries its outputs' first and
+    second derivatives in those directions (forward-mode AD, symbolic on one call); the
+    derivatives of u's entries not `moving` 0 (fewer terms)."""
     pairs = _pairs(nv)
     blocks = 1 + nv + len(pairs)
     eps = ca.SX.sym("eps", nv)
     ins = [ca.SX.sym(f"in{k}", blocks * fn.size1_in(k)) for k in range(fn.n_in())]
-    outs = fn(*[_series([_block(a, k, blocks) for k in range(blocks)], eps) for a in ins])
+    mask = ca.DM([1.0 if m else 0.0 for m in moving])
+    coefficients = [[_block(a, k, blocks) for k in range(blocks)] for a in ins]
+    coefficients[-1] = coefficients[-1][:1] + [c * mask for c in coefficients[-1][1:]]
+    outs = fn(*[_series(c, eps) for c in coefficients])
     stacked = []
     for o in outs:
         J = ca.jacobian(o, eps)
@@ -245,6 +251,8 @@ def second_order_term(pieces: ChainPieces, reduce, args):
     its value the plain chain's (ChainPieces.compose), its first and second derivatives in v
     those of one pass carrying second-order Taylor coefficients in v along the chain
     (ChainPieces.taylor), remembered between the NLP's gradient and Hessian at one point."""
+    import numpy as np
+
     u = ca.vertcat(*[ca.vec(ca.SX(a)) for a in args])
     free = ca.symvar(u)
     if not free:
@@ -257,7 +265,8 @@ def second_order_term(pieces: ChainPieces, reduce, args):
         u, *[J[:, i] for i in range(nv)],
         *[ca.jacobian(J[:, i], v)[:, j] for i, j in _pairs(nv)])])
     vm, eps = ca.MX.sym("v", nv), ca.MX.sym("eps", nv)
-    outs = pieces.compose(series(vm), pieces.taylor(nv), 1 + nv + len(_pairs(nv)))
+    moving = tuple(bool(n) for n in np.asarray(ca.sum2(ca.DM(J.sparsity(), 1.0))).ravel())
+    outs = pieces.compose(series(vm), pieces.taylor(nv, moving), 1 + nv + len(_pairs(nv)))
     g, var, *cross = [_series(o, eps) for o in outs]
     b = reduce(g, ca.sqrt(var + VARIANCE_FLOOR), *cross)
     grad = ca.jacobian(b, eps)
