@@ -104,6 +104,7 @@ def main() -> None:
     parser.add_argument("--old", type=Path, required=True)
     parser.add_argument("--builds", type=int, default=10000)
     parser.add_argument("--cases", default="all", help="'all' or indices, e.g. 0,1")
+    parser.add_argument("--out", type=Path, default=ROOT / "results" / "bench_max_yield_speed.md")
     args = parser.parse_args()
     chosen = range(len(CASES)) if args.cases == "all" else [int(i) for i in
                                                              args.cases.split(",")]
@@ -122,8 +123,7 @@ def main() -> None:
             print(source, stages, cell(old, "wall", "{:.1f}"), cell(new, "wall", "{:.1f}"),
                   flush=True)
     command = "python results/bench_max_yield_speed.py " + " ".join(sys.argv[1:])
-    (ROOT / "results" / "bench_max_yield_speed.md").write_text(report(rows, args.builds,
-                                                                       command))
+    args.out.write_text(report(rows, args.builds, command))
 
 
 def report(rows, builds, command) -> str:

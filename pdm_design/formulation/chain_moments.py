@@ -221,10 +221,19 @@ def _taylor(fn, nv, moving):
     stacked = []
     for o in outs:
         J = ca.jacobian(o, eps)
-        second = [ca.jacobian(J[:, i], eps)[:, j] for i, j in pairs]
-        stacked.append(ca.vertcat(o, *[J[:, i] for i in range(nv)], *second))
+        stacked.append(ca.vertcat(o, *[J[:, i] for i in range(nv)], *_second(J, eps)))
     stacked = ca.substitute(stacked, [eps], [ca.DM.zeros(nv)])
     return ca.Function(f"{fn.name()}_taylor", ins, ca.cse(stacked))
+
+
+def _second(J, v):
+    """The second derivatives d2/dv_i dv_j (i <= j, _pairs' order) from the Jacobian J in v:
+    each column of J differentiated once."""
+    out = []
+    for i in range(v.numel()):
+        Ji = ca.jacobian(J[:, i], v)
+        out += [Ji[:, j] for j in range(i, v.numel())]
+    return out
 
 
 def _pairs(nv):
@@ -261,9 +270,8 @@ def second_order_term(pieces: ChainPieces, reduce, args):
     v = ca.vertcat(*free)
     nv = v.numel()
     J = ca.jacobian(u, v)
-    series = ca.Function("arguments", [v], [ca.vertcat(
-        u, *[J[:, i] for i in range(nv)],
-        *[ca.jacobian(J[:, i], v)[:, j] for i, j in _pairs(nv)])])
+    series = ca.Function("arguments", [v], [ca.vertcat(u, *[J[:, i] for i in range(nv)],
+                                                       *_second(J, v))])
     vm, eps = ca.MX.sym("v", nv), ca.MX.sym("eps", nv)
     moving = tuple(bool(n) for n in np.asarray(ca.sum2(ca.DM(J.sparsity(), 1.0))).ravel())
     outs = pieces.compose(series(vm), pieces.taylor(nv, moving), 1 + nv + len(_pairs(nv)))
