@@ -15,6 +15,12 @@ a row's variance Gs R Gs^T + |(Gs C + G_k) S_e^1/2|^2 + |G_{k+1} S_e^1/2|^2
 O(stages). Means are second order, g + tr(H Sz) / 2, and Q (and each row's extra variance)
 the quadratic terms' own covariance, tr(H_a Sz H_b Sz) / 2 (exact for a quadratic of normal z).
 
+The chain is three SX Functions (the first stage, a call that carries the state on, the last
+call) with the middle one iterated by mapaccum (ChainPieces): one graph at any number of
+stages. In an NLP the scene's bound is one node of the free symbols (second_order_term): its
+value the plain chain's, its gradient and Hessian carried along the chain as second-order
+Taylor coefficients (docs/optimizer.md section 10, "Cost").
+
 The failure probability: the union bound sum_i Phi(-beta_i) (failure_bound, nines), or
 Hunter's bound over each row and its own one call before (tree_nines, log_new_failure), in
 logarithms with a tail-accurate log Phi (log_tail).
@@ -45,12 +51,27 @@ def sigmas(tolerances, parts, lots, scale=1.0):
             lot[lots.index(tol.quantity)] = s
     return each, lot
 
-def linearise(rows, state, x, s, ek, ek1, el):
+def active(values) -> tuple[bool, ...]:
+    """Which of the sigmas `values` (numbers or SX) can be other than 0: a deviation of sigma
+    0 moves nothing, and the chain leaves it out of z."""
+    return tuple(not (isinstance(v, (int, float)) and v == 0.0) for v in values)
+
+
+def _picked(v, keep):
+    """The elements of the SX column v that `keep` marks (all of them when it is None)."""
+    if keep is None:
+        return v
+    return ca.vertcat(ca.SX(0, 1), *[v[i] for i in range(v.numel()) if keep[i]])
+
+
+def linearise(rows, state, x, s, ek, ek1, el, active_each=None, active_lot=None):
     """(Function (x, s, Sz) -> (g + tr(H Sz) / 2, dg/dz, tr((H Sz)^2) / 2 of each row[,
     s' + tr(H Sz) / 2, ds'/dz, tr(H_a Sz H_b Sz) / 2 of the state's]), row names) at zero
     deviation, z = (s, ek, ek1, el), Sz the covariance of z. rows: [(name, expression)];
-    state: the next state (None for a last stage)."""
-    z = ca.vertcat(s, ek, ek1, el)
+    state: the next state (None for a last stage). active_each, active_lot: the part and lot
+    deviations z holds (`active`; every one by default), the others 0."""
+    z = ca.vertcat(s, _picked(ek, active_each), _picked(ek1, active_each),
+                   _picked(el, active_lot))
     Sz = ca.SX.sym("Sz", z.numel(), z.numel())
     outs = []
     names = tuple(name for name, _ in rows)
@@ -67,57 +88,283 @@ def linearise(rows, state, x, s, ek, ek1, el):
             spread = ca.vertcat(*[0.5 * ca.trace(h @ h) for h in HS])
         outs += [f + mean, J, spread]
     deviations = [ek, ek1, el]
-    outs = ca.substitute(outs, deviations, [ca.DM.zeros(v.shape) for v in deviations])
+    outs = ca.cse(ca.substitute(outs, deviations, [ca.DM.zeros(v.shape) for v in deviations]))
     return ca.Function("stage_linearised", [x, s, Sz], outs), names
 
 
-def reliability(first, stage, x, calls: int, sigma_each, sigma_lot, neighbours=False):
-    """(g, sd, names) of every row: the first stage's (first: (Function, names)), then `calls`
-    stages (stage(k): (Function, names) of call k; the last call's state is not used): mean
-    values (second order) and standard deviations (first order and the quadratic terms'),
-    CasADi expressions of x (DM for a number x). neighbours: also (previous, cross), the index
-    of each row's own in the call before when both calls are the same stage map (-1 where not:
-    a numpy array) and their first-order covariance (0 where none)."""
-    Se = ca.diag(ca.vertcat(*[s**2 for s in sigma_each]))
-    Sl = ca.diag(ca.vertcat(*[s**2 for s in sigma_lot]))
-    ne, nl = Se.shape[0], Sl.shape[0]
-    fn, names = first
-    ns = fn.size1_in(1)
-    R, C, L = ca.DM.zeros(ns, ns), ca.DM.zeros(ns, ne), ca.DM.zeros(ns, nl)
-    g, Gz, q, s, Fz, Q = fn(x, ca.DM.zeros(ns), _covariance(R, C, L, Se, Sl))
-    gs, vs, labels = [g], [_variance(Gz, R, C, L, Se, Sl) + q], list(names)
-    previous, cross, before = [-1] * len(names), [ca.DM.zeros(len(names))], None
-    R, C, L = Q, Fz[:, ns:ns + ne], Fz[:, ns + 2 * ne:]
-    for k in range(calls):
-        here = stage(k)
-        fn, names = here
-        Sz = _covariance(R, C, L, Se, Sl)
-        out = fn(x, s, Sz)
-        g, Gz, q = out[:3]
-        if neighbours and before is not None and before[0] is here:
-            start = len(labels) - len(names)
-            previous += list(range(start, start + len(names)))
-            cross.append(_successive(before[1:], Gz, ns, ne))
-        else:
-            previous += [-1] * len(names)
-            cross.append(ca.DM.zeros(len(names)))
-        gs.append(g)
-        labels += names
-        vs.append(_variance(Gz, R, C, L, Se, Sl) + q)
-        if k < calls - 1:
-            s, Fz, Q = out[3:]
-            before = (here, Gz, Sz, Fz)
-            A, Bk = Fz[:, :ns], Fz[:, ns:ns + ne]
-            Bk1, BL = Fz[:, ns + ne:ns + 2 * ne], Fz[:, ns + 2 * ne:]
-            AC = A @ C + Bk
-            R = A @ R @ A.T + AC @ Se @ AC.T + Q
-            C, L = Bk1, A @ L + BL
-    rows = (ca.vertcat(*gs), ca.sqrt(ca.vertcat(*vs) + VARIANCE_FLOOR), tuple(labels))
-    if not neighbours:
-        return rows
+class ChainPieces:
+    """A row of stage maps as three SX Functions of u = (x, sigma_each, sigma_lot) (nx, ne,
+    nl numbers) and the state carried from call to call (the mean s, R, C, L of the module
+    docstring, and with neighbours the call's row Jacobian, input covariance and state
+    Jacobian, for the next call's cross terms):
+        head(u) -> (state, g, variance[, cross])            the first stage (first)
+        step(state, u) -> (state', g, variance[, cross])    calls 0 .. calls - 2 (middle)
+        tail(state, u) -> (g, variance[, cross])            the last call (last, or middle)
+    g: the rows' means (second order); variance: first order and the quadratic terms'; cross:
+    each row's first-order covariance with its own in the call before (0 where none).
+    `compose` iterates step with mapaccum: an MX graph of the same size at any number of
+    calls, each call one SX Function evaluated once. names: every row's, in order; previous
+    (neighbours): the index of each row's own in the call before when both calls are the
+    same map, else -1."""
+
+    def __init__(self, first, middle, calls: int, nx: int, ne: int, nl: int, last=None,
+                 neighbours: bool = False):
+        fn, names = first
+        mid, mid_names = middle
+        end, end_names = last if last is not None else middle
+        self.calls, self.sizes = calls, (nx, ne, nl)
+        ns, nr = fn.size1_in(1), len(mid_names)
+        nz = ns + 2 * ne + nl
+        shapes = [(ns, 1), (ns, ns), (ns, ne), (ns, nl)] + ([(nr, nz), (nz, nz), (ns, nz)]
+                                                             if neighbours else [])
+        layout = (nx, ne, nl, shapes, neighbours)
+        crossed = neighbours and end is mid and calls > 1
+        self.head = _call(fn, layout, crossed=False, carries=True, first=True)
+        self.step = _call(mid, layout, crossed=neighbours, carries=True) if calls > 1 else None
+        self.tail = _call(end, layout, crossed=crossed, carries=False) if calls else None
+        self.names = (tuple(names) + tuple(mid_names) * max(calls - 1, 0)
+                      + (tuple(end_names) if calls else ()))
+        previous = [-1] * (len(names) + (nr if calls > 1 else 0))
+        previous += [len(names) + i for i in range(nr * max(calls - 2, 0))]
+        if calls:
+            at = len(previous)
+            previous += list(range(at - nr, at)) if crossed else [-1] * len(end_names)
+        self.previous = previous
+        self._taylor: dict = {}
+
+    def compose(self, u, pieces=None, blocks: int = 1):
+        """[g, variance(, cross)] of every row, MX of the MX column u; with pieces (head,
+        step, tail) whose outputs stack `blocks` coefficients of each row (taylor's), each a
+        list of those coefficients' vectors."""
+        head, step, tail = pieces or (self.head, self.step, self.tail)
+        out = head(u)
+        state, columns = out[0], [[o] for o in out[1:]]
+        if step is not None:
+            carried = step.mapaccum("chain", self.calls - 1)(state, u)
+            state = carried[0][:, -1]
+            for column, o in zip(columns, carried[1:], strict=True):
+                column.append(o)
+        if tail is not None:
+            for column, o in zip(columns, tail(state, u), strict=True):
+                column.append(o)
+        return [[ca.vertcat(*[ca.vec(_block(o, k, blocks)) for o in column])
+                 for k in range(blocks)] for column in columns]
+
+    def rows_function(self):
+        """Function (x, sigma_each, sigma_lot) -> (g, sd[, cross]) of every row."""
+        args = [ca.MX.sym(n, k) for n, k in zip(("x", "sigma_each", "sigma_lot"), self.sizes)]
+        outs = [o[0] for o in self.compose(ca.vertcat(*args))]
+        outs[1] = ca.sqrt(outs[1] + VARIANCE_FLOOR)
+        return ca.Function("chain_rows", args, outs)
+
+    def taylor(self, nv: int, moving: tuple[bool, ...]):
+        """(head, step, tail) carrying every input's, state's and output's second-order Taylor
+        coefficients in nv directions (_taylor; moving: the entries of u that depend on the
+        directions, the others' derivatives 0), built once per nv and moving."""
+        key = (nv, moving)
+        if key not in self._taylor:
+            self._taylor[key] = tuple(None if f is None else _taylor(f, nv, moving)
+                                      for f in (self.head, self.step, self.tail))
+        return self._taylor[key]
+
+
+def _block(o, k, blocks):
+    """The k-th of `blocks` equal row blocks of o."""
+    n = o.size1() // blocks
+    return o[k * n:(k + 1) * n, :]
+
+
+def _call(fn, layout, crossed, carries, first=False):
+    """One call of the stage map fn as an SX Function ([state,] u) -> ([state',] g, variance
+    [, cross]): first, the first stage (no state in: its parts 0); crossed, its cross terms
+    with the call before (the state's last three parts: _successive), else 0."""
+    nx, ne, nl, shapes, neighbours = layout
+    ns = shapes[0][0]
+    u = ca.SX.sym("u", nx + ne + nl)
+    x, se, sl = u[:nx], u[nx:nx + ne], u[nx + ne:]
+    state = ca.SX.sym("state", sum(a * b for a, b in shapes))
+    s, R, C, L, *before = _unpack(ca.SX.zeros(state.shape) if first else state, shapes)
+    Se, Sl = ca.diag(se**2), ca.diag(sl**2)
+    Sz = _covariance(R, C, L, Se, Sl)
+    g, Gz, q, *more = fn(x, s, Sz)
+    outs = [g, _variance(Gz, R, C, L, Se, Sl) + q]
+    if neighbours:
+        outs.append(_successive(before, Gz, ns, ne) if crossed else ca.SX.zeros(g.shape))
+    if carries:
+        s1, Fz, Q = more
+        A, Bk = Fz[:, :ns], Fz[:, ns:ns + ne]
+        Bk1, BL = Fz[:, ns + ne:ns + 2 * ne], Fz[:, ns + 2 * ne:]
+        AC = A @ C + Bk
+        after = [s1, A @ R @ A.T + AC @ Se @ AC.T + Q, Bk1, A @ L + BL] if not first else \
+            [s1, Q, Bk, BL]  # the first stage's e_k is the next call's part
+        if neighbours:  # the first stage is no call of the map: nothing crosses with it
+            after += [ca.SX.zeros(*shape) for shape in shapes[4:]] if first else [Gz, Sz, Fz]
+        outs.insert(0, _pack(after))
+    return ca.Function("stage_call", [u] if first else [state, u], ca.cse(outs))
+
+
+def _taylor(fn, nv, moving):
+    """fn (SX, column inputs and outputs, u the last input) on second-order Taylor
+    coefficients in nv directions: each input and output the stack [value; d/dv_i (i < nv);
+    d2/dv_i dv_j (i <= j)], so that a chain of such calls carries its outputs' first and
+    second derivatives in those directions (forward-mode AD, symbolic on one call); the
+    derivatives of u's entries not `moving` 0 (fewer terms)."""
+    pairs = _pairs(nv)
+    blocks = 1 + nv + len(pairs)
+    eps = ca.SX.sym("eps", nv)
+    ins = [ca.SX.sym(f"in{k}", blocks * fn.size1_in(k)) for k in range(fn.n_in())]
+    mask = ca.DM([1.0 if m else 0.0 for m in moving])
+    coefficients = [[_block(a, k, blocks) for k in range(blocks)] for a in ins]
+    coefficients[-1] = coefficients[-1][:1] + [c * mask for c in coefficients[-1][1:]]
+    outs = fn(*[_series(c, eps) for c in coefficients])
+    stacked = []
+    for o in outs:
+        J = ca.jacobian(o, eps)
+        stacked.append(ca.vertcat(o, *[J[:, i] for i in range(nv)], *_second(J, eps)))
+    stacked = ca.substitute(stacked, [eps], [ca.DM.zeros(nv)])
+    return ca.Function(f"{fn.name()}_taylor", ins, ca.cse(stacked))
+
+
+def _second(J, v):
+    """The second derivatives d2/dv_i dv_j (i <= j, _pairs' order) from the Jacobian J in v:
+    each column of J differentiated once."""
+    out = []
+    for i in range(v.numel()):
+        Ji = ca.jacobian(J[:, i], v)
+        out += [Ji[:, j] for j in range(i, v.numel())]
+    return out
+
+
+def _pairs(nv):
+    return [(i, j) for i in range(nv) for j in range(i, nv)]
+
+
+def _series(blocks, eps):
+    """a_0 + sum_i a_i eps_i + sum_(i<=j) a_ij eps_i eps_j (times 1/2 where i = j) of the
+    coefficients blocks = [a_0, a_i.., a_ij..] (SX or MX): its second derivatives at 0 are
+    the a_ij."""
+    nv = eps.numel()
+    out = blocks[0]
+    for i in range(nv):
+        out = out + blocks[1 + i] * eps[i]
+    for k, (i, j) in enumerate(_pairs(nv)):
+        out = out + blocks[1 + nv + k] * (eps[i] * eps[j] * (0.5 if i == j else 1.0))
+    return out
+
+
+def second_order_term(pieces: ChainPieces, reduce, args):
+    """reduce(g, sd[, cross]) (an MX scalar of every row's mean, sd and cross term: a bound,
+    nines) at the SX arguments args = [x, sigma_each, sigma_lot] (expressions of a few free
+    symbols v, or numbers: then a DM), as one node of the SX graph at any number of calls:
+    its value the plain chain's (ChainPieces.compose), its first and second derivatives in v
+    those of one pass carrying second-order Taylor coefficients in v along the chain
+    (ChainPieces.taylor), remembered between the NLP's gradient and Hessian at one point."""
     import numpy as np
 
-    return (*rows, np.array(previous), ca.vertcat(*cross))
+    u = ca.vertcat(*[ca.vec(ca.SX(a)) for a in args])
+    free = ca.symvar(u)
+    if not free:
+        outs = [o[0] for o in pieces.compose(ca.MX(ca.evalf(u)))]
+        return ca.evalf(reduce(outs[0], ca.sqrt(outs[1] + VARIANCE_FLOOR), *outs[2:]))
+    v = ca.vertcat(*free)
+    nv = v.numel()
+    J = ca.jacobian(u, v)
+    series = ca.Function("arguments", [v], [ca.vertcat(u, *[J[:, i] for i in range(nv)],
+                                                       *_second(J, v))])
+    vm, eps = ca.MX.sym("v", nv), ca.MX.sym("eps", nv)
+    moving = tuple(bool(n) for n in np.asarray(ca.sum2(ca.DM(J.sparsity(), 1.0))).ravel())
+    outs = pieces.compose(series(vm), pieces.taylor(nv, moving), 1 + nv + len(_pairs(nv)))
+    g, var, *cross = [_series(o, eps) for o in outs]
+    b = reduce(g, ca.sqrt(var + VARIANCE_FLOOR), *cross)
+    grad = ca.jacobian(b, eps)
+    at = ca.substitute([b, grad.T, ca.jacobian(grad, eps)], [eps], [ca.DM.zeros(nv)])
+    taylor = _Remembered(ca.Function("chain_taylor", [vm], at))
+    _REMEMBERED.append(taylor)  # a Callback lives as long as the Python object does
+    plain = [o[0] for o in pieces.compose(series(vm)[:u.numel()])]
+    value = reduce(plain[0], ca.sqrt(plain[1] + VARIANCE_FLOOR), *plain[2:])
+    return _differentiated(vm, value, taylor)(v)
+
+
+def _differentiated(v, value, taylor):
+    """Function v -> value (MX of the MX symbol v, a scalar) whose first and second
+    derivatives are taylor(v)'s gradient and Hessian: its forward and reverse derivatives,
+    and theirs, given as such (one direction at a time), so that an SX graph calling it as one
+    node evaluates the value alone and its derivative functions the Taylor coefficients."""
+    n = v.numel()
+    _, G, H = taylor(v)
+
+    def sym(name, size=n):
+        return ca.MX.sym(name, size)
+
+    def fn(name, ins, outs, cache=()):
+        opts = {"never_inline": True, "max_num_dir": 1, "cache": {f.name(): f for f in cache}}
+        return ca.Function(name, [v, *ins.values()], list(outs.values()), ["i0", *ins],
+                           list(outs), opts)
+
+    o, a, oa, fa, fo = sym("out_o0", 1), sym("adj_o0", 1), sym("out_adj_i0"), \
+        sym("fwd_adj_o0", 1), sym("fwd_out_o0", 1)
+    f1, f2, ff, ofo, afo, aa = sym("fwd_i0"), sym("fwd_i0_"), sym("fwd_fwd_i0"), \
+        sym("out_fwd_o0", 1), sym("adj_fwd_o0", 1), sym("adj_adj_i0")
+    adj = fn("adj1_V", {"out_o0": o, "adj_o0": a}, {"adj_i0": G * a}, [
+        fn("fwd1_adj1_V", {"out_o0": o, "adj_o0": a, "out_adj_i0": oa, "fwd_i0": f1,
+                           "fwd_out_o0": fo, "fwd_adj_o0": fa},
+           {"fwd_adj_i0": H @ f1 * a + G * fa}),
+        fn("adj1_adj1_V", {"out_o0": o, "adj_o0": a, "out_adj_i0": oa, "adj_adj_i0": aa},
+           {"adj_i0": H @ aa * a, "adj_out_o0": ca.MX(1, 1), "adj_adj_o0": ca.dot(G, aa)})])
+    fwd = fn("fwd1_V", {"out_o0": o, "fwd_i0": f1}, {"fwd_o0": ca.dot(G, f1)}, [
+        fn("fwd1_fwd1_V", {"out_o0": o, "fwd_i0": f1, "out_fwd_o0": ofo, "fwd_fwd_i0_": f2,
+                           "fwd_out_o0": fo, "fwd_fwd_i0": ff},
+           {"fwd_fwd_o0": ca.bilin(H, f1, f2) + ca.dot(G, ff)}),
+        fn("adj1_fwd1_V", {"out_o0": o, "fwd_i0": f1, "out_fwd_o0": ofo, "adj_fwd_o0": afo},
+           {"adj_i0": H @ f1 * afo, "adj_out_o0": ca.MX(1, 1), "adj_fwd_i0": G * afo})])
+    return fn("V", {}, {"o0": value}, [fwd, adj])
+
+
+_REMEMBERED: list = []  # every _Remembered made: an NLP may call it as long as the process runs
+
+
+class _Remembered(ca.Callback):
+    """A Function that remembers its last answer: the NLP's objective, gradient and Hessian,
+    evaluated one after the other at the same point, compute the chain once."""
+
+    def __init__(self, fn):
+        ca.Callback.__init__(self)
+        self.fn, self.last = fn, (None, None)
+        self.construct(f"{fn.name()}_remembered", {})
+
+    def get_n_in(self):
+        return self.fn.n_in()
+
+    def get_n_out(self):
+        return self.fn.n_out()
+
+    def get_sparsity_in(self, i):
+        return self.fn.sparsity_in(i)
+
+    def get_sparsity_out(self, i):
+        return self.fn.sparsity_out(i)
+
+    def eval(self, args):
+        key = tuple(bytes(memoryview(a.full())) for a in args)
+        found, answer = self.last
+        if found != key:
+            answer = self.fn(*args)
+            answer = list(answer) if isinstance(answer, (list, tuple)) else [answer]
+            self.last = (key, answer)
+        return answer
+
+
+def _pack(parts):
+    return ca.vertcat(*[ca.vec(p) for p in parts])
+
+
+def _unpack(v, shapes):
+    """The matrices of `shapes` from the column v (_pack's inverse)."""
+    out, at = [], 0
+    for rows, cols in shapes:
+        out.append(ca.reshape(v[at:at + rows * cols], rows, cols))
+        at += rows * cols
+    return out
 
 
 def _successive(before, Gz, ns, ne):

@@ -19,9 +19,10 @@ and one L on the lot; one stage is
     R' = A R A^T + (A C + B_k) S_e (A C + B_k)^T,   C' = B_{k+1},   L' = A L + B_L
 and a row's variance Gs R Gs^T + |(Gs C + G_k) S_e^1/2|^2 + |G_{k+1} S_e^1/2|^2
 + |(Gs L + G_L) S_L^1/2|^2: exact first-order covariance in O(stages), each stage a small
-CasADi Function (built once) of the design, so the yield is a smooth function of the design
-for IPOPT. A quantity toleranced per lot that is a part's (every link alike, say) is a lot
-deviation added to every part.
+CasADi Function (built once) of the design, iterated (chain_moments.ChainPieces), so the
+yield is a smooth function of the design for IPOPT, one node of its NLP at any row length.
+A quantity toleranced per lot that is a part's (every link alike, say) is a lot deviation
+added to every part.
 
 The landing place's drift along the row is partly second order (the concave handover map's
 r(delta), docs/optimizer.md section 4, which the worst case accumulates linearly): it enters
@@ -59,10 +60,14 @@ def sigmas(tolerances, scale=1.0):
 
 
 class Chain:
-    """The linearised stage maps of one scene (design symbols DESIGN, as a vector)."""
+    """The linearised stage maps of one scene (design symbols DESIGN, as a vector). active:
+    (part mask, lot mask) of the deviations the maps are linearised in (chain_moments.active:
+    those of a sigma other than 0), every one by default."""
 
-    def __init__(self, scene):
+    def __init__(self, scene, active=None):
         self.scene = scene
+        self.active = active if active is not None else ((True,) * len(PARTS),
+                                                          (True,) * len(LOTS))
         self.x = ca.SX.sym("design", len(DESIGN))
         self.ek, self.ek1 = ca.SX.sym("e_k", len(PARTS)), ca.SX.sym("e_k1", len(PARTS))
         self.el = ca.SX.sym("e_lot", len(LOTS))
@@ -168,16 +173,8 @@ class Chain:
         """Function (x, s, Sz) -> (g + tr(H Sz) / 2, dg/dz, tr((H Sz)^2) / 2 of each row[,
         s' + tr(H Sz) / 2, ds'/dz, tr(H_a Sz H_b Sz) / 2 of the state's two]) at e = 0,
         z = (s, e_k, e_k1, e_lot), Sz the covariance of z (chain_moments.linearise)."""
-        return chain_moments.linearise(rows, state, self.x, self.s, self.ek, self.ek1, self.el)
-
-
-def reliability(chain: Chain, x, stages: int, sigma_each, sigma_lot):
-    """(g, sd) of every row of a row of `stages` palms: mean values (to second order) and
-    standard deviations (first order), CasADi expressions of x (DM for a number x)."""
-    def stage(k):
-        return chain.last if k == stages - 1 else chain.middle
-
-    return chain_moments.reliability(chain.first, stage, x, stages, sigma_each, sigma_lot)
+        return chain_moments.linearise(rows, state, self.x, self.s, self.ek, self.ek1, self.el,
+                                       *self.active)
 
 
 def counted(names) -> ca.DM:
@@ -196,37 +193,66 @@ def design_vector(values: dict):
     return ca.vertcat(*[values.get(n, 0.0) for n in DESIGN])
 
 
+_ROWS: dict = {}  # (scene, stages, active) -> (rows Function, names, ChainPieces, Chain)
+
+
+def kept(each, lot):
+    """((part mask, lot mask), the part sigmas kept, the lot sigmas kept): the deviations of
+    a sigma other than 0 (chain_moments.active), which the chain's Functions take."""
+    active = (chain_moments.active(each), chain_moments.active(lot))
+    return active, [s for s, a in zip(each, active[0]) if a], \
+        [s for s, a in zip(lot, active[1]) if a]
+
+
+def rows_function(scene, stages: int, active):
+    """(Function (design vector, kept part sigmas, kept lot sigmas) -> (g, sd) of every row of
+    a row of `stages` palms, their names): the first landing, stages - 1 calls of the middle
+    stage iterated (chain_moments.chain_function: one graph at any number of stages) and the
+    last palm's; built once, cached. active: `kept`'s masks."""
+    return _functions(scene, stages, active)[:2]
+
+
+def _functions(scene, stages: int, active):
+    key = (repr(scene), stages, active)
+    if key not in _ROWS:
+        chain = Chain(scene, active)
+        pieces = chain_moments.ChainPieces(chain.first, chain.middle, stages, len(DESIGN),
+                                           sum(active[0]), sum(active[1]), last=chain.last)
+        if len(_ROWS) >= CACHED:
+            _ROWS.clear()
+        _ROWS[key] = (pieces.rows_function(), pieces.names, pieces, chain)
+    return _ROWS[key]
+
+
+CACHED = 4  # chains kept (a spec's NLP and its checks share one)
+
+
+def union_bound(scene, values: dict, stages: int, each, lot):
+    """The union bound of a row of `stages` palms at the design `values` (by name, numbers or
+    SX) and the part and lot sigmas `each`, `lot` (lists of numbers or SX): one node of an SX
+    graph with its value, gradient and Hessian in the free symbols (chain_moments.
+    second_order_term), the same size at any number of stages."""
+    active, each, lot = kept(each, lot)
+    _, names, pieces, _ = _functions(scene, stages, active)
+    mask = counted(names)
+    return chain_moments.second_order_term(
+        pieces, lambda g, sd: chain_moments.failure_bound(g, sd, mask),
+        [design_vector(values), ca.vertcat(*each), ca.vertcat(*lot)])
+
+
 def yield_term(scene, values: dict, tolerances, stages: int, scale=1.0):
     """The max_yield objective term: nines of the linearised yield's union bound."""
-    chain = Chain(scene)
     each, lot = sigmas(tolerances, scale)
-    g, sd, names = reliability(chain, design_vector(values), stages, each, lot)
-    return nines(failure_bound(g, sd, names))
-
-
-_ROWS: dict = {}  # (scene, stages) -> Function (x, sigma_each, sigma_lot) -> (g, sd)
-
-
-def rows_function(scene, stages: int):
-    """Function (design vector, part sigmas, lot sigmas) -> (g, sd) of a row of `stages`
-    (MX calls of the stage maps: built in a fraction of a second, cached)."""
-    key = (repr(scene), stages)
-    if key not in _ROWS:
-        x = ca.MX.sym("x", len(DESIGN))
-        se, sl = ca.MX.sym("sigma_each", len(PARTS)), ca.MX.sym("sigma_lot", len(LOTS))
-        g, sd, names = reliability(Chain(scene), x, stages, ca.vertsplit(se), ca.vertsplit(sl))
-        _ROWS.clear()
-        _ROWS[key] = (ca.Function("rows", [x, se, sl], [g, sd]), names)
-    return _ROWS[key]
+    return nines(union_bound(scene, values, stages, each, lot))
 
 
 def row_reliability(scene, design, tolerances, stages: int):
     """(g, sd, names) of every row of a fixed design (scenes.ManipulatorsDesign) as numpy arrays:
     each row's mean (second order) and standard deviation (first order and its quadratic
     term's), the rows of the first landing and then stage by stage."""
-    each, lot = sigmas(tolerances)
+    active, each, lot = kept(*sigmas(tolerances))
     x = [float(getattr(design, n)) for n in DESIGN]
-    fn, names = rows_function(scene, stages)
+    fn, names = rows_function(scene, stages, active)
     g, sd = fn(x, each, lot)
     return np.asarray(g).ravel(), np.asarray(sd).ravel(), names
 
@@ -245,7 +271,7 @@ def placed_rows(scene, design, tolerances, stages: int):
     from ....plugin_tolerances import PlacedRows
 
     g, sd, names = row_reliability(scene, design, tolerances, stages)
-    chain = Chain(scene)
+    chain = _functions(scene, stages, kept(*sigmas(tolerances))[0])[3]
     sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1) + [len(chain.last[1])]
     return PlacedRows(g, sd, names, np.asarray(counted(names)).ravel(),
                       np.repeat(np.arange(len(sizes)), sizes),

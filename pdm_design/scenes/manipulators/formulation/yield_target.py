@@ -45,17 +45,16 @@ def target_rows(spec, values: dict, symbols: dict, bounds: dict) -> TargetRows:
     import casadi as ca
 
     from ....formulation import yield_target
-    from .statistical import Chain, design_vector, failure_bound, reliability
+    from .statistical import union_bound
 
     check(spec)
 
     def nines_of(s):
         each, lot = scaled_sigmas(spec.tolerances, s)
-        g, sd, names = reliability(Chain(spec.scene), design_vector(values),
-                                   spec.verification.stages, each, lot)
+        bound = union_bound(spec.scene, values, spec.verification.stages, each, lot)
         # not statistical.nines: its floor hides a NaN (a spread the closed forms cannot
         # follow) as 300 nines; here a NaN stays one, and IPOPT steps back from it
-        return -ca.log10(failure_bound(g, sd, names) + 1e-300)
+        return -ca.log10(bound + 1e-300)
 
     return yield_target.target_rows(spec, symbols, bounds, nines_of)
 

@@ -154,15 +154,6 @@ class StairsChain:
         return where(rolls, roll_vx, slide_vx), where(rolls, roll_omega, slide_omega)
 
 
-def reliability(chain: StairsChain, x, stages: int, sigma_each, sigma_lot, neighbours=False):
-    """(g, sd, names[, previous, cross]) of every row of `stages` bounces (the launch and
-    stages - 1 flights): means (second order) and standard deviations (first order), CasADi
-    expressions of x; neighbours: each row's own one bounce before and their covariance
-    (chain_moments.reliability)."""
-    return chain_moments.reliability(chain.first, lambda k: chain.middle, x, stages - 1,
-                                     sigma_each, sigma_lot, neighbours=neighbours)
-
-
 def yield_term(scene, design: dict, tolerances, stages: int, scale=1.0):
     """The max_yield objective term: nines of Hunter's bound on the failure probability (the
     union bound less every row's failures shared with its own one bounce before). design:
@@ -172,11 +163,15 @@ def yield_term(scene, design: dict, tolerances, stages: int, scale=1.0):
 
 
 def _nines(scene, design: dict, stages: int, each, lot):
-    """Nines of Hunter's bound at these step and lot sigmas (numbers or SX)."""
-    chain = StairsChain(scene)
+    """Nines of Hunter's bound at these step and lot sigmas (numbers or SX): one node of an
+    SX graph with its value, gradient and Hessian in the free symbols (chain_moments.
+    second_order_term), the same size at any number of stages."""
     x = ca.vertcat(*[design[n] for n in DESIGN])
-    g, sd, names, previous, cross = reliability(chain, x, stages, each, lot, neighbours=True)
-    return chain_moments.tree_nines(g, sd, _drifting(previous, names), cross)
+    _, names, previous, _, pieces, _ = _functions(scene, stages)
+    drifting = _drifting(previous, names)
+    return chain_moments.second_order_term(
+        pieces, lambda g, sd, cross: chain_moments.tree_nines(g, sd, drifting, cross),
+        [x, ca.vertcat(*each), ca.vertcat(*lot)])
 
 
 def _drifting(previous, names):
@@ -189,27 +184,30 @@ def _drifting(previous, names):
 
 
 _ROWS: dict = {}  # (scene, stages) -> (Function (x, sigma_each, sigma_lot) -> (g, sd, cross),
-#                                       names, previous, Function (g, sd, cross) -> nines)
+#                      names, previous, Function (g, sd, cross) -> nines, ChainPieces, chain)
 
 
 def rows_function(scene, stages: int):
     """(Function (design vector, step sigmas, lot sigmas) -> (g, sd, cross), names, previous,
-    Function (g, sd, cross) -> Hunter's nines) of `stages` bounces (MX calls of the stage
-    maps: built once, cached)."""
+    Function (g, sd, cross) -> Hunter's nines) of `stages` bounces: the launch and stages - 1
+    flights, the flights iterated (chain_moments.chain_function: one graph at any number of
+    stages); built once, cached."""
+    return _functions(scene, stages)[:4]
+
+
+def _functions(scene, stages: int):
     key = (repr(scene), stages)
     if key not in _ROWS:
-        x = ca.MX.sym("x", len(DESIGN))
-        se, sl = ca.MX.sym("sigma_each", len(PARTS)), ca.MX.sym("sigma_lot", len(LOTS))
-        g, sd, names, previous, cross = reliability(StairsChain(scene), x, stages,
-                                                    ca.vertsplit(se), ca.vertsplit(sl),
-                                                    neighbours=True)
+        chain = StairsChain(scene)
+        pieces = chain_moments.ChainPieces(chain.first, chain.middle, stages - 1, len(DESIGN),
+                                           len(PARTS), len(LOTS), neighbours=True)
+        names, previous = pieces.names, np.array(pieces.previous)
         n = len(names)
         gs, sds, crosses = (ca.SX.sym(v, n) for v in ("g", "sd", "cross"))
         nines = ca.Function("nines", [gs, sds, crosses], [
             chain_moments.tree_nines(gs, sds, _drifting(previous, names), crosses)])
         _ROWS.clear()
-        _ROWS[key] = (ca.Function("rows", [x, se, sl], [g, sd, cross]), names, previous,
-                      nines)
+        _ROWS[key] = (pieces.rows_function(), names, previous, nines, pieces, chain)
     return _ROWS[key]
 
 
@@ -291,7 +289,7 @@ def placed_rows(scene, design, tolerances, stages: int):
     from ....plugin_tolerances import PlacedRows
 
     g, sd, names = row_reliability(scene, design, tolerances, stages)
-    chain = StairsChain(scene)
+    chain = _functions(scene, stages)[5]
     sizes = [len(chain.first[1])] + [len(chain.middle[1])] * (stages - 1)
     return PlacedRows(g, sd, names, np.ones(len(names)), np.repeat(np.arange(1, stages + 1),
                                                                     sizes),
