@@ -365,26 +365,24 @@ def before_and_after(tmp_path_factory):
     return cases, run_cases(cases, before), run_cases(cases, ROOT)
 
 
-def test_runs_that_never_lift_off_are_unchanged_bit_for_bit(before_and_after):
+def test_runs_that_never_lift_off_are_unchanged(before_and_after):
     cases, old, new = before_and_after
     never = [i for i, run in enumerate(old) if not any(e["kind"] == "lift_off"
                                                        for e in run["events"])]
     assert {0, 1, 3, 4} <= set(never) and len(never) >= 50  # the paper's runs among them
-    for i in never:  # json keeps every float's repr: equal text is equal bits (the events'
-        # words are left out: their wording is not the physics, and it has been improved since)
+    for i in never:  # every number (_same; the events' words are left out: their wording is
+        # not the physics, and it has been improved since)
         if _tipped(old[i]) and cases[i]["eps"] == 0.0:
             # a tip onset no longer ends the run: the object rocks (sim/rocking.py) - the run is
             # the same up to it, where a `rock` event starts (or a tip the model does not follow)
             events_old = _numbers(old[i])["events"][:-1]
             events_new = _numbers(new[i])["events"]
-            assert json.dumps(events_new[:len(events_old)], sort_keys=True) == \
-                json.dumps(events_old, sort_keys=True), i
+            assert _same(events_new[:len(events_old)], events_old), i
             follow = events_new[len(events_old)]
             assert follow["kind"] in ("rock", "tip"), i
-            assert follow["time"] == old[i]["events"][-1]["time"], i
+            assert _same(follow["time"], old[i]["events"][-1]["time"]), i
             continue
-        assert json.dumps(_numbers(new[i]), sort_keys=True) == \
-            json.dumps(_numbers(_failing_stage(old[i])), sort_keys=True), i
+        assert _same(_numbers(new[i]), _numbers(_failing_stage(old[i]))), i
 
 
 def _tipped(run: dict) -> bool:
@@ -400,6 +398,20 @@ def _failing_stage(run: dict) -> dict:
     return {**run, "events": [moved(e) if e["failure"] else e for e in run["events"]]}
 
 
+def _same(a, b) -> bool:
+    """The same structure, the same words, every float equal to 1e-10 (relative): the
+    integrated phases now run on sim/rk.py, scipy's solve_ivp steps in plain floats, whose event
+    times and states differ from scipy's by 2e-11 at most here, 50 times below the rtol (1e-9) the
+    integrator is asked for."""
+    if isinstance(a, dict):
+        return isinstance(b, dict) and a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, list):
+        return isinstance(b, list) and len(a) == len(b) and all(map(_same, a, b))
+    if isinstance(a, float) and isinstance(b, float):
+        return a == b or math.isclose(a, b, rel_tol=1e-10, abs_tol=1e-13)
+    return a == b
+
+
 def _numbers(run: dict) -> dict:
     return {**run, "events": [{k: v for k, v in e.items() if k != "detail"}
                               for e in run["events"]]}
@@ -413,11 +425,11 @@ def test_builds_that_lifted_off_now_complete_or_fail_by_name(before_and_after):
     for i in lifted:
         was, now = old[i]["events"], new[i]["events"]
         # everything up to the lift-off is the same run; the lift-off is now an event
-        assert now[:len(was) - 1] == was[:-1]
+        assert _same(now[:len(was) - 1], was[:-1])
         lift = now[len(was) - 1]
         assert lift["kind"] == "lift_off" and not lift["failure"]
-        assert lift["time"] == was[-1]["time"] and lift["stage"] == was[-1]["stage"]
-        assert lift["before"]["theta"] == was[-1]["before"]["theta"]
+        assert _same(lift["time"], was[-1]["time"]) and lift["stage"] == was[-1]["stage"]
+        assert _same(lift["before"]["theta"], was[-1]["before"]["theta"])
         assert {e["kind"] for e in now} <= set(EVENT_KINDS) | set(FAILURE_KINDS)
         if new[i]["completed"]:
             completed.append(i)
