@@ -163,10 +163,10 @@ def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_build
     assert better > worse and p_value < 0.05, (better, worse, p_value)
 
 
-def test_max_yield_is_refused_in_words_on_manipulators_with_real_links_or_pivots():
-    # the manipulators' linearised yield is the paper's plain device: a row on real links or
-    # with pivot friction is refused (exit 2 at the CLI) rather than optimised for a yield
-    # that leaves them out
+def test_max_yield_on_manipulators_takes_real_links_and_refuses_damping_in_words():
+    # the manipulators' linearised yield takes the carry on real links and with pivot
+    # friction (its closed forms); damped pivots, which have none, are refused (exit 2 at the
+    # CLI) rather than optimised for a yield that leaves them out
     from pdm_design.errors import SpecError
 
     base = {"scene": {"kind": "manipulators", "body": {"mass": 1.0, "width": 0.4,
@@ -179,8 +179,10 @@ def test_max_yield_is_refused_in_words_on_manipulators_with_real_links_or_pivots
     assert parse_spec(base).objective == {"max_yield": 1.0}
     for extra in ({"links": {"mass": 0.5}}, {"pivots": {"friction_torque": 0.2}}):
         data = {**base, "scene": {**base["scene"], **extra}}
-        with pytest.raises(SpecError, match="objective.max_yield.*massless links"):
-            parse_spec(data)
+        assert parse_spec(data).objective == {"max_yield": 1.0}
+    data = {**base, "scene": {**base["scene"], "pivots": {"damping": 0.1}}}
+    with pytest.raises(SpecError, match="objective.max_yield.*undamped pivots"):
+        parse_spec(data)
 
 
 @pytest.mark.parametrize("eps", [0.05, 0.5, 0.99])

@@ -227,6 +227,30 @@ def carry_force_ratio(theta, v2, *, gravity, link_length, along):
     return tan(theta) + along / (cos(theta) * normal)
 
 
+def carry_contact_curvature(*, carry_gravity, fastest_u2, friction, link_length, span):
+    """S >= |d2N/dth2| and |d2F/dth2| (per object mass, carry_contact_force) along a forward
+    stuck carry from any stop a in [0, span] to any th with th + a <= span, landing speed
+    u^2 <= fastest_u2 (docs/physics.md section 2.1). With c = cos th, s = sin th, k = f / l and
+    P = u^2 / l + 2 g_e cos a the closed-form carry gives
+        N = g - g_e + 3 g_e c^2 - P c + k (2 (th + a) c + s),
+        F = s (3 g_e c - P + 2 k (th + a)) - k c,
+        N'' = -6 g_e cos 2th + P c - k (5 s + 2 (th + a) c),
+        F'' = -6 g_e sin 2th + P s + k (5 c - 2 (th + a) s),
+    so both are at most 6 g_e + P + k (5 + 2 span) <= 8 g_e + u^2 / l + k (5 + 2 span)."""
+    return (8.0 * carry_gravity + fastest_u2 / link_length
+            + friction / link_length * (5.0 + 2.0 * span))
+
+
+def carry_contact_at(theta, u, alpha, *, gravity, carry_gravity, friction, link_length):
+    """(friction, normal) per object mass on the stuck object at theta of a closed-form carry
+    that left -alpha at speed u (carry_speed_squared, carry_along, carry_contact_force)."""
+    v2 = carry_speed_squared(u, alpha, theta, gravity=carry_gravity, link_length=link_length,
+                             friction=friction)
+    along = carry_along(theta, gravity=gravity, carry_gravity=carry_gravity, friction=friction,
+                        link_length=link_length)
+    return carry_contact_force(theta, v2, gravity=gravity, link_length=link_length, along=along)
+
+
 def is_exact_zero(value) -> bool:
     """A plain number that is exactly zero (a symbol never is)."""
     return isinstance(value, (int, float)) and value == 0.0

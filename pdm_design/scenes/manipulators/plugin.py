@@ -66,11 +66,11 @@ class Manipulators(Scene):
         return QUANTITIES
 
     def max_yield_refusal(self, scene):
-        if scene.plain_mechanism:
+        if scene.pivots.damping == 0.0:
             return None
-        return ("massless links and frictionless pivots (the linearised yield is the paper's "
-                "device's; `pdm-design yield` judges a design on real links and pivots)",
-                "[scene.links] or [scene.pivots]")
+        return ("undamped pivots (the linearised yield takes the closed-form carry, which "
+                "damping has not; `pdm-design yield` judges a design on damped pivots)",
+                "scene.pivots.damping")
 
     template = lazily(".template:manipulators_template")
 

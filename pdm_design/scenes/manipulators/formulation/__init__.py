@@ -146,6 +146,7 @@ def _yield_term(spec, values):
         return ca.SX(0.0)
     from .statistical import yield_term
 
+    yield_target.modelled_quantities(spec, "objective.max_yield")
     return yield_term(spec.scene, values, spec.tolerances, spec.verification.stages)
 
 

@@ -26,6 +26,9 @@ OVER_THE_TOP = ("over_the_top", "first_over_the_top")
 LIFT_OFF = ("lift_off", "first_lift_off")
 ACOS_EDGE = 1e-15  # acos is taken of at most 1 - this: a finite slope
 MASS_KEPT = 1e-3  # a mass tolerance leaves at least this fraction of the mass
+# Cells of the real-link carry's angle range whose ends hold its contact rows with the chord
+# bound's allowance (docs/physics.md section 2.1, `_inside_rows`)
+CARRY_CELLS = 8
 
 
 def conditions(m, S, u_lo, u_hi, box, robust) -> list[Condition]:
@@ -53,7 +56,7 @@ class Frame:
         # width (wider: lands less fully on the palm, tips less over its own edges)
         self.mu, self.W, self.h = palm.friction - box.get("friction", 0.0), palm.width, body.height
         self.w, self.w_lo = body.width + t_w, body.width - t_w
-        self.tau, self.out = tau, []
+        self.tau, self.out, self.inside, self.g = tau, [], [], m.g
         a_lo, a_hi = m.stops(box)
         stopped = a_lo is not a_hi
         # palm K + 1's rest raises the handover by cos a_K+1 - cos a (its stop), the pivots by
@@ -277,7 +280,7 @@ def _contact_rows(m, f):
     friction / normal ratio, linear-fractional with a positive denominator, is extreme at one."""
     a, l, g, add, mu, h = m.a, m.l, m.g, f.add, f.mu, f.h
     u_lo, u_hi, th_lo, th_hi = f.u_lo, f.u_hi, f.th_lo, f.th_hi
-    back, front = [], []
+    back, front, f.inside = [], [], []
     # the links' lengths (stops exact: allocation._check_links): N and F are affine in
     # (u^2 / l_K, 1 / l_K) at fixed (g_e, f) (v^2 / l_K = u^2 / l_K + 2 g_e (cos a - cos th)
     # - 2 f (a + th) / l_K), each (u^2, l_K) end a vertex of that trapezoid: at both links
@@ -299,11 +302,81 @@ def _contact_rows(m, f):
         front += v.carry_ratios([(th, v.carry_v2(u, th, a=stop, l=link))
                                  for th in (th_lo, th_hi)
                                  for u, stop in ((u_lo, f.a_hi), (u_hi, f.a_lo))], link)
+        f.inside += _inside_rows(m, f, v, link, corner)
     for i, r in enumerate(back + front):
         add("slip_carry", version("at the ends of the carry", i, back + front),
             mu - phys.friction_demand(None, r), mu)
     return (fmax_all([phys.carry_force_point(-a, h, r) for r in back]),
             fmax_all([-phys.carry_force_point(None, h, r) for r in front]))
+
+
+def _inside_rows(m, f, v, link, corner):
+    """Lift-off and slip over the whole carry on real links or pivots, at one vertex of the
+    carry's terms (the model view v) and link (None: the design's); the carries' nodes for the
+    tip rows (placement_rows). Every build's carry lies in th in [-a_hi, th_hi] with v^2
+    between the slowest carry's (u_lo from a_hi) and the fastest's (u_hi from a_lo: v^2
+    decreases in the stop); at a fixed angle each row, a combination c1 N + c2 F >= 0, is
+    affine in v^2, so least on one of those two carries. Along each, N and F have |d2/dth2| <=
+    S (physics.carry_contact_curvature): on each of CARRY_CELLS cells the row is at least
+    `cell_least` of its ends' values (docs/physics.md section 2.1). None with pivot damping
+    (no closed-form carry)."""
+    if nonzero(m.delta):
+        return []
+    l, g, mu, n = m.l if link is None else link, m.g, f.mu, CARRY_CELLS
+    span = f.a_hi + f.th_hi
+    step = span / n
+    bend = phys.carry_contact_curvature(carry_gravity=v.gc, fastest_u2=f.u_hi**2,
+                                        friction=v.f, link_length=l, span=span) * step**2 / 2
+    out = []
+    for u, stop, speed in ((f.u_lo, f.a_hi, "slowest"), (f.u_hi, f.a_lo, "fastest")):
+        nodes = [phys.carry_contact_at(-f.a_hi + i * step, u, stop, gravity=g,
+                                       carry_gravity=v.gc, friction=v.f, link_length=l)
+                 for i in range(n + 1)]
+        where = join("during the carry", speed, corner)
+        for c1, c2, key, what, scale in (
+                (l, 0.0, LIFT_OFF, "", g * l), (mu, -1.0, "slip_carry", "sliding back", mu * g),
+                (mu, 1.0, "slip_carry", "sliding forward", mu * g)):
+            if key is LIFT_OFF and speed == "slowest":  # N decreases in v^2 (cos th > 0)
+                continue
+            cells(f, key, join(where, what), [c1 * N + c2 * F for F, N in nodes],
+                  (abs(c1) + abs(c2)) * bend, scale)
+        out.append((where, nodes, bend))
+    return out
+
+
+def cells(f, key, where, values, bend, scale):
+    """One row a cell: `values` a row's at the nodes, bend = S' h^2 / 2 with S' >= its
+    |d2/dth2| (cell_least)."""
+    for i in range(len(values) - 1):
+        f.add(key, join(where, f"cell {i + 1} of {len(values) - 1}"),
+              cell_least(values[i], values[i + 1], bend), scale)
+
+
+def cell_least(ra, rb, bend):
+    """A lower bound of r over a cell [0, h] from its ends r(0) = ra, r(h) = rb and |r''| <= S,
+    bend = S h^2 / 2: r lies above its chord less S t (h - t) / 2, and the least of
+    ra + D x - bend x (1 - x) over x in [0, 1] (D = rb - ra) is (ra + rb) / 2 - D^2 / (4 bend)
+    - bend / 4 where |D| <= bend and min(ra, rb) = (ra + rb) / 2 - |D| / 2 elsewhere: a row
+    with a continuous slope, exact at the ends where the row is steep across the cell."""
+    d = rb - ra
+    huber = ca.if_else(ca.fabs(d) <= bend, d**2 / (4 * bend) + bend / 4, ca.fabs(d) / 2)
+    return (ra + rb) / 2 - huber
+
+
+def _inside_tip_rows(f, o_hi, o_lo):
+    """Tip over the whole carry (_inside_rows' carries): the force point -(h/2) F / N within
+    d ahead and behind (the object's edges w_lo / 2, the palm's W / 2 -+ o), d N +- (h/2) F
+    >= 0 (N > 0: the lift-off rows), a row a cell with |d2/dth2| <= (d + h/2) S."""
+    h, g = f.h, f.g
+    edges = [(f.w_lo / 2, 1.0, "object's front edge"), (f.w_lo / 2, -1.0, "object's rear edge")]
+    edges += [(f.W / 2 - o, 1.0, version("palm's front edge", i, o_hi))
+              for i, o in enumerate(o_hi)]
+    edges += [(f.W / 2 + o, -1.0, version("palm's rear edge", i, o_lo))
+              for i, o in enumerate(o_lo)]
+    for where, nodes, bend in f.inside:
+        for d, sign, edge in edges:
+            cells(f, "tip_carry", join(where, edge), [d * N + sign * h / 2 * F for F, N in nodes],
+                  (d + h / 2) * bend, d * g)
 
 
 def placement_rows(m, f):
@@ -342,6 +415,7 @@ def placement_rows(m, f):
     for i, o in enumerate(o_lo):
         add("tip_carry", version("at the handover, palm's rear edge", i, o_lo),
             W / 2 + o - fp_front, W / 2 + o)
+    _inside_tip_rows(f, o_hi, o_lo)
 
 
 def impact_conditions(m, f):

@@ -51,6 +51,8 @@ LOTS = ("friction", "object_mass", "object_width", "feed_x", "feed_speed") + tup
 DESIGN = ("alpha", "beta", "link_length", "mass_ratio", "first_pivot_x", "first_pivot_y")
 # Failures the event simulator carries on from (the map leaves them to it): not counted.
 SURVIVED = ("slip",)
+# Angles inside a carry on real links or pivots where its rows are taken too (Chain._inside)
+INSIDE = 3
 
 
 def sigmas(tolerances, scale=1.0):
@@ -94,6 +96,17 @@ class Chain:
         e = self.el
         return palm.friction + e[0], body.mass + e[1], body.width + e[2]
 
+    def _terms(self, m, mk, lk):
+        """(q_e, g_e, f) of a palm of mass mk on links of length lk carrying the object of mass
+        m (physics.carry_terms: a build's links as the simulator's, their inertia scaling with
+        the link as a rod's); (m / mk, g, 0) on the paper's device."""
+        scene = self.scene
+        if scene.plain_mechanism:
+            return m / mk, scene.gravity, 0.0
+        l = self._design()[2]
+        return phys.carry_terms(m / mk, object_mass=m, gravity=scene.gravity, link_length=lk,
+                                **scene.mechanism(length_scale=lk / l))
+
     def _first(self):
         """Rows of the first landing and the state on palm 1."""
         scene, g = self.scene, self.scene.gravity
@@ -111,7 +124,7 @@ class Chain:
         fall_speed = ca.sqrt(vy0**2 + 2.0 * g * fall)
         o = x0 + self.el[3] + vx0 * (vy0 + fall_speed) / g - cx
         rows += self._meets(o, w)
-        u, landing = self._land(vx0, -fall_speed, o, ak, m / mk, mu, w)
+        u, landing = self._land(vx0, -fall_speed, o, ak, self._terms(m, mk, lk)[0], mu, w)
         return rows + landing, ca.vertcat(u, o), [self.x, self.ek, self.el]
 
     def _meets(self, o, w):
@@ -130,22 +143,46 @@ class Chain:
         return u, [("stall", u / ca.sqrt(vx**2 + vy**2)), ("slip", mu * py - px),
                    ("slip", mu * py + px), *self._tips(-0.5 * h * px / py, o, w)]
 
-    def _carry_rows(self, u2, theta, o, mu, w, l):
+    def _carry_rows(self, u2, theta, o, mu, w, l, terms):
+        """Lift-off, tip and slip of the stuck object at theta moving at u2 (= v^2) on links of
+        length l, the carry's terms (q_e, g_e, f) (physics: the palm's force with its
+        tangential part A on real links or pivots, none on the paper's device)."""
         g, h = self.scene.gravity, self.scene.body.height
-        return [("lift_off", phys.lift_off_capacity(theta, gravity=g, link_length=l) - u2),
-                *self._tips(phys.carry_force_point(theta, h), o, w),
-                ("slip", mu - ca.tan(theta)), ("slip", mu + ca.tan(theta))]
+        if self.scene.plain_mechanism:
+            return [("lift_off", phys.lift_off_capacity(theta, gravity=g, link_length=l) - u2),
+                    *self._tips(phys.carry_force_point(theta, h), o, w),
+                    ("slip", mu - ca.tan(theta)), ("slip", mu + ca.tan(theta))]
+        along = phys.carry_along(theta, gravity=g, carry_gravity=terms[1], friction=terms[2],
+                                 link_length=l)
+        ratio = phys.carry_force_ratio(theta, u2, gravity=g, link_length=l, along=along)
+        held = phys.lift_off_capacity(theta, gravity=g, link_length=l, along=along)
+        return [("lift_off", held - u2), *self._tips(phys.carry_force_point(theta, h, ratio), o, w),
+                ("slip", mu - ratio), ("slip", mu + ratio)]
+
+    def _inside(self, u, ak, theta, o, mu, w, lk, terms):
+        """The carry's rows at INSIDE angles evenly between its ends (real links or pivots,
+        where they need not be least at the ends: docs/physics.md section 2.1)."""
+        if self.scene.plain_mechanism:
+            return []
+        out = []
+        for i in range(1, INSIDE + 1):
+            th = -ak + i * (theta + ak) / (INSIDE + 1)
+            v2 = phys.carry_speed_squared(u, ak, th, gravity=terms[1], link_length=lk,
+                                          friction=terms[2])
+            out += self._carry_rows(v2, th, o, mu, w, lk, terms)
+        return out
 
     def _stage(self, last: bool):
         """Rows of the carry on palm k (and the handover to k + 1, the landing on it)."""
-        g = self.scene.gravity
         a, b, l, q, _, _ = self._design()
         u, o = self.s[0], self.s[1]
         px, py, lk, ak, mk = self._part(self.ek, (0.0, 0.0))
         mu, m, w = self._lot()
-        rows = self._carry_rows(u**2, -ak, o, mu, w, lk)
-        rows.append(("stall", u**2 - phys.top_speed_squared_needed(ak, gravity=g,
-                                                                   link_length=lk)))
+        terms = self._terms(m, mk, lk)
+        _, g_e, f = terms
+        rows = self._carry_rows(u**2, -ak, o, mu, w, lk, terms)
+        rows.append(("stall", u**2 - phys.top_speed_squared_needed(ak, gravity=g_e,
+                                                                   link_length=lk, friction=f)))
         inputs = [self.x, self.s, self.ek, self.el]
         if last:
             theta = b
@@ -157,15 +194,16 @@ class Chain:
             theta = ca.acos((ny - py) / lk)
             inputs.insert(3, self.ek1)
         rows.append(("stranded", self.scene.palm.front_stop - theta))
-        v2 = phys.carry_speed_squared(u, ak, theta, gravity=g, link_length=lk)
-        rows += self._carry_rows(v2, theta, o, mu, w, lk)
+        v2 = phys.carry_speed_squared(u, ak, theta, gravity=g_e, link_length=lk, friction=f)
+        rows += self._inside(u, ak, theta, o, mu, w, lk, terms)
+        rows += self._carry_rows(v2, theta, o, mu, w, lk, terms)
         if last:
             return rows, None, inputs
         o_next = px + o + lk * ca.sin(theta) - nx
         rows += self._meets(o_next, w)
         v = ca.sqrt(v2)
         u_next, landing = self._land(v * ca.cos(theta), -v * ca.sin(theta), o_next, ak1,
-                                     m / mk1, mu, w)
+                                     self._terms(m, mk1, lk1)[0], mu, w)
         return rows + landing, ca.vertcat(u_next, o_next), inputs
 
     # -- linearised at zero deviation, with the second-order mean -------------------------

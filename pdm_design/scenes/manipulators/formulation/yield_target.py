@@ -22,22 +22,30 @@ from ....formulation.yield_target import (  # noqa: F401 (the names callers read
 
 def check(spec) -> None:
     """Refuse (SpecError, exit 2) what the linearised yield cannot size: another objective
-    (the scale is the objective), a quantity it does not model, links or pivot friction."""
+    (the scale is the objective), a quantity it does not model, damped pivots."""
+    from ....errors import SpecError
+
+    refuse_objectives(spec)
+    modelled_quantities(spec, "tolerances.yield_target")
+    if spec.scene.pivots.damping != 0.0:
+        raise SpecError(spec.source or "<spec>", "tolerances.yield_target", "undamped pivots "
+                        "(the linearised yield takes the closed-form carry, which damping has "
+                        "not)", found=f"scene.pivots.damping = {spec.scene.pivots.damping!r}")
+
+
+def modelled_quantities(spec, what) -> None:
+    """Refuse (SpecError, exit 2) a toleranced quantity the linearised yield does not model
+    (a link's mass, a pivot's friction: the yield map and `pdm-design yield` do), for `what`
+    (tolerances.yield_target or objective.max_yield)."""
     from ....errors import SpecError
     from .statistical import LOTS, PARTS
 
-    source = spec.source or "<spec>"
-    refuse_objectives(spec)
     for tol in spec.tolerances:
         if tol.quantity not in PARTS and tol.quantity not in LOTS:
             key = "allocate" if tol.allocate else "value"
-            raise SpecError(source, f"tolerances.{tol.quantity}.{key}", "a quantity the "
-                            "linearised yield models with tolerances.yield_target: "
+            raise SpecError(spec.source or "<spec>", f"tolerances.{tol.quantity}.{key}",
+                            f"a quantity the linearised yield models with {what}: "
                             + ", ".join(PARTS + LOTS[:5]), found=tol.quantity)
-    if not spec.scene.plain_mechanism:
-        raise SpecError(source, "tolerances.yield_target", "the paper's device (massless links, "
-                        "frictionless pivots): the linearised yield does not model links or "
-                        "pivot friction", found="scene.links or scene.pivots")
 
 
 def target_rows(spec, values: dict, symbols: dict, bounds: dict) -> TargetRows:
