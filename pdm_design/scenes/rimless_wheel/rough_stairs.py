@@ -27,6 +27,7 @@ NODES = 801
 BINS = (40, 40)  # stance-energy bins, nose-distance bins
 COARSE = (30, 30)  # the second resolution of the interval
 SPAN = 8.0  # sigmas of the rise error integrated over
+CHUNK = 64  # states whose transitions are computed together
 
 
 def _stairs(scene, design):
@@ -39,7 +40,17 @@ def _stairs(scene, design):
 
 
 def _transitions(wh, geo, energies, noses, e_edges, a_edges, sigma_r, sigma_t):
-    """(Q (states, E bins, a bins), pre, post) from each state (energies[i], noses[i])."""
+    """(Q (states, E bins * a bins), pre, post) from each state (energies[i], noses[i]), a
+    CHUNK of states at a time: a state's rows hold (nodes, a bins) numbers (33,000 at 801 x
+    41), so 1,600 states at once held gigabytes; each row is the same sum either way."""
+    parts = [_transitions_of(wh, geo, energies[i:i + CHUNK], noses[i:i + CHUNK], e_edges,
+                             a_edges, sigma_r, sigma_t)
+             for i in range(0, len(energies), CHUNK)]
+    return tuple(np.concatenate(column) for column in zip(*parts))
+
+
+def _transitions_of(wh, geo, energies, noses, e_edges, a_edges, sigma_r, sigma_t):
+    """_transitions of a few states."""
     from scipy.special import ndtr
 
     z = np.linspace(-SPAN, SPAN, NODES)
