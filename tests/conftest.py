@@ -27,6 +27,7 @@ MEMLOG = os.environ.get("PDM_TEST_MEMLOG")
 # The modules that build the largest NLPs (several hundred MB each while they run): each of
 # their tests empties the caches when it ends, so two tests' NLPs are never held at once.
 LARGE_NLPS = frozenset({
+    "test_allocation_built.py",
     "test_compass_gait_formulation.py",
     "test_rimless_wheel_rough.py",
     "test_yield_target_monte_carlo.py",
