@@ -5,6 +5,7 @@ Monte Carlo of the `yield` command (the event builds) as the judge."""
 
 import math
 
+import numpy as np
 import pytest
 
 from pdm_design import api
@@ -28,7 +29,7 @@ leg_length = 1.0
 {objective}
 [tolerances]
 {tolerances}
-start_speed = {{ value = 0.1 }}
+start_speed = {{ value = {start} }}
 [verification]
 stages = 20
 """
@@ -39,10 +40,10 @@ TOLERANCES = [Tolerance("slope", value=0.03, applies_to="each"),
 
 
 def spec_of(tmp_path, name, design=FREE, objective="[objective]\nmax_yield = 1.0",
-            tolerances=GIVEN, ground="ramp"):
+            tolerances=GIVEN, ground="ramp", start=0.1):
     path = tmp_path / f"{name}.toml"
     path.write_text(SPEC.format(ground=ground, design=design, objective=objective,
-                                tolerances=tolerances))
+                                tolerances=tolerances, start=start))
     return load_spec(path), str(path)
 
 
@@ -125,3 +126,19 @@ def test_what_is_not_linearised_is_refused_naming_the_key(tmp_path):
     spec, _ = spec_of(tmp_path, "leg", tolerances="leg_length = { value = 0.01 }")
     with pytest.raises(SpecError, match="tolerances.*leg_length"):
         api.optimize(spec, verify=False)
+
+
+def test_an_unreachable_target_is_said_in_words(tmp_path):
+    """A start speed of +-1 rad/s stalls or slips too many wheels for 99.99 % at any slope and
+    any slope tolerance: the answer is infeasible and names the yield target's row."""
+    spec, _ = spec_of(tmp_path, "hard", objective="", start=1.0,
+                      tolerances='yield_target = 0.9999\nslope = { allocate = true, '
+                                 'applies_to = "each" }')
+    for slope in np.linspace(0.02, 0.3, 57):  # statistical.py: no slope reaches it at s -> 0
+        design = RimlessWheelDesign(spokes=8, leg_length=1.0, slope=float(slope))
+        tolerances = [Tolerance("slope", value=1e-9, applies_to="each"),
+                      Tolerance("start_speed", value=1.0)]
+        assert linearised_yield(spec.scene, design, tolerances, 20)["yield"] < 0.9999
+    out = api.optimize(spec, verify=False)
+    assert not out.status.is_success
+    assert any("yield target" in v for v in out.violations)
