@@ -63,24 +63,37 @@ def sigmas(tolerances, scale=1.0):
 
 def row_moments(m, stages: int, slope_sigma, start_sigma):
     """(g, sd): SX columns of every row of every step at the nominal build, on the closed forms
-    `m` (formulation._Model: alpha, rate, leg, k2, eta, beta, scene)."""
-    d, ds = ca.SX.sym("slope_error", stages), ca.SX.sym("start_speed_error")
+    `m` (formulation._Model: alpha, rate, leg, k2, eta, beta, scene). Stance k's rows depend on
+    the errors through E_{k-1}, the chord before (d_{k-1}) and its own (d_k) alone, and
+    E_{k-1} = eta^2 E_{k-2} + b(beta_{k-1}): dE_{k-1}/dd_j = eta^{2(k-1-j)} b', dE_{k-1}/dw_0 =
+    eta^{2(k-1)} 2 w_0. So sd^2 = (g_E S)^2 sigma_w^2 + (g_E^2 V + (g_E b' + g_prev)^2 + g_cur^2)
+    sigma^2, with S and V (the sum of the squared older coefficients) carried step to step:
+    rows and time linear in the steps (one stance's rows differentiated once)."""
+    energy, d0, d1 = ca.SX.sym("energy"), ca.SX.sym("prev_error"), ca.SX.sym("error")
     wheel = SimpleNamespace(alpha=m.alpha, rate=m.rate, leg=m.leg, k2=m.k2, eta=m.eta,
                             beta=m.beta, gravity=m.scene.gravity, friction=m.scene.friction)
-    energy = phys.stance_energy(m.scene.initial.speed + ds, m.beta - m.alpha, m.rate)
-    prev, rows = m.beta, []
+    local = ca.vertcat(*[g for _, g in phys.stance_rows(wheel, energy, m.beta + d0, m.beta + d1,
+                                                        m.ground)])
+    jac = ca.jacobian(local, ca.vertcat(energy, d0, d1))
+    offset = phys.step_offset(m.beta + d1, m.alpha, m.eta, m.rate)
+    local, jac, b_slope = ca.substitute([local, jac, ca.jacobian(offset, d1)], [d0, d1],
+                                        [ca.SX(0.0), ca.SX(0.0)])
+    speed = m.scene.initial.speed
+    nominal = phys.stance_energy(speed, m.beta - m.alpha, m.rate)  # E_0
+    b = phys.step_offset(m.beta, m.alpha, m.eta, m.rate)
+    start, older, gs, sds = 2.0 * speed, 0.0, [], []
     for k in range(stages):
-        beta = m.beta + d[k]
-        rows += [g for _, g in phys.stance_rows(wheel, energy, prev, beta, m.ground)]
-        energy = phys.step_energy(energy, beta, m.alpha, m.eta, m.rate)
-        prev = beta
-    g = ca.vertcat(*rows)
-    errors = ca.vertcat(d, ds)
-    jac = ca.jacobian(g, errors)
-    weights = ca.vertcat(*([slope_sigma**2] * stages), start_sigma**2)
-    zero = ca.SX.zeros(stages + 1)
-    g0, jac0 = ca.substitute([g, jac], [errors], [zero])
-    return g0, ca.sqrt((jac0**2) @ weights + SD_FLOOR)
+        g, jk = ca.substitute([local, jac], [energy], [nominal])
+        g_e, g_prev, g_cur = jk[:, 0], jk[:, 1], jk[:, 2]
+        last = g_e * b_slope + g_prev if k else 0.0 * g_e
+        var = ((g_e * start)**2 * start_sigma**2
+               + (g_e**2 * older + last**2 + g_cur**2) * slope_sigma**2)
+        gs.append(g)
+        sds.append(ca.sqrt(var + SD_FLOOR))
+        older = m.eta**4 * (older + (b_slope**2 if k else 0.0))
+        start = m.eta**2 * start
+        nominal = m.eta**2 * nominal + b  # E_k of the nominal build (every chord beta)
+    return ca.vertcat(*gs), ca.vertcat(*sds)
 
 
 def nines(m, stages: int, slope_sigma, start_sigma):
