@@ -24,7 +24,7 @@ ground = "{ground}"
 speed = 1.1
 [design]
 spokes = 8
-leg_length = 1.0
+leg_length = {leg}
 {design}
 {objective}
 [tolerances]
@@ -40,10 +40,10 @@ TOLERANCES = [Tolerance("slope", value=0.03, applies_to="each"),
 
 
 def spec_of(tmp_path, name, design=FREE, objective="[objective]\nmax_yield = 1.0",
-            tolerances=GIVEN, ground="ramp", start=0.1):
+            tolerances=GIVEN, ground="ramp", start=0.1, leg="1.0"):
     path = tmp_path / f"{name}.toml"
     path.write_text(SPEC.format(ground=ground, design=design, objective=objective,
-                                tolerances=tolerances, start=start))
+                                tolerances=tolerances, start=start, leg=leg))
     return load_spec(path), str(path)
 
 
@@ -142,3 +142,24 @@ def test_an_unreachable_target_is_said_in_words(tmp_path):
     out = api.optimize(spec, verify=False)
     assert not out.status.is_success
     assert any("yield target" in v for v in out.violations)
+
+
+def test_the_chained_spreads_equal_central_differences_over_many_steps(tmp_path):
+    """nlp_yield.row_moments (one stance differentiated, chained through the step map) against
+    statistical.row_reliability (every build perturbed, central differences) at 60 steps, the
+    leg and slope symbols of the NLP set to 0.8 m and 0.12 rad."""
+    import casadi as ca
+
+    from pdm_design.scenes.rimless_wheel.formulation import build
+    from pdm_design.scenes.rimless_wheel.nlp_yield import row_moments
+    from pdm_design.scenes.rimless_wheel.statistical import row_reliability
+
+    spec, _ = spec_of(tmp_path, "rows", leg="{ min = 0.5, max = 1.5 }")
+    _, _, m = build(spec)
+    g, sd = row_moments(m, 60, 0.03 / 3, 0.1 / 3)
+    f = ca.Function("f", [m.values["leg_length"], m.values["slope"]], [g, sd])
+    g, sd = (x.full().ravel() for x in f(0.8, 0.12))
+    design = RimlessWheelDesign(spokes=8, leg_length=0.8, slope=0.12)
+    g_ref, sd_ref, _, _ = row_reliability(spec.scene, design, TOLERANCES, 60)
+    assert np.allclose(g, g_ref, rtol=0, atol=1e-12)
+    assert np.allclose(sd, sd_ref, rtol=1e-6, atol=1e-9)
