@@ -31,6 +31,7 @@ import math
 import casadi as ca
 
 from ...errors import SpecError
+from ...formulation import yield_target
 from ...formulation.common import (
     MARGIN,
     MODEL,
@@ -41,6 +42,7 @@ from ...formulation.common import (
     objective_scale,
 )
 from ...spec.model import Bounds
+from . import nlp_yield
 from . import physics as phys
 from .counts import spoke_counts, with_spokes  # noqa: F401 (the NLP's callers take them here)
 from .model import RimlessWheelDesign
@@ -73,20 +75,27 @@ def build(spec):
     if epigraph:
         aux.append(("min_margin", t, 0.0, 1.0))
         start.append(0.0)
+    target = (nlp_yield.target_rows(spec, m, symbols, bounds) if yield_target.active(spec)
+              else None)
+    if target is not None:  # tolerances sized for a yield target
+        aux.append((yield_target.AUX, target.scale, *target.bounds))
+        start.append(target.start)
     xd = ca.vertcat(*symbols.values()) if symbols else ca.SX(0, 1)
     aux_init = ca.Function("aux_init", [xd], [ca.vertcat(*start)])
     model = SceneModel(
         kind="rimless_wheel", design_symbols=symbols, aux=tuple(aux),
-        conditions=tuple(m.conditions(tau)), margin_symbol=t, aux_init=aux_init,
+        conditions=tuple(m.conditions(tau)) + ((target.condition,) if target else ()),
+        margin_symbol=t, aux_init=aux_init,
         objective_terms={
             "max_offset_tolerance": tau if robust else ca.SX(0.0),
             "max_min_margin": t if epigraph else ca.SX(0.0),
             "min_drop": ca.SX(0.0) + m.chord * ca.sin(m.beta),
             "fastest_convergence": ca.SX(0.0) + m.eta**2,
-            "max_yield": ca.SX(0.0),
+            "max_yield": nlp_yield.objective_term(spec, m),
         },
         derived=m.derived(), tolerance_axes=m.axes,
         objective_scale=objective_scale(spec.objective, top), stack_starts=False,
+        extra_objective=target.objective if target is not None else None,
     )
     return model, bounds, m
 

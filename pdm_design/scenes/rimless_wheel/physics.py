@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ...physics.ops import asin, cos, fabs, fmax, fmin, sin, sqrt
+from ...physics.ops import asin, cos, fabs, fmax, fmin, sin, sqrt, where
 
 
 def half_pitch(spokes):
@@ -209,6 +209,27 @@ def stance_conditions(energy, phi0, phi1, ground, leg, gravity, k2, rate, fricti
         centripetal = leg * w2 * cos(phi - ground)
         out.append((phi, (normal + centripetal, centripetal), (friction * normal,
                                                                 fabs(tangential))))
+    return out
+
+
+def stance_rows(wheel, energy, beta_prev, beta, ground):
+    """[(name, g)] of one stance's failure rows, each g >= 0 where it holds (per unit g, or
+    E / rate): the stance on chord angles beta_prev (where it starts) to beta (where it ends) at
+    energy E, of a wheel of alpha, rate, leg, gravity, k2, eta and friction (floats, arrays or
+    CasADi alike; docs/rimless_wheel.md section 13). over_the_top is E / rate behind the
+    vertical and 1 (always holds) when the wheel's nominal chord starts past it."""
+    w = wheel
+    phi0, phi1 = beta_prev - w.alpha, beta + w.alpha
+    out = [("over_the_top", where(w.beta - w.alpha < 0.0, energy / w.rate, 1.0 + 0.0 * energy))]
+    top = where(phi0 < 0.0, where(phi1 > 0.0, 0.0 * phi0, phi0), phi0)
+    for name, phi in (("start", phi0), ("top", top), ("end", phi1)):
+        normal, tangential = stance_forces(phi, speed_squared(energy, phi, w.rate), ground,
+                                           w.leg, w.gravity, w.k2)
+        out.append((f"no_flight ({name})", normal / w.gravity))
+        out.append((f"no_slip ({name})", (w.friction * normal - fabs(tangential)) / w.gravity))
+    p_n, p_t = impact_impulses(w.eta, w.alpha, beta, ground)
+    out.append(("impact_friction (pushes)", p_n))
+    out.append(("impact_friction", w.friction * p_n - fabs(p_t)))
     return out
 
 

@@ -60,7 +60,15 @@ class RimlessWheel(Scene):
                                       step_errors=errors, record_trajectory=record_trajectory)
 
     # ------------------------------------------------------------------ the NLP
-    objectives = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence")
+    objectives = ("max_offset_tolerance", "max_min_margin", "min_drop", "fastest_convergence",
+                  "max_yield")
+
+    def max_yield_refusal(self, scene):
+        """The NLP's linearised yield is derived on a ramp (nlp_yield.py)."""
+        if scene.ground == "ramp":
+            return None
+        return ("a ramp (scene.ground = \"ramp\"): the rimless wheel's linearised yield is in "
+                "the NLP on a ramp only", f"ground = \"{scene.ground}\"")
 
     search_objectives = ("max_mfpt",)
 
@@ -124,6 +132,7 @@ class RimlessWheel(Scene):
         return simulate_rimless_wheel(spec.scene, design, stages=spec.verification.stages,
                                       accuracy=accuracy, step_errors=steps)
 
+    sizes_for_yield_target = True  # on a ramp (nlp_yield.py); refused on stairs
     linearised_yield = lazily(".statistical:linearised_yield")
     linearised_rows = lazily(".statistical:placed_rows")
 

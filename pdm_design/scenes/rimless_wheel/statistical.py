@@ -69,24 +69,15 @@ def rows(scene, design, deviations, stages):
     e0 = phys.stance_energy(speed, wh.beta - wh.alpha, wh.rate)
     e = energies(wh, e0, betas)[:, :-1]  # E_{k-1} of stance k
     prev = np.concatenate([np.full((builds, 1), wh.beta), betas[:, :-1]], axis=1)
-    phi0, phi1 = prev - wh.alpha, betas + wh.alpha
-    names, out = [], []
+    found = phys.stance_rows(wh, e, prev, betas, wh.ground)  # physics.py: also the NLP's rows
+    if wh.beta - wh.alpha >= 0.0:  # starts past the top: no over_the_top row
+        found = found[1:]
+    names, out = [n for n, _ in found], [g for _, g in found]
 
     def add(name, value):
         names.append(name)
         out.append(value)
 
-    if wh.beta - wh.alpha < 0.0:
-        add("over_the_top", e / wh.rate)
-    top = np.where((phi0 < 0.0) & (phi1 > 0.0), 0.0, phi0)
-    for where, phi in (("start", phi0), ("top", top), ("end", phi1)):
-        w2 = phys.speed_squared(e, phi, wh.rate)
-        normal, tangential = phys.stance_forces(phi, w2, wh.ground, wh.leg, wh.gravity, wh.k2)
-        add(f"no_flight ({where})", normal / wh.gravity)
-        add(f"no_slip ({where})", (wh.friction * normal - np.abs(tangential)) / wh.gravity)
-    p_n, p_t = phys.impact_impulses(wh.eta, wh.alpha, betas, wh.ground)
-    add("impact_friction (pushes)", p_n)
-    add("impact_friction", wh.friction * p_n - np.abs(p_t))
     if scene.ground == "stairs":
         treads = np.concatenate([np.full((builds, 1), geo["tread"]),
                                  geo["tread"] + deviations.get("tread", zero)], axis=1)
