@@ -353,6 +353,14 @@ def test_ctrl_c_twice_in_process_stops_the_workers_once_and_restores_the_handler
     assert 1 <= len(rows) < 6 and (tmp_path / "table.csv").read_text().endswith("\n")
 
 
+def _terminal_sigint():
+    """In the child: SIGINT as a terminal's command has it (a shell's background job, a CI
+    runner's step, may start it ignored, and the table leaves an ignored signal ignored)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _table_stopped_by(out, grid, workers, stop):
     """Run `table` in a child process (its own process group) until a row is written, then call
     stop(child); returns (the child, its stderr) once it has ended."""
@@ -363,7 +371,8 @@ def _table_stopped_by(out, grid, workers, stop):
     child = subprocess.Popen(
         [sys.executable, "-m", "pdm_design", "table", str(ROBUST), *(f"--sweep={g}" for g in grid),
          "--out", str(out), "--workers", str(workers), "--no-plots"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        preexec_fn=_terminal_sigint)
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline and child.poll() is None:
