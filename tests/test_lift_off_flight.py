@@ -302,7 +302,8 @@ try:  # this code's layout, or the one of the commit before the flight was model
                                                       ManipulatorsInitial, ManipulatorsScene, Palm)
     from pdm_design.scenes.manipulators.sim import simulate_manipulators
 except ImportError:
-    from pdm_design.scenes import Body, ManipulatorsDesign, ManipulatorsInitial, ManipulatorsScene, Palm
+    from pdm_design.scenes import (Body, ManipulatorsDesign, ManipulatorsInitial,
+                                   ManipulatorsScene, Palm)
     from pdm_design.sim.manipulators import simulate_manipulators
 out = []
 for c in json.load(sys.stdin):

@@ -72,7 +72,7 @@ def empty_palm(theta0, omega0, link, torque, damping, t_end):
             return z[1]
 
         turn.terminal, turn.direction = True, -way
-        sol = solve_ivp(lambda s, z: [z[1], (weight * math.sin(z[0]) - torque * way
+        sol = solve_ivp(lambda s, z, way=way: [z[1], (weight * math.sin(z[0]) - torque * way
                                              - damping * z[1]) / inertia],
                         (t, t_end), y, events=[turn], **TIGHT)
         pieces.append((t, sol.t[-1], sol.sol))

@@ -131,7 +131,8 @@ def sign_test(first, second) -> tuple[int, int, float]:
 def test_allocation_for_a_yield_target_matches_the_exact_one_quantity_answer(long_row):
     # the feed place allocated alone (lot, normal, weight 2: alone, its share w_min / w is 1,
     # so t = s): the exact yield is the probability that the deviation stays between the
-    # map's two limits, solved for the scale s (sigma = s / 3) by brentq on the CDF. The allocation's union bound counts
+    # map's two limits, solved for the scale s (sigma = s / 3) by brentq on the CDF. The
+    # allocation's union bound counts
     # every row near a limit (three tip rows within 0.07 m of each other ahead), so its s is
     # at most the exact one (the exact yield there meets the target) and, here, within 10 %
     from scipy.optimize import brentq

@@ -589,7 +589,8 @@ def test_a_staircases_friction_tolerance_is_on_its_treads_and_the_step(tmp_path)
     allocated = {"quantity": "friction", "applies_to": "lot", "value": 0.02, "unit": "1",
                  "allocated": True, "limited_by": []}
     assert allocated_entries([allocated], kind="stairs")[0].applies_to.startswith("every tread's")
-    assert allocated_entries([allocated], kind="manipulators")[0].applies_to.startswith("every palm's surface")
+    entry = allocated_entries([allocated], kind="manipulators")[0]
+    assert entry.applies_to.startswith("every palm's surface")
 
 
 # ------------------------------------------------------------------ the sensitivity line

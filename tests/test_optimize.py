@@ -557,7 +557,8 @@ def _robust_manipulators(scale: float = 1.0, stages: int = 6):
 def test_the_linearised_sets_scale_with_the_device():
     """Dimensional analysis: ten times the size, ten times every half-width (cvxpy in metres
     failed at that size and the report silently lost the linearised sets)."""
-    one, ten = (optimize(_robust_manipulators(k), check_samples=0, linearise=True).linearised for k in (1, 10))
+    one, ten = (optimize(_robust_manipulators(k), check_samples=0, linearise=True).linearised
+                for k in (1, 10))
     assert one.status == ten.status == "optimal"
     assert ten.square == pytest.approx(10 * one.square, rel=1e-6)
     for axis in ("dx", "dy"):

@@ -175,7 +175,8 @@ def test_an_optimised_row_longer_than_the_limit_is_bad_input(tmp_path):
 
 FLAT_TEXT = (ROBUST.read_text().replace("mass = 1.0 ", "mass = 0.3 ")
              .replace("stages = 6", "stages = 10")
-             .replace("mass_ratio = 10.0 ", "mass_ratio = { min = 2.0, max = 20.0, initial = 10.0 }"))
+             .replace("mass_ratio = 10.0 ",
+                      "mass_ratio = { min = 2.0, max = 20.0, initial = 10.0 }"))
 
 
 def flat_data() -> dict:

@@ -1,7 +1,7 @@
 """The stairs event simulator against independent numbers.
 
-Expected values come from the closed forms in pdm_design.scenes.stairs.physics, from formulas derived
-by hand in this file (written out next to each test), or from brute-force sampling of the
+Expected values come from the closed forms in pdm_design.scenes.stairs.physics, from formulas
+derived by hand in this file (written out next to each test), or from brute-force sampling of the
 ballistic path (an independent way to find contacts) - never from the simulator's own output.
 """
 

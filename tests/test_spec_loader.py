@@ -323,7 +323,8 @@ def test_key_with_a_dot_is_quoted_in_the_path():
 
 MISSING = [
     ("manipulators", ("scene",), "scene", "a [scene] table"),
-    ("manipulators", ("scene", "kind"), "scene.kind", "one of the installed scenes: compass_gait, manipulators, rimless_wheel, stairs"),
+    ("manipulators", ("scene", "kind"), "scene.kind",
+     "one of the installed scenes: compass_gait, manipulators, rimless_wheel, stairs"),
     ("manipulators", ("scene", "body"), "scene.body", "a table"),
     ("manipulators", ("scene", "body", "mass"), "scene.body.mass", "a value"),
     ("manipulators", ("initial",), "initial", "an [initial] table"),
