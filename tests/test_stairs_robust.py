@@ -118,7 +118,8 @@ def launch_window(eps, spin, v0, *, g=9.81, h0=1.0, r=0.05, m=1.0, J=0.001):
     speed v0 (scenes/stairs/formulation/__init__.py docstring; written afresh here): the ball
     leaves its apex h0 above tread 1 at v0 and ends the first impact rolling at
     vx = (m r^2 v0 - J r spin) / (m r^2 + J); rise = (1 - eps^2) h0 and
-    tread = vx (1 + eps) T, T = sqrt(2 h0 / g), so every flight is the periodic one (V = g T) and lands at L1 again.
+    tread = vx (1 + eps) T, T = sqrt(2 h0 / g), so every flight is the periodic one (V = g T)
+    and lands at L1 again.
       launch row (C1): the top landing's nose x_n = v0 T - L1 ahead, the ball eps^2 h0 above it,
           at x_n + r still above it: v0 T - L1 + r <= v0 sqrt(2 eps^2 h0 / g) = v0 eps T;
       nose rows of a flight (d = tread - L1): d - r >= 0 and d + r <= 2 eps V vx / g;
