@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PROBLEMS = ("ramp", "stairs", "rough")
+PROBLEMS = ("ramp", "stairs", "rough", "max_yield", "yield_target")
 REPEATS = 3
 BEGIN, END = "<!-- optimize: begin -->", "<!-- optimize: end -->"
 
