@@ -24,8 +24,9 @@ NAMES = {"old": "full Jacobian (old)", "new": "chained (new)"}
 SPEC = Path(__file__).resolve().parent.parent / "problems" / "rimless_wheel_max_yield.toml"
 
 
-def full_jacobian(m, stages, slope_sigma, start_sigma):
+def full_jacobian(m, stages, spread):
     """The first version: every row a function of every step's error, differentiated whole."""
+    slope_sigma, start_sigma = spread.each[0], spread.start
     d, ds = ca.SX.sym("slope_error", stages), ca.SX.sym("start_speed_error")
     wheel = nlp_yield.SimpleNamespace(alpha=m.alpha, rate=m.rate, leg=m.leg, k2=m.k2,
                                       eta=m.eta, beta=m.beta, gravity=m.scene.gravity,
