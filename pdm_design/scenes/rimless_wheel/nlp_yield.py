@@ -63,7 +63,7 @@ def sigmas(tolerances, scale=1.0, *, ground="ramp"):
     for t in tolerances:
         sigma = t.value / SIGMAS_PER_TOLERANCE * scale
         if t.quantity == "start_speed":
-            lot[-1] = lot[-1] + sigma
+            lot[-1] += sigma
         elif t.applies_to == "lot":
             lot[names.index(t.quantity)] += sigma
         else:
@@ -97,6 +97,23 @@ def _is_zero(value) -> bool:
     return isinstance(value, (int, float)) and value == 0.0
 
 
+def linear_step(m):
+    """(x, rows, their Jacobian in (x, e_{k-1}, e_k), the next state, M, N) of one stance at
+    zero errors, x the state's symbol (row_moments)."""
+    nx, ne = (2, 2) if m.stairs else (1, 1)
+    x, prev, cur = ca.SX.sym("x", nx), ca.SX.sym("prev", ne), ca.SX.sym("cur", ne)
+    rows, state = local_step(m, x, prev, cur)
+    every = ca.vertcat(x, prev, cur)
+    rows, jac, state, step_jac = ca.substitute(
+        [rows, ca.jacobian(rows, every), state, ca.jacobian(state, every)],
+        [ca.vertcat(prev, cur)], [ca.SX.zeros(2 * ne)])
+    if ca.depends_on(step_jac, x):
+        raise AssertionError("the step map is not linear in its state")  # A = diag(eta^2, 1)
+    big_m = ca.vertcat(step_jac[:, :nx + ne], ca.SX.zeros(ne, nx + ne))  # M = [A B_p; 0 0]
+    big_n = ca.vertcat(step_jac[:, nx + ne:], ca.SX.eye(ne))  # N = [B_c; I]
+    return x, rows, jac, state, big_m, big_n
+
+
 def row_moments(m, stages: int, spread: Spread):
     """(g, sd): SX columns of every row of every step at the nominal build. Stance k's rows
     depend on the errors through the state x_{k-1}, the errors e_{k-1} of the step before and
@@ -106,36 +123,26 @@ def row_moments(m, stages: int, spread: Spread):
     G_c S G_c^T (H = [g_x, g_p]). The lots and the start speed: J_k = dz_k/dlots = M J_{k-1} +
     N L, a row's gradient H J_{k-1} + G_c L. One stance differentiated once: rows and time
     linear in the steps."""
-    nx, ne = (2, 2) if m.stairs else (1, 1)
-    x, prev, cur = ca.SX.sym("x", nx), ca.SX.sym("prev", ne), ca.SX.sym("cur", ne)
-    rows, state = local_step(m, x, prev, cur)
-    errors, zero = ca.vertcat(prev, cur), ca.SX.zeros(2 * ne)
-    rows, jac, state, step_jac = ca.substitute(
-        [rows, ca.jacobian(rows, ca.vertcat(x, prev, cur)), state,
-         ca.jacobian(state, ca.vertcat(x, prev, cur))], [errors], [zero])
-    # the map is linear in x (A = diag(eta^2, 1)): its Jacobian is free of x
-    big_m = ca.vertcat(step_jac[:, :nx + ne], ca.SX.zeros(ne, nx + ne))  # M = [A B_p; 0 0]
-    big_n = ca.vertcat(step_jac[:, nx + ne:], ca.SX.eye(ne))  # N = [B_c; I]
+    x, rows, jac, state, big_m, big_n = linear_step(m)
+    nz, ne = big_m.shape[0], big_n.shape[1]
     lots = [i for i, s in enumerate(spread.lot) if not _is_zero(s)]
-    lot_sigma = [spread.lot[i] for i in lots] + [spread.start]
-    lot_map = ca.SX.zeros(ne, len(lot_sigma))  # L: a lot moves its quantity on every step
+    lot_map = ca.SX.zeros(ne, len(lots) + 1)  # L: a lot moves its quantity on every step
     for col, i in enumerate(lots):
         lot_map[i, col] = 1.0
+    lot_var = ca.vertcat(*[ca.SX(spread.lot[i])**2 for i in lots], ca.SX(spread.start)**2)
     each = ca.diag(ca.vertcat(*[ca.SX(s)**2 for s in spread.each]))
     speed = m.scene.initial.speed
     nominal = ca.vertcat(phys.stance_energy(speed, m.beta - m.alpha, m.rate),
                          *([m.s0] if m.stairs else []))  # x_0
-    cov = ca.SX.zeros(nx + ne, nx + ne)
-    sens = ca.SX.zeros(nx + ne, len(lot_sigma))
+    cov, sens = ca.SX.zeros(nz, nz), ca.SX.zeros(nz, len(lots) + 1)
     sens[0, len(lots)] = 2.0 * speed  # dE_0 / d(start speed)
     noise = big_n @ each @ big_n.T
     gs, sds = [], []
     for _ in range(stages):
         g, j = ca.substitute([rows, jac], [x], [nominal])
-        h, g_cur = j[:, :nx + ne], j[:, nx + ne:]
+        h, g_cur = j[:, :nz], j[:, nz:]
         var = (ca.sum2((h @ cov) * h) + ca.sum2((g_cur @ each) * g_cur)
-               + ca.sum2((h @ sens + g_cur @ lot_map)**2
-                         @ ca.diag(ca.vertcat(*[ca.SX(s)**2 for s in lot_sigma]))))
+               + (h @ sens + g_cur @ lot_map)**2 @ lot_var)
         gs.append(g)
         sds.append(ca.sqrt(var + SD_FLOOR))
         cov = big_m @ cov @ big_m.T + noise
