@@ -110,18 +110,6 @@ def test_a_yield_target_is_met_by_monte_carlo(tmp_path):
         0.99, abs=1e-6)
 
 
-def test_stairs_are_refused_naming_the_key(tmp_path):
-    with pytest.raises(SpecError, match="objective.max_yield.*ramp"):
-        spec_of(tmp_path, "stairs", design="rise = 0.07", ground="stairs",
-                tolerances='rise = { value = 0.03, applies_to = "each" }')
-    spec, _ = spec_of(tmp_path, "stairs_target", ground="stairs", objective="",
-                      design="rise = { min = 0.03, max = 0.1, initial = 0.07 }",
-                      tolerances='yield_target = 0.99\nrise = { allocate = true, '
-                                 'applies_to = "each" }')
-    with pytest.raises(SpecError, match="tolerances.yield_target.*ramp"):
-        api.optimize(spec, verify=False)
-
-
 def test_what_is_not_linearised_is_refused_naming_the_key(tmp_path):
     spec, _ = spec_of(tmp_path, "leg", tolerances="leg_length = { value = 0.01 }")
     with pytest.raises(SpecError, match="tolerances.*leg_length"):
@@ -144,22 +132,27 @@ def test_an_unreachable_target_is_said_in_words(tmp_path):
     assert any("yield target" in v for v in out.violations)
 
 
-def test_the_chained_spreads_equal_central_differences_over_many_steps(tmp_path):
+@pytest.mark.parametrize("applies_to", ["each", "lot"])
+def test_the_chained_spreads_equal_central_differences_over_many_steps(tmp_path, applies_to):
     """nlp_yield.row_moments (one stance differentiated, chained through the step map) against
     statistical.row_reliability (every build perturbed, central differences) at 60 steps, the
-    leg and slope symbols of the NLP set to 0.8 m and 0.12 rad."""
+    leg and slope symbols of the NLP set to 0.8 m and 0.12 rad; every step's own slope error,
+    or one for every step of a build (a lot)."""
     import casadi as ca
 
     from pdm_design.scenes.rimless_wheel.formulation import build
-    from pdm_design.scenes.rimless_wheel.nlp_yield import row_moments
+    from pdm_design.scenes.rimless_wheel.nlp_yield import Spread, row_moments
     from pdm_design.scenes.rimless_wheel.statistical import row_reliability
 
     spec, _ = spec_of(tmp_path, "rows", leg="{ min = 0.5, max = 1.5 }")
     _, _, m = build(spec)
-    g, sd = row_moments(m, 60, 0.03 / 3, 0.1 / 3)
+    lot = applies_to == "lot"
+    g, sd = row_moments(m, 60, Spread([0.0 if lot else 0.01], [0.01 if lot else 0.0], 0.1 / 3))
     f = ca.Function("f", [m.values["leg_length"], m.values["slope"]], [g, sd])
     g, sd = (x.full().ravel() for x in f(0.8, 0.12))
     design = RimlessWheelDesign(spokes=8, leg_length=0.8, slope=0.12)
-    g_ref, sd_ref, _, _ = row_reliability(spec.scene, design, TOLERANCES, 60)
+    tolerances = [Tolerance("slope", value=0.03, applies_to=applies_to),
+                  Tolerance("start_speed", value=0.1)]
+    g_ref, sd_ref, _, _ = row_reliability(spec.scene, design, tolerances, 60)
     assert np.allclose(g, g_ref, rtol=0, atol=1e-12)
     assert np.allclose(sd, sd_ref, rtol=1e-6, atol=1e-9)

@@ -233,6 +233,23 @@ def stance_rows(wheel, energy, beta_prev, beta, ground):
     return out
 
 
+def next_foothold(s, chord_length, beta, tread_before):
+    """s_k = s_{k-1} + c cos beta_k - tread_{k-1}: the foothold's place from the back of the
+    tread it lands on, from the one before on the tread before (the footholds' drift)."""
+    return s + chord_length * cos(beta) - tread_before
+
+
+def landing_rows(wheel, s_prev, beta, tread_before, tread_after, scale):
+    """[(name, g)] of one step's landing on stairs, per unit `scale` (a tread), g >= 0 where
+    it holds: the nose of the tread before lies tread_before - s_prev ahead of the foothold,
+    within nose_reach(beta) (nose_clearance); the new foothold falls short of the nose of the
+    tread after (landing). Floats, arrays or CasADi alike (docs/rimless_wheel.md, section 13)."""
+    s = next_foothold(s_prev, chord(wheel.leg, wheel.alpha), beta, tread_before)
+    reach = nose_reach(wheel.leg, wheel.alpha, beta)
+    return [("nose_clearance", (reach - (tread_before - s_prev)) / scale),
+            ("landing", (tread_after - s) / scale)]
+
+
 # --- spokes of their own lengths (a build's): the stance spoke a, the landing spoke b ---------
 # The chord from the stance tip to the landing tip is fixed in the wheel: at phi = 0 it is
 # (b sin 2 alpha, a - b cos 2 alpha), so its angle below the horizontal is phi - theta0, and the

@@ -13,8 +13,9 @@ the normal force and mu N - |F| at phi0, the top and phi1 (per unit g), the impa
 impulse and mu P_n - |P_t|; on stairs the nose (reach(beta_k) less the nose's distance ahead
 of foothold k - 1) and the landing (tread k less foothold k's place), per unit tread.
 
-The uniform distribution and the leg_length and mass tolerances are not linearised here: a
-spec with them is refused in words (ValueError).
+A lot (one slope, rise or tread error for every step of a build) is one axis that moves every
+step at once. The uniform distribution and the leg_length and mass tolerances are not
+linearised here: a spec with them is refused in words (ValueError).
 """
 
 from __future__ import annotations
@@ -30,12 +31,12 @@ STEP = 1e-6  # central differences, in sigmas of each deviation
 
 
 def _sigmas(scene, tolerances, stages):
-    """(per-step sigmas {quantity: sigma}, start speed sigma); ValueError for what is not
-    linearised."""
+    """(per-step sigmas {quantity: sigma}, lot sigmas {quantity: sigma}, start speed sigma);
+    ValueError for what is not linearised."""
     from ...tolerance_model import SIGMAS_PER_TOLERANCE
 
     allowed = LINEARISED[scene.ground]
-    each, start = {}, 0.0
+    each, lot, start = {}, {}, 0.0
     for t in tolerances:
         if t.quantity not in allowed or t.distribution != "normal" or t.value is None:
             raise ValueError("the rimless wheel's linearised yield takes normal "
@@ -45,11 +46,10 @@ def _sigmas(scene, tolerances, stages):
         if t.quantity == "start_speed":
             start = sigma
         elif t.applies_to == "lot":
-            raise ValueError(f"the rimless wheel's linearised yield takes {t.quantity} on each "
-                             "step, not as a lot")
+            lot[t.quantity] = sigma
         else:
             each[t.quantity] = sigma
-    return each, start
+    return each, lot, start
 
 
 def rows(scene, design, deviations, stages):
@@ -78,24 +78,28 @@ def rows(scene, design, deviations, stages):
         names.append(name)
         out.append(value)
 
-    if scene.ground == "stairs":
+    if scene.ground == "stairs":  # the footholds' drift: physics.next_foothold
         treads = np.concatenate([np.full((builds, 1), geo["tread"]),
                                  geo["tread"] + deviations.get("tread", zero)], axis=1)
-        s = geo["landing_offset"] + np.cumsum(wh.chord * np.cos(betas) - treads[:, :-1], axis=1)
-        s_prev = np.concatenate([np.full((builds, 1), geo["landing_offset"]), s[:, :-1]],
-                                axis=1)
-        reach = phys.nose_reach(wh.leg, wh.alpha, betas)
-        add("nose_clearance", (reach - (treads[:, :-1] - s_prev)) / geo["tread"])
-        add("landing", (treads[:, 1:] - s) / geo["tread"])
+        advance = phys.next_foothold(0.0, wh.chord, betas, treads[:, :-1])
+        s_prev = geo["landing_offset"] + np.concatenate(
+            [np.zeros((builds, 1)), np.cumsum(advance, axis=1)[:, :-1]], axis=1)
+        for name, g in phys.landing_rows(wh, s_prev, betas, treads[:, :-1], treads[:, 1:],
+                                         geo["tread"]):
+            add(name, g)
     return names, np.stack(out, axis=2)  # (builds, stages, rows)
 
 
 def row_reliability(scene, design, tolerances, stages: int):
-    """(g, sd, names, step) of every row of every step at the nominal build, flattened."""
-    each, start = _sigmas(scene, tolerances, stages)
+    """(g, sd, names, step) of every row of every step at the nominal build, flattened: each
+    axis (a step's own error, a lot's error on every step, the start speed) moved by
+    +-STEP sigmas, every moved build at once."""
+    each, lot, start = _sigmas(scene, tolerances, stages)
     per_step = [q for q in LINEARISED[scene.ground] if q != "start_speed"]
-    axes = [(q, k) for q in per_step for k in range(stages)] + [("start_speed", None)]
-    sigma = np.array([each.get(q, 0.0) if k is not None else start for q, k in axes])
+    axes = ([(q, k) for q in per_step if q not in lot for k in range(stages)]
+            + [(q, "lot") for q in per_step if q in lot] + [("start_speed", None)])
+    sigma = np.array([start if k is None else lot[q] if k == "lot" else each.get(q, 0.0)
+                      for q, k in axes])
     count = 2 * len(axes) + 1
     dev = {q: np.zeros((count, stages)) for q in per_step}
     dev["start_speed"] = np.zeros(count)
@@ -104,6 +108,8 @@ def row_reliability(scene, design, tolerances, stages: int):
         for sign, row in ((1.0, 1 + 2 * i), (-1.0, 2 + 2 * i)):
             if k is None:
                 dev[q][row] = sign * h
+            elif k == "lot":
+                dev[q][row, :] = sign * h
             else:
                 dev[q][row, k] = sign * h
     names, g = rows(scene, design, dev, stages)
