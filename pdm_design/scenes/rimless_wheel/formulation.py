@@ -22,6 +22,11 @@ largest on (rise - tau, tread - tau), smallest on (rise + tau, tread + tau); the
 nose rows take those at the first and the last step (a straight run's ends), the nose's reach
 at the high chord: it shrinks as the chord steepens (a long rise of the step the spoke lands
 on), and the nose's distance does not depend on that step's rise.
+
+Allocated ([tolerances] with allocate = true: formulation/allocation.py), the box holds one
+half-width per quantity: slope, or rise and tread; start_speed (the scene's speed_tolerance
+when not listed); and with leg_length (each spoke, or a lot) or the hub's mass, spread.py's
+rows over the corners of each step's two spokes and the hub's k^2.
 """
 
 from __future__ import annotations
