@@ -44,6 +44,7 @@ class Box(NamedTuple):
 
 
 class Corner(NamedTuple):
+    ends: tuple[int, int, int]  # (a's end, b's end, k^2's end): 0 low, 1 high
     a: object
     b: object
     k2: object
@@ -65,7 +66,7 @@ def mass_moves_nothing(wheel, leg) -> bool:
     return wheel.spoke_mass == 0.0 or wheel.gyration**2 == leg**2 / 3.0
 
 
-def corner(a, b, k2, alpha, gravity):
+def corner(a, b, k2, alpha, gravity, ends=(0, 0, 0)):
     """The closed forms of a step from spoke a to spoke b at k^2, without cancellation at
     a = b: 1 - eta = b (2 b sin^2 alpha + (b - a) cos 2 alpha) / (k^2 + b^2),
     tan theta0 = ((a - b) + 2 b sin^2 alpha) / (b sin 2 alpha)."""
@@ -73,8 +74,8 @@ def corner(a, b, k2, alpha, gravity):
     drop = b * (2.0 * b * s2 + (b - a) * c2) / (k2 + b**2)
     eta = 1.0 - drop
     theta0 = ca.atan(((a - b) + 2.0 * b * s2) / (b * math.sin(2.0 * alpha)))
-    return Corner(a, b, k2, phys.stance_rate(gravity, k2, a), phys.stance_rate(gravity, k2, b),
-                  eta, drop * (2.0 - drop), theta0)
+    return Corner(ends, a, b, k2, phys.stance_rate(gravity, k2, a),
+                  phys.stance_rate(gravity, k2, b), eta, drop * (2.0 - drop), theta0)
 
 
 def chord_between(a, b, alpha):
@@ -89,11 +90,11 @@ class Spread:
         self.m, self.box = m, box
         alpha, g = m.alpha, m.scene.gravity
         legs = [m.leg - box.leg, m.leg + box.leg]
-        pairs = ([(a, b) for a in legs for b in legs] if box.each
-                 else [(a, a) for a in legs])
+        pairs = ([(i, j) for i in (0, 1) for j in (0, 1)] if box.each else [(0, 0), (1, 1)])
         self.legs = legs
         self.k2s = k2_ends(m.scene.wheel, m.n, m.leg, box.mass)
-        self.corners = [corner(a, b, k2, alpha, g) for a, b in pairs for k2 in self.k2s]
+        self.corners = [corner(legs[i], legs[j], k2, alpha, g, (i, j, kk))
+                        for i, j in pairs for kk, k2 in enumerate(self.k2s)]
         short, long_ = legs
         if box.each:  # theta0 grows with a and falls with b
             self.theta_lo = corner(short, long_, self.k2s[0], alpha, g).theta0
@@ -139,8 +140,7 @@ class Spread:
         first = self.first(sign)
         steps = {}  # (a end, b end, k^2 end): (q, c)
         for c in self.corners:
-            key = (self.legs_index(c.a), self.legs_index(c.b), self.k2_index(c.k2))
-            steps[key] = (c.eta**2, self.offset(c, self.beta(c, sign)))
+            steps[c.ends] = (c.eta**2, self.offset(c, self.beta(c, sign)))
         ends = range(len(self.legs)) if self.box.each else ()
         out = {}
         for j in range(len(self.k2s)):
@@ -154,12 +154,6 @@ class Spread:
                      for b in range(len(self.legs))}
             out.update({(b, j): value for b, value in y.items()})
         return out
-
-    def legs_index(self, leg):
-        return next(i for i, v in enumerate(self.legs) if v is leg)
-
-    def k2_index(self, k2):
-        return next(i for i, v in enumerate(self.k2s) if v is k2)
 
     def rows(self, add, margin, validity):
         m, box = self.m, self.box
