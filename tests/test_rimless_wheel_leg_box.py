@@ -260,3 +260,28 @@ def test_a_stairs_box_of_spokes_and_hub(tmp_path):
         out = replay(spec, design, tol, build, 20)
         assert not out.completed and out.failure.kind == build[-1]
     random_builds_in_the_simulator(spec, design, tol, 6, seed=5)
+
+
+@pytest.mark.parametrize("ground,tolerances,key", [
+    ("ramp", "mass = { value = 1.0 }\nslope = { allocate = true }", "tolerances.mass.value"),
+    ("ramp", "rise = { allocate = true }", "tolerances.rise"),
+    ("stairs", "slope = { allocate = true }", "tolerances.slope"),
+    ("ramp", "start_speed = { value = 1.5 }\nslope = { allocate = true }",
+     "tolerances.start_speed.value"),
+])
+def test_allocations_the_rows_cannot_bound_are_refused(tmp_path, ground, tolerances, key):
+    """A hub mass or start speed tolerance that reaches 0, a quantity of the other ground."""
+    design = "slope = 0.1" if ground == "ramp" else "rise = 0.1"
+    spec = spec_of(tmp_path, ground=ground, design=design, speed=1.3, tolerances=tolerances)
+    with pytest.raises(SpecError, match=key.replace(".", r"\.")):
+        formulation.build(spec)
+
+
+def test_spokes_of_their_own_need_a_step_a_spoke(tmp_path):
+    """The box's builds draw spoke j's length from step j's draw: stages >= spokes."""
+    path = tmp_path / "few.toml"
+    path.write_text(RAMP.format(ground="ramp", gyration=0.1, spoke_mass=0.1, speed=1.3,
+                                design="slope = 0.1", tolerances="leg_length = { allocate = "
+                                "true }").replace("stages = 20", "stages = 5"))
+    with pytest.raises(SpecError, match="verification.stages"):
+        formulation.build(load_spec(path))
