@@ -237,6 +237,14 @@ def test_the_problem_box_holds_at_every_corner_and_fails_just_beyond():
         out = replay(spec, design, tol, build, 200)
         assert not out.completed and out.failure.kind == "stalled"
     random_builds_in_the_simulator(spec, design, tol, 8, seed=3)
+    # the corners stand for the box: 5000 uniform builds inside it make the 200 steps too
+    rng = np.random.default_rng(0)
+    builds, steps = 5000, 200
+    inside = {"leg_length": rng.uniform(-1, 1, (builds, steps)) * tol["leg_length"],
+              "slope": rng.uniform(-1, 1, (builds, steps)) * tol["slope"],
+              "mass": rng.uniform(-1, 1, builds) * tol["mass"],
+              "start_speed": rng.uniform(-1, 1, builds) * tol["start_speed"]}
+    assert (build_outcome(spec.scene, design, inside, steps).stages_passed == steps).all()
 
 
 def test_a_stairs_box_of_spokes_and_hub(tmp_path):
