@@ -236,7 +236,7 @@ class _Model:
             if self.stairs:
                 self._tread_row(add)
             Spread(self, Box(chord, tread, dw, box.get("leg_length", 0.0),
-                             box.get("mass", 0.0), each)).rows(add, MARGIN, VALIDITY)
+                             box.get("mass", 0.0), each)).rows(add, VALIDITY)
             return out
         self._periodic_rows(add)
         self._box_rows(add, chord, tread, dw)

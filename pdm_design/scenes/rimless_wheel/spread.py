@@ -141,21 +141,22 @@ class Spread:
         steps = {}  # (a end, b end, k^2 end): (q, c)
         for c in self.corners:
             steps[c.ends] = (c.eta**2, self.offset(c, self.beta(c, sign)))
-        ends = range(len(self.legs)) if self.box.each else ()
         out = {}
         for j in range(len(self.k2s)):
             mine = {(a, b): v for (a, b, jj), v in steps.items() if jj == j}
             one = pick([first[(i, j)] for i in range(len(self.legs))]
                        + [cc / (1.0 - q) for q, cc in mine.values()])
             y = {i: pick([first[(i, j)], one]) for i in range(len(self.legs))}
-            for _ in range(ITERATIONS if ends else 1):
+            for _ in range(ITERATIONS if self.box.each else 1):
                 y = {b: pick([first[(b, j)]] + [q * y[a] + cc for (a, bb), (q, cc)
                                                   in mine.items() if bb == b])
                      for b in range(len(self.legs))}
             out.update({(b, j): value for b, value in y.items()})
         return out
 
-    def rows(self, add, margin, validity):
+    def rows(self, add, validity):
+        """Every row (add(key, where, slack, scale, kind=...), validity: the kind of the rows
+        that keep the model valid): section 9's "Spokes and hub in the box"."""
         m, box = self.m, self.box
         alpha = m.alpha
         phi0_lo = self.theta_lo + self.beta_lo - 2.0 * alpha
