@@ -22,6 +22,11 @@ largest on (rise - tau, tread - tau), smallest on (rise + tau, tread + tau); the
 nose rows take those at the first and the last step (a straight run's ends), the nose's reach
 at the high chord: it shrinks as the chord steepens (a long rise of the step the spoke lands
 on), and the nose's distance does not depend on that step's rise.
+
+Allocated ([tolerances] with allocate = true: formulation/allocation.py), the box holds one
+half-width per quantity: slope, or rise and tread; start_speed (the scene's speed_tolerance
+when not listed); and with leg_length (each spoke, or a lot) or the hub's mass, spread.py's
+rows over the corners of each step's two spokes and the hub's k^2.
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ import math
 import casadi as ca
 
 from ...errors import SpecError
-from ...formulation import yield_target
+from ...formulation import allocation, yield_target
 from ...formulation.common import (
     MARGIN,
     MODEL,
@@ -58,13 +63,15 @@ def build(spec):
         raise SpecError(spec.source or "<spec>", "design.spokes",
                         "a fixed count here (solve each of spoke_counts(spec))",
                         found="a free count")
+    if allocation.allocating(spec):  # refused in words where no bound is derived
+        allocation.check(spec)
     scene = spec.scene
     names = tuple(n for n in RimlessWheelDesign.VARIABLES if n != "spokes")
     values, symbols, bounds = design_inputs(spec, names, DEFAULTS)
     robust = float(spec.objective.get("max_offset_tolerance", 0.0)) > 0.0
     epigraph = float(spec.objective.get("max_min_margin", 0.0)) > 0.0
     m = _Model(scene, int(spec.design["spokes"]), values, spec.verification.stages)
-    top = m.tolerance_bound(bounds)
+    top = scale_bound(spec, m, values, bounds)
     tau = ca.SX.sym("tolerance") if robust else 0.0
     t = ca.SX.sym("min_margin") if epigraph else None
     aux = [("periodic_speed", m.W, 0.0, math.inf)]
@@ -82,9 +89,14 @@ def build(spec):
         start.append(target.start)
     xd = ca.vertcat(*symbols.values()) if symbols else ca.SX(0, 1)
     aux_init = ca.Function("aux_init", [xd], [ca.vertcat(*start)])
+    today = {axis: tau for axis in m.axes}
+    each = any(t.quantity == "leg_length" and t.applies_to == "each"
+               for t in getattr(spec, "tolerances", ()))
+    conditions = allocation.box_conditions(spec, lambda box: m.conditions(box, each), today,
+                                           tau)
     model = SceneModel(
         kind="rimless_wheel", design_symbols=symbols, aux=tuple(aux),
-        conditions=tuple(m.conditions(tau)) + ((target.condition,) if target else ()),
+        conditions=tuple(conditions) + ((target.condition,) if target else ()),
         margin_symbol=t, aux_init=aux_init,
         objective_terms={
             "max_offset_tolerance": tau if robust else ca.SX(0.0),
@@ -94,10 +106,50 @@ def build(spec):
             "max_yield": nlp_yield.objective_term(spec, m),
         },
         derived=m.derived(), tolerance_axes=m.axes,
-        objective_scale=objective_scale(spec.objective, top), stack_starts=False,
+        objective_scale=objective_scale(spec.objective, _scale_size(spec, m, values, bounds,
+                                                                           top)),
+        stack_starts=False,
         extra_objective=target.objective if target is not None else None,
     )
     return model, bounds, m
+
+
+def _ends(spec, m, values, bounds):
+    """{quantity: its half-width's physical end}: a slope's half pitch, a rise's (tread's,
+    spoke's) largest length, the start speed, the hub's mass."""
+    def largest(name):
+        if name in bounds:
+            return float(bounds[name][1])
+        value = values.get(name)
+        return float(value) if isinstance(value, (int, float)) else None
+
+    leg = largest("leg_length")
+    rise = largest("rise") if m.stairs else None
+    chord = 2.0 * leg * math.sin(m.alpha)
+    return {"slope": m.alpha, "rise": rise or chord, "tread": largest("tread") or chord,
+            "start_speed": spec.scene.initial.speed, "leg_length": leg,
+            "mass": spec.scene.wheel.mass}
+
+
+def scale_bound(spec, m, values, bounds):
+    """The tolerance scale's upper bound: the chord's (tolerance_bound), or, allocating, the
+    largest of each allocated quantity's physical end over its share (its rows hold it below
+    that; the bound keeps the variable finite)."""
+    top = m.tolerance_bound(bounds)
+    if not allocation.allocating(spec):
+        return top
+    ends = _ends(spec, m, values, bounds)
+    return max([top] + [ends[q] / share for q, share in allocation.coefficients(spec).items()])
+
+
+def _scale_size(spec, m, values, bounds, top):
+    """The tolerance scale's size for the objective's: the dearest allocated quantity's
+    physical end (`top` when nothing is allocated)."""
+    dearest = [q for q, share in allocation.coefficients(spec).items() if share == 1.0] \
+        if allocation.allocating(spec) else []
+    if not dearest:
+        return top
+    return _ends(spec, m, values, bounds)[dearest[0]]
 
 
 class _Model:
@@ -153,10 +205,10 @@ class _Model:
             out.update(tread=_sx(self.tread), landing_offset=_sx(self.s0))
         return out
 
-    def energy_ends(self, tau):
+    def energy_ends(self, tau, dw):
         """(low, high): each a list of (energy, chord angle its stances start on) bounding every
-        stance of every build (module docstring)."""
-        speed, dw = self.scene.initial.speed, self.scene.initial.speed_tolerance
+        stance of every build (module docstring); dw: the start speed's half-width."""
+        speed = self.scene.initial.speed
         start_angle = self.beta - self.alpha
         ends = []
         for sign in (-1.0, 1.0):
@@ -166,22 +218,51 @@ class _Model:
             ends.append([(first, self.beta), (orbit, beta)])
         return ends
 
-    def conditions(self, tau):
+    def conditions(self, box, each=True):
+        """The rows over a box {quantity: half-width} (slope, or rise and tread; start_speed,
+        the scene's speed_tolerance when left out; leg_length and mass: spread.py's rows)."""
         out: list[Condition] = []
 
         def add(key, where, slack, scale=1.0, kind=MARGIN, **kw):
             out.append(Condition((key,) if key else (), where, slack, scale, kind, **kw))
 
+        chord = box.get("rise" if self.stairs else "slope", 0.0)
+        tread = box.get("tread", 0.0)
+        dw = box.get("start_speed", self.scene.initial.speed_tolerance)
+        if "leg_length" in box or "mass" in box:
+            from .spread import Box, Spread
+
+            self._periodic_rows(add)
+            if self.stairs:
+                self._tread_row(add)
+            Spread(self, Box(chord, tread, dw, box.get("leg_length", 0.0),
+                             box.get("mass", 0.0), each)).rows(add, VALIDITY)
+            return out
+        self._periodic_rows(add)
+        self._box_rows(add, chord, tread, dw)
+        return out
+
+    def _periodic_rows(self, add):
         lhs = self.W**2 * self.loss
         rhs = self.eta**2 * self.rate * 2.0 * ca.sin(self.alpha) * ca.sin(self.beta)
         add(None, "periodic speed: W^2 (1 - eta^2) = eta^2 rate 2 sin(alpha) sin(beta)",
             lhs - rhs, lhs + rhs, kind=MODEL, equality=True)
+
+    def _tread_row(self, add):
+        if not self.tread_derived:
+            advance = phys.stairs_advance(self.rise, self.leg, self.alpha)
+            add("periodic_tread", "tread = the chord's horizontal span", self.tread - advance,
+                self.tread, equality=True)
+
+    def _box_rows(self, add, tau, tread_tau, dw):
+        """The rows over a box of every step's chord (+-tau) and tread (+-tread_tau) and the
+        start speed (+-dw) (module docstring)."""
         low_beta, high_beta = self.chord_angle(-tau), self.chord_angle(tau)
         add("descends", "every step's chord goes down", low_beta - MIN_SLOPE, self.alpha,
             kind=VALIDITY)
         add("impact_ratio", "an impact keeps the wheel rolling forward", self.eta, 1.0,
             kind=VALIDITY)
-        (low, high) = self.energy_ends(tau)
+        (low, high) = self.energy_ends(tau, dw)
         for (energy, beta), what in zip(low, ("first stance", "orbit of the lowest slopes")):
             # omega+^2 against rate (1 - cos(beta - alpha)) behind the vertical, 0 past it
             start2 = phys.speed_squared(energy, beta - self.alpha, self.rate)
@@ -194,8 +275,7 @@ class _Model:
             add("impact_friction", f"impact on the {what} chord", mu * normal - ca.fabs(tangential),
                 mu * normal)
         if self.stairs:
-            self._stairs_rows(add, tau, low_beta, high_beta)
-        return out
+            self._stairs_rows(add, tau, tread_tau, high_beta)
 
     def _force_rows(self, add, energies, low_beta, high_beta):
         phi0, phi1 = low_beta - self.alpha, high_beta + self.alpha
@@ -208,23 +288,22 @@ class _Model:
                 # mu N as the scale while N > 0; where N <= 0 the slack is negative already
                 add("no_slip", "stance, widest arc", sc - sd, ca.fmax(sc, 0.0))
 
-    def _stairs_rows(self, add, tau, low_beta, high_beta):
+    def _stairs_rows(self, add, tau, tt, high_beta):
+        """tau: the rise's half-width, tt: the tread's."""
         chord, tread, s0 = self.chord, self.tread, self.s0
+        low_beta = self.chord_angle(-tau)
         add("spoke_reach", "every rise is below the spokes' chord", chord * (1 - 1e-6) - self.rise
             - tau, chord, kind=VALIDITY)
         add("step_down", "every step goes down", self.rise - tau, chord, kind=VALIDITY)
-        if not self.tread_derived:
-            advance = phys.stairs_advance(self.rise, self.leg, self.alpha)
-            add("periodic_tread", "tread = the chord's horizontal span", tread - advance, tread,
-                equality=True)
-        long_step = chord * ca.cos(low_beta) - tread + tau
-        short_step = chord * ca.cos(high_beta) - tread - tau
+        self._tread_row(add)
+        long_step = chord * ca.cos(low_beta) - tread + tt
+        short_step = chord * ca.cos(high_beta) - tread - tt
         reach = phys.nose_reach(self.leg, self.alpha, high_beta)
         for k in sorted({1, max(self.stages, 1)}):
-            longest = s0 + k * long_step - tau  # tread 0 is as designed
-            shortest_before = s0 + (k - 1) * short_step + (tau if k > 1 else 0.0)
-            add("landing", f"foothold {k}, furthest", tread - tau - longest, tread)
-            nose = tread + (tau if k > 1 else 0.0) - shortest_before
+            longest = s0 + k * long_step - tt  # tread 0 is as designed
+            shortest_before = s0 + (k - 1) * short_step + (tt if k > 1 else 0.0)
+            add("landing", f"foothold {k}, furthest", tread - tt - longest, tread)
+            nose = tread + (tt if k > 1 else 0.0) - shortest_before
             add("nose_clearance", f"step {k}, nearest foothold", reach - nose, reach)
 
 

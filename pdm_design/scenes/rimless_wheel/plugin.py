@@ -114,21 +114,38 @@ class RimlessWheel(Scene):
         return None
 
     def box_axes_of(self, spec):
-        """Every step's own slope on a ramp; every step's rise and tread on stairs."""
+        """Every step's own slope on a ramp; every step's rise and tread on stairs. Spokes of
+        their own lengths (leg_length on each part): every spoke long or short, alternately
+        long and short, and one length a spoke in a random build."""
         from ...plugin_tolerances import BoxAxes
 
+        each = tuple(t.quantity for t in getattr(spec, "tolerances", ())
+                     if t.quantity == "leg_length" and t.applies_to == "each")
         if spec.scene.ground == "ramp":
-            return BoxAxes((("slope", "slope"),))
-        return BoxAxes((("rise", "rise"), ("tread", "tread")))
+            return BoxAxes((("slope", "slope"),), each, each)
+        return BoxAxes((("rise", "rise"), ("tread", "tread")), each, each)
+
+    allocatable = ("slope", "rise", "tread", "start_speed", "leg_length", "mass")
+    allocation_refusal = lazily(".refusals:allocation_refusal")
 
     def simulate_box_build(self, spec, design, errors, deviations, accuracy):
-        """One build of the box: every step's slope error (a ramp) or rise and tread errors."""
+        """One build of the box: every step's slope error (a ramp) or rise and tread errors;
+        deviations of an allocated box's other quantities: start_speed and mass (a number),
+        leg_length (a number, or one a step of which spoke j takes step j + 1's)."""
+        import numpy as np
+
         from .sim import simulate_rimless_wheel
 
         names = ("slope",) if spec.scene.ground == "ramp" else ("rise", "tread")
-        steps = [{"step": k + 1, **dict(zip(names, e))} for k, e in enumerate(errors)]
-        return simulate_rimless_wheel(spec.scene, design, stages=spec.verification.stages,
-                                      accuracy=accuracy, step_errors=steps)
+        if not deviations:
+            steps = [{"step": k + 1, **dict(zip(names, e))} for k, e in enumerate(errors)]
+            return simulate_rimless_wheel(spec.scene, design, stages=spec.verification.stages,
+                                          accuracy=accuracy, step_errors=steps)
+        built = {name: np.array([[e[i] for e in errors]]) for i, name in enumerate(names)}
+        # a number: (1,), a lot; a list: (1, stages), one a step
+        built.update({q: np.array([v], dtype=float) for q, v in deviations.items()})
+        return self.simulate_build(spec.scene, design, built, spec.verification.stages,
+                                   accuracy=accuracy)
 
     sizes_for_yield_target = True  # on a ramp and on stairs (nlp_yield.py)
     linearised_yield = lazily(".statistical:linearised_yield")
