@@ -223,3 +223,30 @@ def test_analysis_and_stage_maps_flag_the_dip(dip):
     built = run_builds(spec.scene, _design(spec), {"friction": np.zeros(2)}, 3)
     assert list(built.failure) == ["tip", "tip"] and not built.closed_form.any()
     assert (built.stages_passed == 0).all() and (built.min_margin < 0).all()
+
+
+def test_whole_carry_rows_are_one_function_for_floats_arrays_and_casadi():
+    """physics.carry_contact_nodes / carry_row_least on floats, on numpy arrays (one carry an
+    entry) and on CasADi symbols give the same numbers, and the least is at or below the row
+    sampled densely along the carry (a lower bound) on every carry."""
+    rng = np.random.default_rng(7)
+    n = 20
+    u, a, b = rng.uniform(5.0, 6.0, n), rng.uniform(0.0, 0.3, n), rng.uniform(0.3, 0.9, n)
+    kw = dict(gravity=G, carry_gravity=1.1 * G, friction=0.4, link_length=2.0)
+
+    def least(u, a, b, c1, c2, cells=8):
+        nodes, bend = phys.carry_contact_nodes(u, a, start=a, end=b, fastest_u2=u * u,
+                                               cells=cells, **kw)
+        return phys.carry_row_least(nodes, c1, c2, bend)
+
+    sym = [ca.SX.sym(s) for s in "uab"]
+    for c1, c2 in ((1.0, 0.0), (0.75, -1.0), (0.09, 0.2), (0.09, -0.2)):
+        arrays = least(u, a, b, c1, c2)
+        fn = ca.Function("least", sym, [least(*sym, c1, c2)])
+        for i in range(n):
+            assert float(least(float(u[i]), float(a[i]), float(b[i]), c1, c2)) == \
+                pytest.approx(arrays[i], abs=1e-12)
+            assert float(fn(u[i], a[i], b[i])) == pytest.approx(arrays[i], abs=1e-12)
+            th = np.linspace(-a[i], b[i], 2001)
+            F, N = phys.carry_contact_at(th, u[i], a[i], **kw)
+            assert arrays[i] <= float(np.min(c1 * N + c2 * F)) + 1e-12
