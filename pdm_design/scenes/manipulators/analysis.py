@@ -277,12 +277,10 @@ def whole_carry_margins(scene, carry: CarryTerms, u, a, b, l, support, cells=Non
     section 2.1, "Over the whole carry"), a lower bound of each row, exact at the cells' ends.
     Rows (per object mass): lift-off N / g, slip (mu N -+ F) / (mu g), tip (d N +- (h/2) F) /
     (d g) for the supported base's front and rear ends d (`support`)."""
-    from .formulation.rows import CARRY_CELLS
-
     g, mu, half_h = scene.gravity, scene.palm.friction, scene.body.height / 2
     nodes, bend = phys.carry_contact_nodes(
         u, a, start=a, end=b, fastest_u2=u * u, gravity=g, carry_gravity=carry.gravity,
-        friction=carry.friction, link_length=l, cells=cells or CARRY_CELLS)
+        friction=carry.friction, link_length=l, cells=cells or phys.CARRY_CELLS)
 
     def least(c1, c2, scale):
         value = float(phys.carry_row_least(nodes, c1, c2, bend))

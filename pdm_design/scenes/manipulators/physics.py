@@ -251,6 +251,12 @@ def carry_contact_at(theta, u, alpha, *, gravity, carry_gravity, friction, link_
     return carry_contact_force(theta, v2, gravity=gravity, link_length=link_length, along=along)
 
 
+# Cells of a real-link carry whose ends hold its contact rows with the curvature bound's
+# allowance (docs/physics.md section 2.1): the NLP's (formulation/rows.py), the analysis' and
+# the stage maps' (formulation/offsets.py)
+CARRY_CELLS = 8
+
+
 def carry_contact_nodes(u, alpha, *, start, end, fastest_u2, gravity, carry_gravity, friction,
                         link_length, cells):
     """The whole carry's cells (docs/physics.md section 2.1, "Over the whole carry"): ([(F, N)]

@@ -26,9 +26,7 @@ OVER_THE_TOP = ("over_the_top", "first_over_the_top")
 LIFT_OFF = ("lift_off", "first_lift_off")
 ACOS_EDGE = 1e-15  # acos is taken of at most 1 - this: a finite slope
 MASS_KEPT = 1e-3  # a mass tolerance leaves at least this fraction of the mass
-# Cells of the real-link carry's angle range whose ends hold its contact rows with the chord
-# bound's allowance (docs/physics.md section 2.1, `_inside_rows`)
-CARRY_CELLS = 8
+CARRY_CELLS = phys.CARRY_CELLS  # cells of the carry's angle range (`_inside_rows`)
 
 
 def conditions(m, S, u_lo, u_hi, box, robust) -> list[Condition]:
