@@ -196,3 +196,57 @@ def test_lift_off_and_slip_agree_with_the_simulators_carry(dip):
         sim = min(float(np.min(mu * c[:, 2] + sign * c[:, 1])) for c in carries) / (mu * G)
         least = min(v for w, v in out["slip_carry"] if "during the carry" in w and what in w)
         assert sim - (mu + 1) * S * cell2 / (mu * G) <= least <= sim + 1e-9
+
+
+def test_analysis_and_stage_maps_flag_the_dip(dip):
+    """The analysis' margins, the streamed stage maps (formulation/offsets.py) and the builds'
+    map (tolerances.py) judge the carry with the NLP's whole-carry rows: the dip the ends
+    accepted is a negative tip margin in each (the simulator tips the object on palm 1)."""
+    from pdm_design.formulation import formulate
+    from pdm_design.scenes.manipulators.analysis import analyse_manipulators
+    from pdm_design.scenes.manipulators.tolerances import run_builds
+
+    spec, out, _, _ = dip
+    margins = analyse_manipulators(spec.scene, _design(spec), 3).margins
+    # the NLP's rows at the periodic carry (its speed interval's ends hold the first landing,
+    # almost periodic here): the same least, at the same cell
+    nlp_least = min(v for w, v in out["tip_carry"] if "during the carry" in w)
+    assert margins["tip_carry"] == pytest.approx(nlp_least, abs=2e-3)
+    assert margins["tip_carry"] < -0.05
+    assert min(margins.values()) == margins["tip_carry"]  # every other margin holds
+    form = formulate(spec)
+    x = np.asarray(form.aux_init(np.zeros(0))).ravel()
+    zero = np.zeros(4)
+    worst = form.scenario_source.stream(x, {}, lambda K: (zero, zero), 4)
+    assert worst["value"] < -0.05 and worst["stage"] == 1
+    assert worst["label"].startswith("tip_carry (palm 1, during the carry, object's rear edge")
+    built = run_builds(spec.scene, _design(spec), {"friction": np.zeros(2)}, 3)
+    assert list(built.failure) == ["tip", "tip"] and not built.closed_form.any()
+    assert (built.stages_passed == 0).all() and (built.min_margin < 0).all()
+
+
+def test_whole_carry_rows_are_one_function_for_floats_arrays_and_casadi():
+    """physics.carry_contact_nodes / carry_row_least on floats, on numpy arrays (one carry an
+    entry) and on CasADi symbols give the same numbers, and the least is at or below the row
+    sampled densely along the carry (a lower bound) on every carry."""
+    rng = np.random.default_rng(7)
+    n = 20
+    u, a, b = rng.uniform(5.0, 6.0, n), rng.uniform(0.0, 0.3, n), rng.uniform(0.3, 0.9, n)
+    kw = dict(gravity=G, carry_gravity=1.1 * G, friction=0.4, link_length=2.0)
+
+    def least(u, a, b, c1, c2, cells=8):
+        nodes, bend = phys.carry_contact_nodes(u, a, start=a, end=b, fastest_u2=u * u,
+                                               cells=cells, **kw)
+        return phys.carry_row_least(nodes, c1, c2, bend)
+
+    sym = [ca.SX.sym(s) for s in "uab"]
+    for c1, c2 in ((1.0, 0.0), (0.75, -1.0), (0.09, 0.2), (0.09, -0.2)):
+        arrays = least(u, a, b, c1, c2)
+        fn = ca.Function("least", sym, [least(*sym, c1, c2)])
+        for i in range(n):
+            assert float(least(float(u[i]), float(a[i]), float(b[i]), c1, c2)) == \
+                pytest.approx(arrays[i], abs=1e-12)
+            assert float(fn(u[i], a[i], b[i])) == pytest.approx(arrays[i], abs=1e-12)
+            th = np.linspace(-a[i], b[i], 2001)
+            F, N = phys.carry_contact_at(th, u[i], a[i], **kw)
+            assert arrays[i] <= float(np.min(c1 * N + c2 * F)) + 1e-12

@@ -221,8 +221,9 @@ def _first_landing(scene, design, problems):
 
 def _stage_margins(scene, design, velocity, offset) -> dict[str, float]:
     """Margins of one stage: landing with `velocity` at `offset` from the palm centre, then the
-    carry to beta (with links or pivot friction, the speed-dependent slip and tipping of the
-    carry are judged at its two ends, as the lift-off is)."""
+    carry to beta (with links or pivot friction, the carry's lift-off, slip and tipping are
+    judged at its two ends and over the whole carry, whole_carry_margins: each margin is the
+    ends' where the whole carry's rows hold, else the least of those rows, < 0)."""
     g, l = scene.gravity, design.link_length
     a, b = design.alpha, design.beta
     carry = carry_terms(scene, design)
@@ -257,12 +258,38 @@ def _stage_margins(scene, design, velocity, offset) -> dict[str, float]:
             _tip_margin(support, float(phys.carry_force_point(b, body.height, ratio[1]))),
         ),
     }
+    if not carry.plain and carry.damping == 0.0 and u > 0.0:
+        # the ends' margin where the whole carry's rows hold (proven), else their least
+        for key, value in whole_carry_margins(scene, carry, u, a, b, l, support).items():
+            out[key] = out[key] if value >= 0.0 else min(out[key], value)
     if py > 0.0:
         out["slip_impact"] = margin(palm.friction * py, abs(px))
         out["tip_impact"] = _tip_margin(support, -half_h * px / py)
     else:  # the palm would have to pull the object down: it is not landing on the palm
         out["slip_impact"] = out["tip_impact"] = -1.0
     return out
+
+
+def whole_carry_margins(scene, carry: CarryTerms, u, a, b, l, support, cells=None) -> dict:
+    """The least over the whole carry from -a at u to b (real links or pivots, no damping) of
+    its lift-off, slip and tip rows, each over its scale and clipped to [-1, 1]: the NLP's rows
+    over the carry's cells with the curvature bound (physics.carry_contact_nodes; docs/physics.md
+    section 2.1, "Over the whole carry"), a lower bound of each row, exact at the cells' ends.
+    Rows (per object mass): lift-off N / g, slip (mu N -+ F) / (mu g), tip (d N +- (h/2) F) /
+    (d g) for the supported base's front and rear ends d (`support`)."""
+    g, mu, half_h = scene.gravity, scene.palm.friction, scene.body.height / 2
+    nodes, bend = phys.carry_contact_nodes(
+        u, a, start=a, end=b, fastest_u2=u * u, gravity=g, carry_gravity=carry.gravity,
+        friction=carry.friction, link_length=l, cells=cells or phys.CARRY_CELLS)
+
+    def least(c1, c2, scale):
+        value = float(phys.carry_row_least(nodes, c1, c2, bend))
+        return max(-1.0, min(1.0, value / scale)) if scale > 0.0 else -1.0
+
+    low, high = support
+    return {"lift_off": least(1.0, 0.0, g),
+            "slip_carry": min(least(mu, -1.0, mu * g), least(mu, 1.0, mu * g)),
+            "tip_carry": min(least(high, half_h, high * g), least(-low, -half_h, -low * g))}
 
 
 def _support(object_width, palm_width, offset):

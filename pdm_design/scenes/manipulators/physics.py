@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 
-from ...physics.ops import asin, cos, fabs, fmax, fmin, sin, sqrt, tan
+from ...physics.ops import asin, cos, fabs, fmax, fmin, sin, sqrt, tan, where
 
 
 def momentum_fraction(mass_ratio):
@@ -249,6 +249,58 @@ def carry_contact_at(theta, u, alpha, *, gravity, carry_gravity, friction, link_
     along = carry_along(theta, gravity=gravity, carry_gravity=carry_gravity, friction=friction,
                         link_length=link_length)
     return carry_contact_force(theta, v2, gravity=gravity, link_length=link_length, along=along)
+
+
+# Cells of a real-link carry whose ends hold its contact rows with the curvature bound's
+# allowance (docs/physics.md section 2.1): the NLP's (formulation/rows.py), the analysis' and
+# the stage maps' (formulation/offsets.py)
+CARRY_CELLS = 8
+
+
+def carry_contact_nodes(u, alpha, *, start, end, fastest_u2, gravity, carry_gravity, friction,
+                        link_length, cells):
+    """The whole carry's cells (docs/physics.md section 2.1, "Over the whole carry"): ([(F, N)]
+    per object mass at cells + 1 angles evenly from -start to end, on the closed-form carry that
+    left -alpha at u; bend = S h^2 / 2), h = (start + end) / cells and S the curvature bound of
+    every carry from a stop in [0, start + end] with a landing speed^2 at most fastest_u2
+    (carry_contact_curvature). Floats, numpy arrays (one carry per entry) or CasADi."""
+    span = start + end
+    step = span / cells
+    terms = dict(gravity=gravity, carry_gravity=carry_gravity, friction=friction,
+                 link_length=link_length)
+    bend = carry_contact_curvature(carry_gravity=carry_gravity, fastest_u2=fastest_u2,
+                                   friction=friction, link_length=link_length,
+                                   span=span) * step**2 / 2
+    return [carry_contact_at(-start + i * step, u, alpha, **terms) for i in range(cells + 1)], bend
+
+
+def carry_row_cells(nodes, c1, c2, bend):
+    """A lower bound of the row c1 N + c2 F (lift-off: N; slip: mu N -+ F; tip: d N +- (h/2) F)
+    over each cell between carry_contact_nodes' nodes: |r''| <= (|c1| + |c2|) S
+    (carry_cell_least)."""
+    values = [c1 * N + c2 * F for F, N in nodes]
+    size = (abs(c1) + abs(c2)) * bend  # abs: floats, arrays and CasADi alike
+    return [carry_cell_least(values[i], values[i + 1], size) for i in range(len(values) - 1)]
+
+
+def carry_row_least(nodes, c1, c2, bend):
+    """The least of carry_row_cells over the whole carry (a lower bound of the row on it)."""
+    cells = carry_row_cells(nodes, c1, c2, bend)
+    least = cells[0]
+    for value in cells[1:]:
+        least = fmin(least, value)
+    return least
+
+
+def carry_cell_least(ra, rb, bend):
+    """A lower bound of r over a cell [0, h] from its ends r(0) = ra, r(h) = rb and |r''| <= S,
+    bend = S h^2 / 2 (> 0): r lies above its chord less S t (h - t) / 2, and the least of
+    ra + D x - bend x (1 - x) over x in [0, 1] (D = rb - ra) is (ra + rb) / 2 - D^2 / (4 bend)
+    - bend / 4 where |D| <= bend and min(ra, rb) = (ra + rb) / 2 - |D| / 2 elsewhere: a row
+    with a continuous slope, exact at the ends where the row is steep across the cell."""
+    d = rb - ra
+    huber = where(fabs(d) <= bend, d**2 / (4 * bend) + bend / 4, fabs(d) / 2)
+    return (ra + rb) / 2 - huber
 
 
 def is_exact_zero(value) -> bool:

@@ -12,7 +12,8 @@ per-stage logic of formulation/manipulators/offsets.py, extended to every part's
                   |px| <= mu py, no tip iff -(h/2) px/py lies in the support
                   [max(-w/2, -W/2 - o), min(w/2, W/2 - o)]
   carry on palm k over the top iff u^2 >= 2 g l_k (1 - cos a_k); at both ends of the carry
-                  (the guards are monotone or convex in the angle between them): no lift-off
+                  (the guards are monotone or convex in the angle between them; on real links
+                  over the whole carry, Builds.inside): no lift-off
                   (v^2 < g l cos th), no slip (|tan th| <= mu), no tip ((h/2) tan th in the
                   support); palms parked behind stay clear (physics.parked_palm_clearance)
   handover        palm k+1's top at C' = P_{k+1} + l_{k+1} (-sin a_{k+1}, cos a_{k+1}) is met
@@ -53,7 +54,9 @@ UNBUILDABLE = (
     ("object_width", lambda x: x <= 0.0, "> 0"),
 )
 PARKED_CAP = 16  # palms parked behind the carrying one checked, at most
-INSIDE_ANGLES = 32  # angles inside a carry on real links where its guards are compared
+# cells of a carry on real links whose rows hold over the whole carry (its guards compared at
+# their inner ends)
+INSIDE_CELLS = 32
 AHEAD = 2  # palms beyond the one the object goes to checked one by one; the rest by a bound
 
 
@@ -431,23 +434,40 @@ class _Builds:
 
     def inside(self, k, u, a, theta, offset, w, mu, terms):
         """With links and pivots the carry's guards are judged at its ends (docs/physics.md,
-        section 2.1), where on the paper's device they are monotone or convex in between.
-        No such proof here: a build whose guards are lower at any of INSIDE_ANGLES angles
-        inside the carry than at both ends is left to the simulator (closed_form False)."""
+        section 2.1), where on the paper's device they are monotone or convex in between. Here
+        a build is left to the simulator (closed_form False) unless its whole-carry rows hold:
+        lift-off, slip and tip over INSIDE_CELLS cells with the curvature bound (the NLP's,
+        physics.carry_contact_nodes), lower bounds of each row over the carry (a row below 0
+        fails the build on the map: that lift-off, slip or tip, closed form False); and where
+        the guards at the cells' inner ends are lower than at both ends (its smallest margin
+        is inside the carry)."""
+        l = self.v["link_length"][k]
+        kw = dict(gravity=terms[1], friction=terms[2], link_length=l)  # the carry's speed
+        nodes, bend = phys.carry_contact_nodes(u, a, start=a, end=theta, fastest_u2=u * u,
+                                               gravity=self.g, carry_gravity=terms[1],
+                                               friction=terms[2], link_length=l,
+                                               cells=INSIDE_CELLS)
+        lo, hi = self.support(offset, w)
+        half_h, g = 0.5 * self.h, self.g
+        rows = []  # (failure, the row's least over the carry in g (object half widths for tip))
+        for kind, c1, c2, unit in (("lift_off", 1.0, 0.0, g), ("slip", mu, -1.0, g),
+                                   ("slip", mu, 1.0, g), ("tip", hi, half_h, g * self.half_w),
+                                   ("tip", -lo, -half_h, g * self.half_w)):
+            rows.append((kind, phys.carry_row_least(nodes, c1, c2, bend) / unit))
+        held = np.logical_and.reduce([value >= 0.0 for _, value in rows])
+        # a row not proven: the map's account is that failure, the simulator's the verdict
+        self.group(k, [(kind, np.where(value >= 0.0, np.inf, value), False)
+                       for kind, value in rows])
         ends = [self.guards(k, th, v2, offset, w, mu, terms) for th, v2 in (
-            (-a, u * u), (theta, phys.carry_speed_squared(u, a, theta, gravity=terms[1],
-                                                           link_length=self.v["link_length"][k],
-                                                           friction=terms[2])))]
+            (-a, u * u), (theta, phys.carry_speed_squared(u, a, theta, **kw)))]
         low = np.minimum.reduce([c[1] for c in ends[0] + ends[1]])
         inner = np.full(self.n, np.inf)
-        for frac in np.linspace(0.0, 1.0, INSIDE_ANGLES + 2)[1:-1]:
-            th = -a + frac * (theta + a)
-            v2 = phys.carry_speed_squared(u, a, th, gravity=terms[1],
-                                          link_length=self.v["link_length"][k],
-                                          friction=terms[2])
+        for i in range(1, INSIDE_CELLS):
+            th = -a + i * (theta + a) / INSIDE_CELLS
+            v2 = phys.carry_speed_squared(u, a, th, **kw)
             for _, value, _ in self.guards(k, th, v2, offset, w, mu, terms):
                 np.fmin(inner, value, out=inner)
-        self.closed &= ~(self.alive & ~(inner >= low))
+        self.closed &= ~(self.alive & ~(held & (inner >= low)))
 
     def parked_palms(self, k, theta, offset, w):
         """Clearance, in link lengths, to the palms 1 .. parked places behind palm k, each at

@@ -31,7 +31,7 @@ import numpy as np
 
 from ....formulation.common import MARGIN, VALIDITY, ConditionInfo, Scenario
 from .. import physics as phys
-from .rows import impact_rows, scene_sizes
+from .rows import CARRY_CELLS, impact_rows, join, nonzero, scene_sizes
 
 
 class Stages:
@@ -149,6 +149,8 @@ class Stages:
         add("slip_carry", f"{where}, handover", mu - demand, mu)
         add("tip_carry", f"{where}, handover, object's rear edge", w / 2 - fp_front, w / 2)
         add("tip_carry", f"{where}, handover, palm's rear edge", W / 2 + o - fp_front, W / 2 + o)
+        if not m.plain and not nonzero(m.delta):  # with damping the rows stay at the ends
+            _whole_carry_rows(add, m, scene, u, th, o, where, f"{first}lift_off")
         u_next, o_next = u, o
         if not last:
             v = ca.sqrt(v2)
@@ -267,6 +269,27 @@ class Bound:
     def stream(self, x, *args, **kwargs) -> dict:
         x = np.concatenate([np.asarray(x, dtype=float).ravel(), self.numbers])
         return self.stages.stream(x, *args, **kwargs)
+
+
+def _whole_carry_rows(add, m, scene, u, th, o, where, lift_off):
+    """The carry's lift-off, slip and tip rows over the whole carry from -alpha at u to the
+    handover th (real links or pivots): the NLP's rows over the carry's cells with the
+    curvature bound (physics.carry_contact_nodes, rows._inside_rows), at this one carry."""
+    g, l, mu = m.g, m.l, scene.palm.friction
+    d, W, half_h = scene.body.width / 2, scene.palm.width, scene.body.height / 2
+    nodes, bend = phys.carry_contact_nodes(
+        u, m.a, start=m.a, end=th, fastest_u2=u**2, gravity=g, carry_gravity=m.gc,
+        friction=m.f, link_length=l, cells=CARRY_CELLS)
+    inside = f"{where}, during the carry"
+    for c1, c2, key, what, scale in (
+            (1.0, 0.0, lift_off, "", g), (mu, -1.0, "slip_carry", "sliding back", mu * g),
+            (mu, 1.0, "slip_carry", "sliding forward", mu * g),
+            (d, half_h, "tip_carry", "object's front edge", d * g),
+            (d, -half_h, "tip_carry", "object's rear edge", d * g),
+            (W / 2 - o, half_h, "tip_carry", "palm's front edge", (W / 2 - o) * g),
+            (W / 2 + o, -half_h, "tip_carry", "palm's rear edge", (W / 2 + o) * g)):
+        for i, value in enumerate(phys.carry_row_cells(nodes, c1, c2, bend)):
+            add(key, join(inside, what, f"cell {i + 1} of {CARRY_CELLS}"), value, scale)
 
 
 def _worse(worst: dict, slack, scale, rows, required, K: int) -> None:

@@ -26,9 +26,7 @@ OVER_THE_TOP = ("over_the_top", "first_over_the_top")
 LIFT_OFF = ("lift_off", "first_lift_off")
 ACOS_EDGE = 1e-15  # acos is taken of at most 1 - this: a finite slope
 MASS_KEPT = 1e-3  # a mass tolerance leaves at least this fraction of the mass
-# Cells of the real-link carry's angle range whose ends hold its contact rows with the chord
-# bound's allowance (docs/physics.md section 2.1, `_inside_rows`)
-CARRY_CELLS = 8
+CARRY_CELLS = phys.CARRY_CELLS  # cells of the carry's angle range (`_inside_rows`)
 
 
 def conditions(m, S, u_lo, u_hi, box, robust) -> list[Condition]:
@@ -322,45 +320,33 @@ def _inside_rows(m, f, v, link, corner):
     (no closed-form carry)."""
     if nonzero(m.delta):
         return []
-    l, g, mu, n = m.l if link is None else link, m.g, f.mu, CARRY_CELLS
-    span = f.a_hi + f.th_hi
-    step = span / n
-    bend = phys.carry_contact_curvature(carry_gravity=v.gc, fastest_u2=f.u_hi**2,
-                                        friction=v.f, link_length=l, span=span) * step**2 / 2
+    l, g, mu = m.l if link is None else link, m.g, f.mu
     out = []
     for u, stop, speed in ((f.u_lo, f.a_hi, "slowest"), (f.u_hi, f.a_lo, "fastest")):
-        nodes = [phys.carry_contact_at(-f.a_hi + i * step, u, stop, gravity=g,
-                                       carry_gravity=v.gc, friction=v.f, link_length=l)
-                 for i in range(n + 1)]
+        nodes, bend = phys.carry_contact_nodes(
+            u, stop, start=f.a_hi, end=f.th_hi, fastest_u2=f.u_hi**2, gravity=g,
+            carry_gravity=v.gc, friction=v.f, link_length=l, cells=CARRY_CELLS)
         where = join("during the carry", speed, corner)
         for c1, c2, key, what, scale in (
                 (l, 0.0, LIFT_OFF, "", g * l), (mu, -1.0, "slip_carry", "sliding back", mu * g),
                 (mu, 1.0, "slip_carry", "sliding forward", mu * g)):
             if key is LIFT_OFF and speed == "slowest":  # N decreases in v^2 (cos th > 0)
                 continue
-            cells(f, key, join(where, what), [c1 * N + c2 * F for F, N in nodes],
-                  (abs(c1) + abs(c2)) * bend, scale)
+            cells(f, key, join(where, what), nodes, c1, c2, bend, scale)
         out.append((where, nodes, bend))
     return out
 
 
-def cells(f, key, where, values, bend, scale):
-    """One row a cell: `values` a row's at the nodes, bend = S' h^2 / 2 with S' >= its
-    |d2/dth2| (cell_least)."""
-    for i in range(len(values) - 1):
-        f.add(key, join(where, f"cell {i + 1} of {len(values) - 1}"),
-              cell_least(values[i], values[i + 1], bend), scale)
+def cells(f, key, where, nodes, c1, c2, bend, scale):
+    """One row a cell of c1 N + c2 F along the carry's nodes (physics.carry_row_cells)."""
+    values = phys.carry_row_cells(nodes, c1, c2, bend)
+    for i, value in enumerate(values):
+        f.add(key, join(where, f"cell {i + 1} of {len(values)}"), value, scale)
 
 
-def cell_least(ra, rb, bend):
-    """A lower bound of r over a cell [0, h] from its ends r(0) = ra, r(h) = rb and |r''| <= S,
-    bend = S h^2 / 2: r lies above its chord less S t (h - t) / 2, and the least of
-    ra + D x - bend x (1 - x) over x in [0, 1] (D = rb - ra) is (ra + rb) / 2 - D^2 / (4 bend)
-    - bend / 4 where |D| <= bend and min(ra, rb) = (ra + rb) / 2 - |D| / 2 elsewhere: a row
-    with a continuous slope, exact at the ends where the row is steep across the cell."""
-    d = rb - ra
-    huber = ca.if_else(ca.fabs(d) <= bend, d**2 / (4 * bend) + bend / 4, ca.fabs(d) / 2)
-    return (ra + rb) / 2 - huber
+# a lower bound of a row over one cell (physics.carry_cell_least, shared with the analysis
+# and the stage maps)
+cell_least = phys.carry_cell_least
 
 
 def _inside_tip_rows(f, o_hi, o_lo):
@@ -375,8 +361,7 @@ def _inside_tip_rows(f, o_hi, o_lo):
               for i, o in enumerate(o_lo)]
     for where, nodes, bend in f.inside:
         for d, sign, edge in edges:
-            cells(f, "tip_carry", join(where, edge), [d * N + sign * h / 2 * F for F, N in nodes],
-                  (d + h / 2) * bend, d * g)
+            cells(f, "tip_carry", join(where, edge), nodes, d, sign * h / 2, bend, d * g)
 
 
 def placement_rows(m, f):
