@@ -56,6 +56,7 @@ def _bracket(spec, design):
     return 1.0 - p.sum(), 1.0 - p.max()
 
 
+@pytest.mark.slow  # 4,000 builds, most simulated: about 30 s; CI runs the slow suite
 def test_max_yield_on_real_links_against_the_monte_carlo():
     from pdm_design.solve import optimize
 
