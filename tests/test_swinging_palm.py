@@ -128,3 +128,72 @@ def test_a_landing_on_a_palm_swinging_after_a_lift_off_is_followed():
     theta, omega = _pendulum(past, 0.0, 0.0, landing.time, g, l)
     assert landing.before["palm_theta"] == pytest.approx(theta, abs=1e-7)
     assert landing.before["palm_omega"] == pytest.approx(omega, rel=1e-6)
+
+
+def test_on_real_links_the_palm_met_swinging_and_the_carry_after_are_their_pendulums():
+    """Links of mass m_l (two uniform rods: J = 2 m_l / 3 along the swing, W = m_l of weight)
+    and a Coulomb torque tau at the pivots (docs/physics.md, section 2.1): the empty palm
+    (M + J) l^2 th'' = (M + W) g l sin th - tau, the impact kept (M + J) w + m v.t, the carry
+    (m + M + J) l^2 th'' = (m + M + W) g l sin th - tau, each integrated by scipy here."""
+    spec = load_spec(PROBLEMS / "manipulators_all_toleranced.toml")
+    scene, design = spec.scene, spec.design_at()
+    g, l, m = scene.gravity, design.link_length, scene.body.mass
+    M, tau = m / design.mass_ratio, scene.pivots.friction_torque
+    J, W = scene.links.count * scene.links.mass / 3.0, scene.links.count * scene.links.mass / 2.0
+    past = 0.04
+    result = simulate_manipulators(scene, design, stages=4, accuracy="precise",
+                                   parts=Parts(back_stop=(design.alpha, -past, design.alpha,
+                                                          design.alpha)))
+    assert result.outcome.completed
+
+    def swing(inertia, weight, theta0, omega0, t0, t1):
+        sol = solve_ivp(lambda t, y: [y[1], (weight * g * l * math.sin(y[0]) - tau)
+                                      / (inertia * l * l)],
+                        (t0, t1), [theta0, omega0], method="DOP853", rtol=1e-12, atol=1e-14)
+        return float(sol.y[0][-1]), float(sol.y[1][-1])
+
+    onto = next(e for e in result.events if e.kind == "handover" and e.stage == 1)
+    theta, omega = swing(M + J, M + W, past, 0.0, 0.0, onto.time)
+    assert omega > 0.3 and onto.after["theta"] == pytest.approx(theta, abs=1e-7)
+    _, _, w1 = _stick_by_hand(m, M + J, onto.before["vx"], onto.before["vy"], l * omega, theta)
+    assert onto.after["omega"] * l == pytest.approx(w1, rel=1e-6)
+    off = next(e for e in result.events if e.kind == "handover" and e.stage == 2)
+    assert not [e for e in result.events if onto.time < e.time < off.time and e.stage == 2
+                and e.kind in ("slip", "lift_off")]
+    th2, om2 = swing(m + M + J, m + M + W, onto.after["theta"], onto.after["omega"], onto.time,
+                     off.time)
+    assert off.before["theta"] == pytest.approx(th2, abs=1e-7)
+    assert off.before["omega"] == pytest.approx(om2, rel=1e-6)
+
+
+def test_the_fed_object_lands_on_a_first_palm_still_swinging_where_the_two_paths_meet():
+    """Palm 1 swings from rest as the object is fed: the landing is where the object's fall
+    meets the palm's top on its own pendulum (found here by Brent's method on scipy's dense
+    solution), the impact sticks as the hand solve says, and the row completes."""
+    from scipy.optimize import brentq
+
+    scene, design = _paper()
+    g, l, m = scene.gravity, design.link_length, scene.body.mass
+    M = m / design.mass_ratio
+    past = 0.03
+    result = simulate_manipulators(scene, design, stages=4, accuracy="precise",
+                                   parts=Parts(back_stop=(-past, design.alpha, design.alpha,
+                                                          design.alpha)))
+    assert result.outcome.completed
+    pend = solve_ivp(lambda t, y: [y[1], g * math.sin(y[0]) / l], (0.0, 2.0), [past, 0.0],
+                     method="DOP853", rtol=1e-12, atol=1e-14, dense_output=True)
+    (x0, y0), (vx, vy) = scene.initial.position, scene.initial.velocity
+    py = design.first_pivot_y
+
+    def gap(t):
+        return y0 + vy * t - 0.5 * g * t * t - (py + l * math.cos(pend.sol(t)[0]))
+
+    t_land = brentq(gap, 0.0, 1.0, xtol=1e-14)
+    landing = next(e for e in result.events if e.kind == "landing" and e.stage == 1)
+    assert landing.time == pytest.approx(t_land, abs=1e-8)
+    theta, omega = pend.sol(t_land)
+    reach = 0.5 * (scene.palm.width + scene.body.width)  # on the palm's top, not past its end
+    assert abs(x0 + vx * t_land - (design.first_pivot_x + l * math.sin(theta))) < reach
+    assert landing.before["palm_theta"] == pytest.approx(theta, abs=1e-8)
+    _, _, w1 = _stick_by_hand(m, M, vx, vy - g * t_land, l * omega, theta)
+    assert landing.after["omega"] * l == pytest.approx(w1, rel=1e-6)
