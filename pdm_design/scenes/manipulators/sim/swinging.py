@@ -33,6 +33,8 @@ class SwingingPhases:
     def _free_state(self, k, t):
         """(th, th') at time t of palm k, swinging alone from rest since the row was built."""
         t0, theta, omega = self._free[k]
+        if t < t0:  # (an earlier time than the last asked for: from the release again)
+            t0, theta, omega = 0.0, -self.alphas[k], 0.0
         if t > t0:
             sw = self.swings_alone[k]
             _, z, _, _ = self._integrate(
