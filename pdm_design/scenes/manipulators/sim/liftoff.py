@@ -164,7 +164,8 @@ class LiftOffPhases:
             v0 = max(math.nextafter(v0, math.inf), math.sqrt(g * l * math.cos(theta0)))
         state = self._on_palm(k, theta0, v0 / l, s, sd)
         self._log(t0, "lift_off", k + 1, state, state, detail)
-        if not self.plain:  # the empty palm on real links and pivots: integrated (ode.py)
+        if not self.plain or self._tracked(t0, k):  # the empty palm on real links and pivots,
+            # or palms swinging from rest (swinging.py): integrated (ode.py)
             obj = (state["x"], state["y"], state["vx"], state["vy"])
             return lambda: self._bouncing(t0, k, *obj, theta0, v0 / l, lifted=True)
         planned = len(self.palm_events)

@@ -95,26 +95,30 @@ class OdePhases:
         ]
         if k == self.n - 1 and theta0 < self.beta:
             physics.append((lambda t, z: self.beta - z[0], "complete"))
-        faces = []
+        tracked = self._tracked(t0, k)  # palms swinging from rest (swinging.py)
+        z0, rhs, faces = self._with_swinging(tracked, t0, [theta0, omega0, s0, sd0],
+                                             ph.slide_rhs(p), point)
         for box in self._obstacles(t0, k, near=px):
             faces += [(f, d, v, (kind, box.palm))
                       for f, d, v, kind in face_guards(lambda z, b=box: b, point)]
-        z0 = [theta0, omega0, s0, sd0]
         t_split = self._next_arrival(t0, k)  # a palm at rest from then on is an obstacle
-        te, z, kind, sol = self._integrate(ph.slide_rhs(p), t0, z0, physics, faces,
-                                           t_end=t_split)
+        te, z, kind, sol = self._integrate(rhs, t0, z0, physics, faces, t_end=t_split)
+        self._swung_to(te, z, 4, tracked)
         if self.record and sol is not None:
             for t in np.linspace(t0, te, 60):
                 zz = sol.sol(t)
                 st = self._on_palm(k, zz[0], zz[1], zz[2], zz[3])
                 self._rec(t, st["x"], st["y"], st["vx"], st["vy"], zz[0], k + 1)
-        theta, omega, s, sd = (float(v) for v in z)
+        theta, omega, s, sd = (float(v) for v in z[:4])
         state = self._on_palm(k, theta, omega, s, sd)
         if kind is None and t_split is not None and te >= t_split:
             return lambda: self._sliding(te, k, theta, omega, s, sd)
         if kind is None:
             msg = sol.message if sol is not None and sol.status < 0 else "no event"
             return self._fail(te, "timeout", k + 1, state, f"sliding on palm {k + 1}: {msg}")
+        if isinstance(kind, tuple) and len(kind) == 3:
+            return self._met_swinging(te, kind, z, 4, tracked, None, state, k + 1,
+                                      carrier=(k, theta, omega, s, sd))
         if isinstance(kind, tuple):
             face, j = kind
             if face == "top":
@@ -204,15 +208,25 @@ class OdePhases:
         if entry is not None:
             kind = ("handover", entry.palm) if entry.kind == "top" else ("blocked", entry.palm)
             physics.append((lambda t, z: entry.tau - z[0], kind))
+        tracked = self._tracked(t0, k)  # palms swinging from rest (swinging.py)
+        px, py = self.row.pivots[k]
+        z0, rhs, faces = self._with_swinging(
+            tracked, t0, [theta0, omega0],
+            lambda t, y: [y[1], ph.swing_acceleration(y[0], y[1], sw, direction=1.0)],
+            lambda z: (px + l * math.sin(z[0]) + s, py + l * math.cos(z[0])))
         t_split = self._next_arrival(t0, k)  # a palm at rest from then on is an obstacle
-        te, z, kind, sol = self._integrate(lambda t, y: [y[1], ph.swing_acceleration(
-            y[0], y[1], sw, direction=1.0)], t0, [theta0, omega0], physics, [], t_end=t_split)
+        te, z, kind, sol = self._integrate(rhs, t0, z0, physics, faces, t_end=t_split)
+        self._swung_to(te, z, 2, tracked)
         if self.record and sol is not None:
             for t in np.linspace(t0, te, 40):
                 zz = sol.sol(t)
                 st = self._on_palm(k, zz[0], zz[1], s)
                 self._rec(t, st["x"], st["y"], st["vx"], st["vy"], zz[0], k + 1)
         theta, omega = float(z[0]), float(z[1])
+        if isinstance(kind, tuple) and len(kind) == 3:
+            state = self._on_palm(k, theta, omega, s)
+            return self._met_swinging(te, kind, z, 2, tracked, None, state, k + 1,
+                                      carrier=(k, theta, omega, s, 0.0))
         if isinstance(kind, tuple):
             theta = entry.tau  # the contact angle is closed form: the event only finds its time
         state = self._on_palm(k, theta, omega, s)
@@ -326,15 +340,20 @@ class OdePhases:
         for box in self._obstacles(t0, k):
             faces += [(f, d, v, (kind, box.palm))
                       for f, d, v, kind in face_guards(lambda z, b=box: b, point)]
-        z0 = [x, y, vx, vy, theta, omega]
+        tracked = self._tracked(t0, k)  # palms swinging from rest (swinging.py)
+        z0, rhs, more = self._with_swinging(tracked, t0, [x, y, vx, vy, theta, omega], rhs,
+                                            point)
+        faces += more
         t_split = self._next_arrival(t0, k)  # a palm at rest from then on is an obstacle
         te, z, kind, sol = self._integrate(rhs, t0, z0, physics, faces,
                                            max_step=0.05 * math.sqrt(l / g), t_end=t_split)
+        self._swung_to(te, z, 6, tracked)
         if self.record and sol is not None:
             ts = np.linspace(t0, te, 40)
             zz = sol.sol(ts)
             self._rec(ts, zz[0], zz[1], zz[2], zz[3], zz[4], k + 1)
-        z = [float(v) for v in z]
+        zs = [float(v) for v in z]
+        z = zs[:6]
         state = {"x": z[0], "y": z[1], "vx": z[2], "vy": z[3], "theta": z[4], "omega": z[5]}
         if kind is None and t_split is not None and te >= t_split:
             return lambda: self._bouncing(te, k, *z, leaving=False, lifted=lifted)
@@ -361,6 +380,10 @@ class OdePhases:
                               "fell past the row after the lift-off, landing on no palm")
         if kind == "fell_clear":
             return self._fail(te, "fell_clear", k + 1, state, "fell past the row")
+        if len(kind) == 3:  # a palm swinging from rest: the object lands on it (or not)
+            if kind[0] == "top":
+                self._release(k, te, z[4], l * z[5])
+            return self._met_swinging(te, kind, zs, 6, tracked, tuple(z[:4]), state, k + 1)
         face, j = kind
         if face != "top":
             return self._fail(te, "blocked", k + 1, state, f"hits the side of palm {j + 1}")

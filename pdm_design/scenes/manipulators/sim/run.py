@@ -20,6 +20,7 @@ from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
 from .rocking import RockingPhases
+from .swinging import SwingingPhases
 
 FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object is given up
 ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact
@@ -27,7 +28,7 @@ PHASE_TIME = 200.0  # longest integrated phase, in units of sqrt(l / g)
 EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chattering)
 
 
-class Run(OdePhases, LiftOffPhases, RockingPhases):
+class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record, parts=None,
@@ -50,6 +51,11 @@ class Run(OdePhases, LiftOffPhases, RockingPhases):
                       and not any(self.row.pivot_frictions))
         if not self.plain:  # links and pivots (docs/physics.md, section 2.1), palm by palm
             self._mechanism(scene, design)
+        else:  # the paper's device as phases.Swing (l th'' = g sin th), for integrated phases
+            self.swings_alone = [ph.Swing(M, M, 0.0, 0.0, self.g, l)
+                                 for M, l in zip(self.Ms, self.ls)]
+            self.swings_loaded = [ph.Swing(M + self.m, M + self.m, 0.0, 0.0, self.g, l)
+                                  for M, l in zip(self.Ms, self.ls)]
         self.qs = tuple(self.m / M for M in self.Ms)
         self.rest_angle = [-a for a in self.alphas]
         self.rest_since = [-math.inf] * stages
@@ -70,7 +76,11 @@ class Run(OdePhases, LiftOffPhases, RockingPhases):
         self.traj = {k: [] for k in ("time", "x", "y", "vx", "vy", "theta", "manipulator")}
         self.zeno_speed = ZENO_FRACTION * math.sqrt(self.g * self.l)
         self.phase_time = PHASE_TIME * math.sqrt(self.l / self.g)
+        self._planned: dict = {}  # a palm swinging from rest: its planned stop (palm event)
         self.from_rest = self._release_past_vertical()
+        # followed while they swing (swinging.py) until the object meets one
+        self.unmet = set(self.from_rest)
+        self._free = {k: (0.0, -self.alphas[k], 0.0) for k in self.from_rest}
 
     def _release_past_vertical(self):
         """Palms whose back stop is past the vertical (alpha_k < 0: gravity pulls them forward,
@@ -83,16 +93,20 @@ class Run(OdePhases, LiftOffPhases, RockingPhases):
         for k, a in enumerate(self.alphas):
             if a >= 0.0 or (not self.plain and ph.held_by_friction(-a, self.swings_alone[k])):
                 continue
+            events = len(self.palm_events)
             self._release(k, 0.0, -a, 0.0)
+            if len(self.palm_events) > events:
+                self._planned[k] = self.palm_events[-1]
             out.append(k)
         return tuple(out)
 
     def _swinging_from_rest(self, t, j):
-        """The object reaches palm j at time t: a palm up to j released from rest at the build
-        (_release_past_vertical) and still swinging then is one the object met or passed while
-        it moved; such contacts are not followed: the run fails (`swinging_palm`). Returns the
+        """The object reaches palm j at time t at the end of a phase that does not follow the
+        palms swinging from rest (swinging.py; a rocking object): a palm up to j released from
+        rest at the build (_release_past_vertical), not yet met and still swinging then is one
+        the object may have met or passed unseen: the run fails (`swinging_palm`). Returns the
         1-based palm or None."""
-        for k in self.from_rest:
+        for k in self.unmet:
             if k <= j and self.rest_since[k] > t:
                 return k + 1
         return None
@@ -241,6 +255,9 @@ class Run(OdePhases, LiftOffPhases, RockingPhases):
 
     # ------------------------------------------------------------ flight among resting palms
     def _flight(self, t0, x, y, vx, vy, stage):
+        tracked = self._tracked(t0)
+        if tracked:  # palms swing from rest: integrated with them (swinging.py)
+            return self._flight_swinging(t0, x, y, vx, vy, stage, tracked)
         path = Ballistic(t0, x, y, vx, vy, self.g)
         roots = path.roots_y(self.y_floor, t0, math.inf)
         t_floor = roots[-1] if y > self.y_floor and roots else t0
@@ -288,11 +305,6 @@ class Run(OdePhases, LiftOffPhases, RockingPhases):
 
         log_as: "landing" (from a flight), "handover" (from the previous palm), "rebound" (onto
         the palm it bounced off), "stop" (its palm has just been stopped by the front stop)."""
-        swinging = self._swinging_from_rest(t, j) if log_as in ("landing", "handover") else None
-        if swinging is not None:
-            return self._fail(t, "swinging_palm", j + 1, before,
-                              f"the object reaches palm {j + 1} while palm {swinging}, released "
-                              "past the vertical, still swings from rest")
         if log_as in ("landing", "handover") and self._comes_onto(j):
             return self._fail(t, "skipped_palm", self.at + 2, before,
                               f"the object flew over palm {self.at + 2} and came onto palm "
@@ -461,8 +473,9 @@ class Run(OdePhases, LiftOffPhases, RockingPhases):
         return self._fail(t + tau, kind, j + 1, state,
                           f"slides to the end of {where} and goes over its edge")
 
-    def _handover(self, t, k, theta, omega, s, sd, j):
-        """The object on palm k meets palm j's top: record, release palm k, land on palm j."""
+    def _handover(self, t, k, theta, omega, s, sd, j, palm=None):
+        """The object on palm k meets palm j's top: record, release palm k, land on palm j
+        (at rest, or swinging at palm = (angle, speed along t))."""
         before = self._on_palm(k, theta, omega, s, sd)
         rec = self._stage(k)
         vx, vy = before["vx"], before["vy"]
@@ -470,8 +483,10 @@ class Run(OdePhases, LiftOffPhases, RockingPhases):
             rec.update(handover_time=t, handover_speed=math.hypot(vx, vy), handover_angle=theta,
                        handover_vx=vx, handover_vy=vy, release_speed=self.ls[k] * omega)
         self._release(k, t, theta, self.ls[k] * omega)
-        return self._impact(t, j, self.rest_angle[j], 0.0, before["x"], before["y"], vx, vy,
-                            log_as="handover", stage=k + 1, before=before, at_rest=True)
+        theta_j, w_j = (self.rest_angle[j], 0.0) if palm is None else palm
+        return self._impact(t, j, theta_j, w_j, before["x"], before["y"], vx, vy,
+                            log_as="handover", stage=k + 1, before=before,
+                            at_rest=palm is None)
 
     def _stop_with_object(self, t, k, omega, s, sd):
         """Palm k reaches its front stop carrying the object: the palm stops (plastic); the
@@ -483,11 +498,6 @@ class Run(OdePhases, LiftOffPhases, RockingPhases):
 
     def _complete(self, t, k, theta, omega, s, sd=0.0):
         state = self._on_palm(k, theta, omega, s, sd)
-        swinging = self._swinging_from_rest(t, k)
-        if swinging is not None:
-            return self._fail(t, "swinging_palm", k + 1, state,
-                              f"palm {swinging}, released past the vertical, still swings from "
-                              "rest")
         rec = self._stage(k)
         if rec is not None:
             rec.update(handover_angle=theta)
@@ -506,8 +516,8 @@ class Run(OdePhases, LiftOffPhases, RockingPhases):
         if v0 <= 0.0:
             return self._fail(t0, "stall", k + 1, self._on_palm(k, theta0, v0 / l, s),
                               "the palm is not moving forward")
-        if not self.plain:  # links and pivots: integrated (ode.py)
-            return self._stuck_integrated(t0, k, theta0, v0 / l, s)
+        if not self.plain or self._tracked(t0, k):  # links and pivots, or palms swinging from
+            return self._stuck_integrated(t0, k, theta0, v0 / l, s)  # rest: integrated (ode.py)
         turn = ph.turning_angle(theta0, v0, gravity=g, link_length=l)
         ends = [(self.fs, "stranded")]
         if turn is not None:
