@@ -2,7 +2,9 @@
 rows of statistical.py (physics.stance_rows, and physics.landing_rows on stairs, written once
 for numbers and symbols) on the NLP's design symbols, their gradients in every build error
 (every step's slope on a ramp, rise and tread on stairs, each step's own or one for every step
-of a build: a lot; the start speed) by CasADi's exact derivatives at the nominal build
+of a build: a lot; the start speed; each spoke's length, a lot of them, the hub's mass:
+physics.spoke_step, each spoke a lot of its own at the steps that use it) by CasADi's exact
+derivatives at the nominal build
 (statistical.py takes central differences), chained through the step map with its state
 x = E (a ramp) or (E, s) (stairs: the stance energy and the foothold's place on its tread);
 sd_i^2 = sum_j (dg_i / dd_j)^2 sigma_j^2, and -log10 of the union bound sum_i Phi(-g_i / sd_i)
