@@ -229,3 +229,17 @@ def test_a_yield_target_on_the_spokes_is_met_by_monte_carlo():
     assert linearised(sized["leg_length"]) == pytest.approx(checked["linearised"], abs=1e-9)
     # the NLP's size (before the check shrank it by `scale`) is where the yield is the target
     assert linearised(sized["leg_length"] / checked["scale"]) == pytest.approx(0.99, abs=1e-5)
+
+
+def test_a_yield_target_on_a_hub_mass_nothing_depends_on_is_refused(tmp_path):
+    """Allocated for a yield target, a hub mass no k^2 depends on (massless spokes) has no
+    scale the yield limits: refused in words naming the key (exit 2), not answered at the
+    scale's bound."""
+    from pdm_design.errors import SpecError
+
+    spec = spec_of(tmp_path, "ramp", "leg_length = 1.0\nslope = { min = 0.02, max = 0.3 }",
+                   tolerances="yield_target = 0.99\nmass = { allocate = true }\n"
+                              'leg_length = { value = 0.05, applies_to = "each" }',
+                   spoke_mass=0.0)
+    with pytest.raises(SpecError, match="tolerances.mass.allocate"):
+        api.optimize(spec, verify=False)

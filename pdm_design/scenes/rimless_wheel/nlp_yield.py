@@ -288,6 +288,7 @@ def target_rows(spec, m, symbols: dict, bounds: dict):
 
     yield_target.refuse_objectives(spec)
     checked_sigmas(spec, "tolerances")
+    _refuse_allocation(spec)
     of_ground = partial(sigmas, ground=spec.scene.ground)
 
     def nines_of(s):
@@ -296,3 +297,14 @@ def target_rows(spec, m, symbols: dict, bounds: dict):
                                ground=spec.scene.ground))
 
     return yield_target.target_rows(spec, symbols, bounds, nines_of)
+
+
+def _refuse_allocation(spec) -> None:
+    """A SpecError (exit 2) for an allocation no yield bounds: refusals.allocation_refusal's
+    (a hub mass no k^2 depends on, whose scale nothing limits; fewer steps than spokes)."""
+    from .refusals import allocation_refusal
+
+    refusal = allocation_refusal(spec)
+    if refusal is not None:
+        key, expected, found = refusal
+        raise SpecError(spec.source or "<spec>", key, expected, found=found)
