@@ -243,3 +243,27 @@ def test_a_yield_target_on_a_hub_mass_nothing_depends_on_is_refused(tmp_path):
                    spoke_mass=0.0)
     with pytest.raises(SpecError, match="tolerances.mass.allocate"):
         api.optimize(spec, verify=False)
+
+
+def test_the_max_yield_answer_with_spokes_is_a_maximum_of_the_numpy_yield(tmp_path):
+    """objective.max_yield with every spoke its own length (+-80 mm), the hub +-0.3 kg, every
+    slope +-0.01 rad and the start +-0.05 rad/s: the NLP's nines at its slope equal
+    statistical.py's there (central differences of the spoke loop), and those are lower
+    0.005 rad either side."""
+    spec = spec_of(tmp_path, "ramp", "leg_length = 1.0\nslope = { min = 0.02, max = 0.3, "
+                   "initial = 0.1 }", "[objective]\nmax_yield = 1.0",
+                   'leg_length = { value = 0.08, applies_to = "each" }\nmass = { value = 0.3 }\n'
+                   'start_speed = { value = 0.05 }\nslope = { value = 0.01, applies_to = "each" }')
+    out = api.optimize(spec, verify=False)
+    assert out.status.is_success
+    slope = out.analysis.design["slope"]
+
+    def nines(x):
+        design = RimlessWheelDesign(spokes=8, leg_length=1.0, slope=x)
+        found = linearised_yield(spec.scene, design, list(spec.tolerances), STEPS)
+        return -math.log10(found["failure_bound"])
+
+    best = nines(slope)
+    assert out.objective["terms"]["max_yield"] == pytest.approx(best, rel=1e-6)
+    assert 0.03 < slope < 0.29
+    assert nines(slope - 0.005) < best and nines(slope + 0.005) < best
