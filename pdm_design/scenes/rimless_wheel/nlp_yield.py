@@ -301,7 +301,8 @@ def target_rows(spec, m, symbols: dict, bounds: dict):
 
 def _refuse_allocation(spec) -> None:
     """A SpecError (exit 2) for an allocation no yield bounds: refusals.allocation_refusal's
-    (a hub mass no k^2 depends on, whose scale nothing limits; fewer steps than spokes)."""
+    (a hub mass no k^2 depends on, whose scale nothing limits; a given mass or start speed
+    tolerance that takes the value to 0; fewer steps than spokes)."""
     from .refusals import allocation_refusal
 
     refusal = allocation_refusal(spec)
