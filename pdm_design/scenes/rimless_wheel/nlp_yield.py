@@ -4,9 +4,9 @@ for numbers and symbols) on the NLP's design symbols, their gradients in every b
 (every step's slope on a ramp, rise and tread on stairs, each step's own or one for every step
 of a build: a lot; the start speed; each spoke's length, a lot of them, the hub's mass:
 physics.spoke_step, each spoke a lot of its own at the steps that use it) by CasADi's exact
-derivatives at the nominal build
-(statistical.py takes central differences), chained through the step map with its state
-x = E (a ramp) or (E, s) (stairs: the stance energy and the foothold's place on its tread);
+derivatives at the nominal build (statistical.py takes central differences), chained through
+the step map with its state x = E (a ramp) or (E, s) (stairs: the stance energy and the
+foothold's place on its tread);
 sd_i^2 = sum_j (dg_i / dd_j)^2 sigma_j^2, and -log10 of the union bound sum_i Phi(-g_i / sd_i)
 over every row of every step (nines): the max_yield term and a yield target's row
 (formulation/yield_target.py).
@@ -184,7 +184,7 @@ def _lot_columns(m, spread: Spread, slots: dict, stages: int):
     i + 1, i + 1 + n, ... and the landing one of steps i, i + n, ...; the spokes' lot moves
     both; the last column is the start speed. x_0's energy E_0 = w0^2 - rate(spoke 0, k^2)
     vers(beta - alpha) moves with the start speed, spoke 0 and the hub."""
-    cols = []  # (variance, {slot: steps' spoke or None (every step)})
+    cols = []  # (sigma, what it moves: {slot: None} every step, or {"spoke": i})
     for i, sigma in enumerate(spread.lot):
         if not _is_zero(sigma):
             cols.append((sigma, {i: None}))
