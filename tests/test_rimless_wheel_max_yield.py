@@ -111,8 +111,9 @@ def test_a_yield_target_is_met_by_monte_carlo(tmp_path):
 
 
 def test_what_is_not_linearised_is_refused_naming_the_key(tmp_path):
-    spec, _ = spec_of(tmp_path, "leg", tolerances="leg_length = { value = 0.01 }")
-    with pytest.raises(SpecError, match="tolerances.*leg_length"):
+    spec, _ = spec_of(tmp_path, "leg", tolerances='leg_length = { value = 0.01, '
+                                                  'distribution = "uniform" }')
+    with pytest.raises(SpecError, match="tolerances.*leg_length.*uniform"):
         api.optimize(spec, verify=False)
 
 

@@ -297,7 +297,7 @@ def test_a_yield_target_is_met_by_monte_carlo():
 
 
 @pytest.mark.parametrize("tolerances,match", [
-    ("leg_length = { value = 0.01 }", "tolerances.*leg_length"),
+    ('leg_length = { value = 0.01, distribution = "uniform" }', "tolerances.*leg_length"),
     ('rise = { value = 0.01, distribution = "uniform" }', "tolerances.*uniform"),
 ])
 def test_what_is_not_linearised_is_refused_naming_the_key(tmp_path, tolerances, match):

@@ -218,8 +218,13 @@ def stance_rows(wheel, energy, beta_prev, beta, ground):
     energy E, of a wheel of alpha, rate, leg, gravity, k2, eta and friction (floats, arrays or
     CasADi alike; docs/rimless_wheel.md section 13). over_the_top is E / rate behind the
     vertical and 1 (always holds) when the wheel's nominal chord starts past it."""
+    p_n, p_t = impact_impulses(wheel.eta, wheel.alpha, beta, ground)
+    return arc_rows(wheel, energy, beta_prev - wheel.alpha, beta + wheel.alpha, ground, p_n, p_t)
+
+
+def arc_rows(wheel, energy, phi0, phi1, ground, p_n, p_t):
+    """`stance_rows` of a stance from phi0 to phi1 whose impact gives impulses (p_n, p_t)."""
     w = wheel
-    phi0, phi1 = beta_prev - w.alpha, beta + w.alpha
     out = [("over_the_top", where(w.beta - w.alpha < 0.0, energy / w.rate, 1.0 + 0.0 * energy))]
     top = where(phi0 < 0.0, where(phi1 > 0.0, 0.0 * phi0, phi0), phi0)
     for name, phi in (("start", phi0), ("top", top), ("end", phi1)):
@@ -227,7 +232,6 @@ def stance_rows(wheel, energy, beta_prev, beta, ground):
                                            w.leg, w.gravity, w.k2)
         out.append((f"no_flight ({name})", normal / w.gravity))
         out.append((f"no_slip ({name})", (w.friction * normal - fabs(tangential)) / w.gravity))
-    p_n, p_t = impact_impulses(w.eta, w.alpha, beta, ground)
     out.append(("impact_friction (pushes)", p_n))
     out.append(("impact_friction", w.friction * p_n - fabs(p_t)))
     return out
@@ -239,13 +243,16 @@ def next_foothold(s, chord_length, beta, tread_before):
     return s + chord_length * cos(beta) - tread_before
 
 
-def landing_rows(wheel, s_prev, beta, tread_before, tread_after, scale):
+def landing_rows(wheel, s_prev, beta, tread_before, tread_after, scale, chord_length=None,
+                 reach=None):
     """[(name, g)] of one step's landing on stairs, per unit `scale` (a tread), g >= 0 where
     it holds: the nose of the tread before lies tread_before - s_prev ahead of the foothold,
     within nose_reach(beta) (nose_clearance); the new foothold falls short of the nose of the
-    tread after (landing). Floats, arrays or CasADi alike (docs/rimless_wheel.md, section 13)."""
-    s = next_foothold(s_prev, chord(wheel.leg, wheel.alpha), beta, tread_before)
-    reach = nose_reach(wheel.leg, wheel.alpha, beta)
+    tread after (landing). chord_length and reach: a build's spokes' (the design's when left
+    out). Floats, arrays or CasADi alike (docs/rimless_wheel.md, section 13)."""
+    chord_length = chord(wheel.leg, wheel.alpha) if chord_length is None else chord_length
+    reach = nose_reach(wheel.leg, wheel.alpha, beta) if reach is None else reach
+    s = next_foothold(s_prev, chord_length, beta, tread_before)
     return [("nose_clearance", (reach - (tread_before - s_prev)) / scale),
             ("landing", (tread_after - s) / scale)]
 
@@ -258,19 +265,22 @@ def landing_rows(wheel, s_prev, beta, tread_before, tread_after, scale):
 
 
 def chord_offset(a, b, alpha):
-    """theta0 = atan2(a - b cos 2 alpha, b sin 2 alpha): the impact angle less the chord's."""
-    return np.arctan2(a - b * np.cos(2.0 * alpha), b * np.sin(2.0 * alpha))
+    """theta0 = atan2(a - b cos 2 alpha, b sin 2 alpha), as the asin of the rise over the chord
+    (b sin 2 alpha > 0 for three spokes or more): the impact angle less the chord's."""
+    return asin((a - b * cos(2.0 * alpha)) / chord_between(a, b, alpha))
 
 
 def chord_between(a, b, alpha):
     """The distance between the tips of spokes a and b, 2 alpha apart."""
-    return np.hypot(b * np.sin(2.0 * alpha), a - b * np.cos(2.0 * alpha))
+    return sqrt((b * sin(2.0 * alpha)) ** 2 + (a - b * cos(2.0 * alpha)) ** 2)
 
 
 def impact_ratio_between(k2, a, b, alpha):
     """omega+ / omega- when spoke b lands as spoke a leaves: angular momentum about b's tip,
-    (k^2 + a b cos 2 alpha) / (k^2 + b^2) (`impact_ratio` when a = b)."""
-    return (k2 + a * b * np.cos(2.0 * alpha)) / (k2 + b**2)
+    (k^2 + a b cos 2 alpha) / (k^2 + b^2), written as 1 - b (2 b sin^2 alpha + (b - a)
+    cos 2 alpha) / (k^2 + b^2) (`impact_ratio` when a = b, without cancellation)."""
+    drop = b * (2.0 * b * sin(alpha) ** 2 + (b - a) * cos(2.0 * alpha))
+    return 1.0 - drop / (k2 + b**2)
 
 
 def impact_impulses_between(eta, a, b, alpha, phi1, ground):
@@ -278,8 +288,8 @@ def impact_impulses_between(eta, a, b, alpha, phi1, ground):
     mass's velocity change b omega+ e_t(phi1 - 2 alpha) - a omega- e_t(phi1), e_t(t) =
     (cos t, -sin t), on the ground's normal (sin g, cos g) and tangent (cos g, -sin g). With
     a = b = l it is l times `impact_impulses`."""
-    normal = a * np.sin(phi1 - ground) + eta * b * np.sin(ground - phi1 + 2.0 * alpha)
-    tangential = eta * b * np.cos(phi1 - 2.0 * alpha - ground) - a * np.cos(phi1 - ground)
+    normal = a * sin(phi1 - ground) + eta * b * sin(ground - phi1 + 2.0 * alpha)
+    tangential = eta * b * cos(phi1 - 2.0 * alpha - ground) - a * cos(phi1 - ground)
     return normal, tangential
 
 
@@ -288,4 +298,24 @@ def nose_reach_between(a, alpha, phi1):
     it: a sin 2 alpha / cos(phi1 - 2 alpha) (the farthest a nose may be; the swing's worst
     moment is the impact while phi1 <= 2 alpha, else the spoke's pass through 2 alpha).
     `nose_reach` when a = b."""
-    return a * np.sin(2.0 * alpha) / np.cos(np.minimum(phi1 - 2.0 * alpha, 0.0))
+    return a * sin(2.0 * alpha) / cos(fmin(phi1 - 2.0 * alpha, 0.0))
+
+
+def spoke_step(wheel, energy, phi0, beta, a, b, k2, ground):
+    """(rows [(name, g)], the next stance's energy, phi1) of a stance on spoke a from phi0 to
+    its impact on ground of chord angle beta, spoke b landing (a build's spokes and k^2;
+    floats, arrays or CasADi alike; docs/rimless_wheel.md section 13): `stance_rows`' rows
+    with the impulses per unit of the wheel's design leg, and E' = eta_ab^2 (E + rate_a
+    vers(phi1)) - rate_b vers(phi1 - 2 alpha)."""
+    from types import SimpleNamespace
+
+    w = wheel
+    phi1 = chord_offset(a, b, w.alpha) + beta
+    rate_a, rate_b = stance_rate(w.gravity, k2, a), stance_rate(w.gravity, k2, b)
+    eta = impact_ratio_between(k2, a, b, w.alpha)
+    at = SimpleNamespace(alpha=w.alpha, beta=w.beta, rate=rate_a, leg=a, k2=k2,
+                         gravity=w.gravity, friction=w.friction)
+    p_n, p_t = impact_impulses_between(eta, a, b, w.alpha, phi1, ground)
+    rows = arc_rows(at, energy, phi0, phi1, ground, p_n / w.leg, p_t / w.leg)
+    after = eta**2 * speed_squared(energy, phi1, rate_a) - rate_b * versine(phi1 - 2.0 * w.alpha)
+    return rows, after, phi1

@@ -29,7 +29,8 @@ def allocation_refusal(spec):
                 return (f"{key}.allocate", "a quantity the wheel's motion depends on: with "
                         "no spoke mass (or a hub gyration^2 = leg_length^2 / 3) k^2 is the "
                         "same at every hub mass, so no hub mass changes the motion and its box "
-                        "is unbounded (give mass a value or leave it out)",
+                        "(a yield target's scale) is unbounded (give mass a value or leave it "
+                        "out)",
                         f"spoke_mass = {w.spoke_mass:g}, gyration = {w.gyration:g}")
         own = {"mass": scene.wheel.mass, "start_speed": scene.initial.speed}
         if tol.quantity in own and not tol.allocate and tol.value >= own[tol.quantity]:

@@ -14,8 +14,11 @@ impulse and mu P_n - |P_t|; on stairs the nose (reach(beta_k) less the nose's di
 of foothold k - 1) and the landing (tread k less foothold k's place), per unit tread.
 
 A lot (one slope, rise or tread error for every step of a build) is one axis that moves every
-step at once. The uniform distribution and the leg_length and mass tolerances are not
-linearised here: a spec with them is refused in words (ValueError).
+step at once. Each spoke's own length is an axis of its own (it recurs at every step that
+stands on or lands that spoke), a lot of spoke lengths one axis for all of them, and the hub's
+mass one (it moves k^2 alone; with no spoke mass nothing: its sigma adds nothing): those builds
+run a loop over the steps (`spoke_rows`, physics.spoke_step). The uniform distribution is not
+linearised here: a spec with it is refused in words (ValueError).
 """
 
 from __future__ import annotations
@@ -26,7 +29,9 @@ from . import physics as phys
 from .analysis import resolve
 from .steps import energies
 
-LINEARISED = {"ramp": ("slope", "start_speed"), "stairs": ("rise", "tread", "start_speed")}
+LINEARISED = {"ramp": ("slope", "start_speed", "leg_length", "mass"),
+              "stairs": ("rise", "tread", "start_speed", "leg_length", "mass")}
+OWN = ("leg_length", "mass")  # a build's spokes and hub
 STEP = 1e-6  # central differences, in sigmas of each deviation
 
 
@@ -45,7 +50,7 @@ def _sigmas(scene, tolerances, stages):
         sigma = t.value / SIGMAS_PER_TOLERANCE
         if t.quantity == "start_speed":
             start = sigma
-        elif t.applies_to == "lot":
+        elif t.applies_to == "lot" or t.quantity == "mass":
             lot[t.quantity] = sigma
         else:
             each[t.quantity] = sigma
@@ -55,6 +60,8 @@ def _sigmas(scene, tolerances, stages):
 def rows(scene, design, deviations, stages):
     """(names, g (builds, rows)): every row of every build (deviations {quantity: (builds,
     stages)}, start_speed (builds,)), on the closed forms."""
+    if any(q in deviations for q in OWN):
+        return spoke_rows(scene, design, deviations, stages)
     wh, geo, problems = resolve(scene, design)
     if problems:
         raise ValueError("; ".join(problems))
@@ -90,28 +97,88 @@ def rows(scene, design, deviations, stages):
     return names, np.stack(out, axis=2)  # (builds, stages, rows)
 
 
-def row_reliability(scene, design, tolerances, stages: int):
-    """(g, sd, names, step) of every row of every step at the nominal build, flattened: each
-    axis (a step's own error, a lot's error on every step, the start speed) moved by
-    +-STEP sigmas, every moved build at once."""
+def spoke_rows(scene, design, deviations, stages):
+    """`rows` of builds whose spokes have their own lengths (deviations["leg_length"] (builds,
+    spokes)) or whose hub its own mass (deviations["mass"] (builds,)): a loop over the steps,
+    stance k on spoke k - 1 landing spoke k (mod n), physics.spoke_step (the NLP's step)."""
+    wh, geo, problems = resolve(scene, design)
+    if problems:
+        raise ValueError("; ".join(problems))
+    builds, n, w = len(deviations["start_speed"]), wh.n, scene.wheel
+    zero = np.zeros((builds, stages))
+    lengths = wh.leg + np.asarray(deviations.get("leg_length", np.zeros((builds, n))), float)
+    k2 = phys.gyration_squared(w.mass + np.asarray(deviations.get("mass", np.zeros(builds))),
+                               w.gyration, w.spoke_mass, n, wh.leg)
+    speed = scene.initial.speed + deviations["start_speed"]
+    phi0 = np.full(builds, wh.beta - wh.alpha)
+    energy = phys.stance_energy(speed, phi0, phys.stance_rate(wh.gravity, k2, lengths[:, 0]))
+    stairs = scene.ground == "stairs"
+    if stairs:
+        s_prev, tread_before = np.full(builds, geo["landing_offset"]), np.full(builds,
+                                                                             geo["tread"])
+    names, out = [], []
+    for k in range(stages):
+        a, b = lengths[:, k % n], lengths[:, (k + 1) % n]
+        chord = phys.chord_between(a, b, wh.alpha)
+        beta = (wh.beta + deviations.get("slope", zero)[:, k] if not stairs else
+                np.arcsin((geo["rise"] + deviations.get("rise", zero)[:, k]) / chord))
+        found, after, phi1 = phys.spoke_step(wh, energy, phi0, beta, a, b, k2, wh.ground)
+        if wh.beta - wh.alpha >= 0.0:  # starts past the top: no over_the_top row
+            found = found[1:]
+        if stairs:
+            tread = geo["tread"] + deviations.get("tread", zero)[:, k]
+            found += phys.landing_rows(wh, s_prev, beta, tread_before, tread, geo["tread"],
+                                       chord, phys.nose_reach_between(a, wh.alpha, phi1))
+            s_prev = phys.next_foothold(s_prev, chord, beta, tread_before)
+            tread_before = tread
+        names = [name for name, _ in found]
+        out.append(np.stack([np.broadcast_to(g, (builds,)) for _, g in found], axis=1))
+        energy, phi0 = after, phi1 - 2.0 * wh.alpha
+    return names, np.stack(out, axis=1)  # (builds, stages, rows)
+
+
+def _axes(scene, design, tolerances, stages):
+    """[(quantity, step, spoke or None)] and their sigmas: each axis a step's own error, a lot
+    (step "lot"), a spoke's own length (step "spoke"), the start speed (step None)."""
     each, lot, start = _sigmas(scene, tolerances, stages)
-    per_step = [q for q in LINEARISED[scene.ground] if q != "start_speed"]
+    per_step = [q for q in LINEARISED[scene.ground] if q not in ("start_speed", *OWN)]
     axes = ([(q, k) for q in per_step if q not in lot for k in range(stages)]
-            + [(q, "lot") for q in per_step if q in lot] + [("start_speed", None)])
+            + [(q, "lot") for q in (*per_step, *OWN) if q in lot])
+    if "leg_length" in each:
+        axes += [("leg_length", ("spoke", j)) for j in range(int(design.spokes))]
+    axes.append(("start_speed", None))
     sigma = np.array([start if k is None else lot[q] if k == "lot" else each.get(q, 0.0)
                       for q, k in axes])
+    return per_step, axes, sigma
+
+
+def _moved(per_step, axes, sigma, stages, spokes):
+    """The deviations of the nominal build and of each axis moved by +-STEP sigmas."""
     count = 2 * len(axes) + 1
     dev = {q: np.zeros((count, stages)) for q in per_step}
     dev["start_speed"] = np.zeros(count)
+    if any(q == "leg_length" for q, _ in axes):
+        dev["leg_length"] = np.zeros((count, spokes))
+    if any(q == "mass" for q, _ in axes):
+        dev["mass"] = np.zeros(count)
     for i, (q, k) in enumerate(axes):
         h = STEP * max(sigma[i], 1e-12)
         for sign, row in ((1.0, 1 + 2 * i), (-1.0, 2 + 2 * i)):
-            if k is None:
+            if k is None or (k == "lot" and q == "mass"):
                 dev[q][row] = sign * h
             elif k == "lot":
                 dev[q][row, :] = sign * h
             else:
-                dev[q][row, k] = sign * h
+                dev[q][row, k[1] if isinstance(k, tuple) else k] = sign * h
+    return dev
+
+
+def row_reliability(scene, design, tolerances, stages: int):
+    """(g, sd, names, step) of every row of every step at the nominal build, flattened: each
+    axis (a step's own error, a lot's error on every step, a spoke's own length, the start
+    speed) moved by +-STEP sigmas, every moved build at once."""
+    per_step, axes, sigma = _axes(scene, design, tolerances, stages)
+    dev = _moved(per_step, axes, sigma, stages, int(design.spokes))
     names, g = rows(scene, design, dev, stages)
     g0 = g[0]
     slopes = np.stack([(g[1 + 2 * i] - g[2 + 2 * i]) / (2.0 * STEP * max(sigma[i], 1e-12))
