@@ -397,7 +397,7 @@ def simulate(spec, stages, offsets, step_errors, plot, accuracy, fmt, build, sav
         typed = {"--offset": offsets, "--step-error": step_errors}[errors.option]
         given = {k: errors.item(k, a, b) for k, a, b in
                  _parse_pairs(typed, errors.option, errors.metavar, row)}
-        built = _with_spec_items(getattr(loaded.verification, errors.key), given,
+        built = _with_spec_items(loaded.verification.stage_list(errors.key), given,
                                  errors.index, f"verification.{errors.key}", row, spec)
     point, answered, found = loaded.design_at(), True, None
     if saved is not None:

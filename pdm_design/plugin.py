@@ -46,6 +46,17 @@ class StageErrors:
         return self.make(k, a, b)
 
 
+@dataclass(frozen=True)
+class StageList:
+    """A per-stage list of the spec's `[verification]` table (`[[verification.KEY]]`): `item`
+    the frozen, self-validating dataclass of one item, `index` its field that numbers the
+    item's stage (an integer from 1). The loader builds the items and refuses two of one stage
+    and one beyond `verification.stages`, each at its key."""
+
+    item: type
+    index: str
+
+
 class lazily:
     """A Scene method that is `module:function` of the scene's own package (a relative module,
     ".sheet:parts", resolved against the package of the class that names it), imported when
@@ -111,6 +122,13 @@ class Scene:
     verification_hints: dict[str, str] = {}
     """`[verification]` keys this scene does not take, each with the reason shown to the user."""
 
+    def stage_lists(self) -> dict[str, StageList]:
+        """The per-stage lists the spec's `[verification]` table may hold, by key, in the order
+        its keys are listed in errors: the build errors of single stages that every
+        verification run applies. A spec holds them in `verification.stage_lists`, read as
+        `spec.verification.stage_list(key)` (() when none is given). None by default."""
+        return {}
+
     def check_spec(self, scene, design: dict) -> tuple[str, str, str] | None:
         """A contradiction between the scene and the `[design]` table (fixed values and
         Bounds by name) of a spec that is valid key by key, as (key, expected, found); the
@@ -126,6 +144,11 @@ class Scene:
         """The quantities a `[tolerances]` table may name (tolerance_model.Quantity by name);
         none by default."""
         return {}
+
+    stream_keys: dict[str, int] = {}
+    """{quantity: the spawn key of its random stream} of the quantities whose builds were drawn
+    before the streams were keyed by name (tolerances/draw.py): closed, so that their draws stay
+    the same. None by default: every quantity's stream is keyed by its name."""
 
     def max_yield_refusal(self, scene) -> tuple[str, str] | None:
         """(expected, found) when objective.max_yield cannot be modelled for this scene (its

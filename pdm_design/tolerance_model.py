@@ -14,7 +14,8 @@ Distributions, for the statistical analysis:
 Each scene lists (Scene.quantities) every quantity that may vary, with its SI unit, the unit a
 build sheet shows it in (and the factor from SI to that unit), and how it may apply. A new
 quantity is one more entry of its scene's list; its random stream follows from its name
-(tolerances/draw.py), so the other quantities keep theirs.
+(tolerances/draw.py; Scene.stream_keys keeps the first quantities' older ones), so the other
+quantities keep theirs.
 
 This is the vocabulary every layer speaks (the spec, the formulation, the yield, the sheets):
 it imports nothing of theirs.

@@ -40,7 +40,7 @@ SCENE, DESIGN, TOLERANCES = SPEC.scene, SPEC.design_at(), SPEC.tolerances
 
 
 def draw(n, stages, seed):
-    return draw_builds(TOLERANCES, n, stages, seed)
+    return draw_builds(TOLERANCES, n, stages, seed, scene=SCENE)
 
 
 def end_to_end() -> tuple[float, str]:

@@ -45,7 +45,7 @@ def compare(scene, design, tolerances, scale) -> dict:
 
     scaled = [Tolerance(t.quantity, t.applies_to, t.value * scale, 1.0, t.distribution)
               for t in tolerances]
-    dev = draw(scaled, BUILDS, STAGES, SEED)
+    dev = draw(scaled, BUILDS, STAGES, SEED, scene=scene)
     out = run_builds(scene, design, dev, STAGES)
     row = {"open": int((~out.closed_form).sum()), "others": 0, "others_open": 0, "alone": 0,
            "agreed": 0}

@@ -168,9 +168,9 @@ def test_command_line_offsets_join_the_spec_s_own(tmp_path):
     """The spec moves pivot 5 by 0.3 m; --offset moves pivot 2 by 1 cm. With the heights
     untouched every carry ends at beta, so a landing is the previous one's offset less the
     difference of the two pivots' shifts: palm 2's 1 cm short, palm 5's 0.3 m short."""
+    from pdm_design.scenes.manipulators.model import ManipulatorOffset
     from pdm_design.scenes.manipulators.sim import simulate_manipulators
     from pdm_design.spec import load_spec
-    from pdm_design.spec.model import ManipulatorOffset
 
     spec = _paper_with_offset(tmp_path)
     code, out, _ = run(spec, "--offset", "2:0.01,0", "--format", "json")

@@ -59,7 +59,7 @@ def test_a_row_linear_in_one_normal_deviation_fails_with_probability_phi_of_minu
     exact_tail = ndtr(-nearest / sigma)  # P(the deviation passes the nearest limit)
     assert ndtr(-beta.min()) == pytest.approx(exact_tail, rel=1e-5)
     # and the Monte Carlo of the map agrees with that tail on that side
-    dev = draw(tols, 200_000, stages, seed=3)["feed_x"]
+    dev = draw(tols, 200_000, stages, seed=3, scene=scene)["feed_x"]
     side = dev > 0 if ahead < -behind else dev < 0
     beyond = np.mean(side & (np.abs(dev) > nearest))
     assert beyond == pytest.approx(exact_tail, abs=4 * math.sqrt(exact_tail / 200_000))

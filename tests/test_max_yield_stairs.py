@@ -101,7 +101,7 @@ def test_the_linearised_yield_is_the_monte_carlo_yield_where_one_row_dominates(
     assert tails[order[1]] < 1e-2 * tails[order[0]]
     lin = linearised_yield(scene, design, tols, stages)
     assert 0.95 < lin["yield"] < 0.999  # a yield a sample of this size resolves
-    out = run_builds(scene, design, draw(tols, builds, stages, seed=5), stages)
+    out = run_builds(scene, design, draw(tols, builds, stages, seed=5, scene=scene), stages)
     assert out.closed_form.all()
     low, high = wilson(out.passed.sum(), builds)
     assert low <= lin["yield"] <= high, (lin["yield"], low, high)
@@ -142,7 +142,7 @@ def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_build
 
     spec = load_spec(PROBLEMS / "stairs_yield_design.toml")
     stages, builds = spec.verification.stages, 3000
-    deviations = draw(spec.tolerances, builds, stages, seed=0)
+    deviations = draw(spec.tolerances, builds, stages, seed=0, scene=spec.scene)
     passed = {}
     for objective in ("max_yield", "max_offset_tolerance"):
         asked = dataclasses.replace(spec, objective={objective: 1.0})
@@ -209,7 +209,7 @@ def test_the_linearised_yield_is_the_same_at_any_size_and_finite_at_extreme_rest
         assert other["min_beta"] == pytest.approx(unit["min_beta"], rel=1e-9)
         assert other["failure_bound"] == pytest.approx(unit["failure_bound"], rel=1e-8)
     builds = 40_000
-    out = run_builds(scene, design, draw(tols, builds, 30, seed=1), 30)
+    out = run_builds(scene, design, draw(tols, builds, 30, seed=1, scene=scene), 30)
     if eps == 0.05:
         assert unit["yield"] == 0.0 and not out.passed.any()
     else:  # and the map's yield over 40 000 builds holds it in its 95 % interval
@@ -255,7 +255,7 @@ def test_hunters_bound_on_a_long_staircase_is_the_monte_carlo_failure_rate():
     scene, design, tols = spec.scene, spec.design_at(), spec.tolerances
     stages, builds = 100, 20_000
     lin = linearised_yield(scene, design, tols, stages)
-    out = run_builds(scene, design, draw(tols, builds, stages, seed=11), stages)
+    out = run_builds(scene, design, draw(tols, builds, stages, seed=11, scene=scene), stages)
     assert out.closed_form.all()
     low, high = wilson(out.passed.sum(), builds)
     fail_low, fail_high = 1.0 - high, 1.0 - low

@@ -54,6 +54,27 @@ def test_the_shared_layers_name_no_scene_and_import_no_scene_package():
     assert not found, "shared modules that name a scene:\n" + "\n".join(found)
 
 
+# the words of the scenes that ship (their kinds, parts and motions), case-insensitive
+SCENE_WORDS = re.compile(r"manipulator|stair|rimless|compass|wheel|gait|walker|palm|bounce|spoke"
+                         r"|ball", re.IGNORECASE)
+
+
+def _speaking_lines(paths) -> list[str]:
+    return [f"{path.relative_to(ROOT)}:{number}: {line.strip()}" for path in paths
+            for number, line in enumerate(path.read_text().splitlines(), 1)
+            if SCENE_WORDS.search(line)]
+
+
+def test_no_line_of_the_shared_layer_speaks_a_scene_s_words():
+    # code, comments and docstrings alike: what a scene knows reaches the shared layer through
+    # its Scene object (its per-stage lists, its random streams' keys, ...)
+    shared = sorted(p for p in PACKAGE.rglob("*.py")
+                    if p.relative_to(PACKAGE).parts[0] != "scenes")
+    assert len(shared) > 50 and _speaking_lines(PACKAGE.glob("scenes/*/plugin.py"))
+    found = _speaking_lines(shared)
+    assert not found, "shared lines that speak of a scene:\n" + "\n".join(found)
+
+
 def test_every_scene_is_an_entry_point_that_gives_its_own_kind():
     assert {"stairs", "manipulators"} <= set(plugin.kinds())
     for kind in plugin.kinds():

@@ -12,9 +12,10 @@ import pytest
 from click.testing import CliRunner
 
 from pdm_design.cli import main
+from pdm_design.scenes.common import StepError
+from pdm_design.scenes.manipulators.model import ManipulatorOffset
 from pdm_design.sheet import sheet_for
 from pdm_design.spec import load_spec
-from pdm_design.spec.model import ManipulatorOffset, StepError
 from pdm_design.verify import simulate_spec
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from pdm_design.analysis import analyse
+from pdm_design.scenes.common import StepError
 from pdm_design.scenes.stairs import physics as phys
 from pdm_design.scenes.stairs.model import Ball, StairsDesign, StairsInitial, StairsScene
 from pdm_design.scenes.stairs.sim import (
@@ -19,7 +20,6 @@ from pdm_design.scenes.stairs.sim import (
     simulate_stairs,
     stairs_geometry,
 )
-from pdm_design.spec.model import StepError
 
 G = 9.81
 H0 = 1.0

@@ -8,12 +8,17 @@ import math
 import re
 import tomllib
 from pathlib import Path
+from typing import Annotated
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from pydantic import Field, Strict
+from pydantic.dataclasses import dataclass as checked
 
+from pdm_design import plugin
 from pdm_design.errors import SpecError
+from pdm_design.scenes.common import CONFIG, Number
 from pdm_design.scenes.manipulators.model import Body, ManipulatorsInitial, ManipulatorsScene, Palm
 from pdm_design.scenes.stairs.model import Ball, StairsInitial, StairsScene
 from pdm_design.spec import Bounds, Spec, load_spec, parse_spec
@@ -171,7 +176,7 @@ def test_complete_example_in_docs_loads(kind):
     specs = [parse_spec(tomllib.loads(b), "docs") for b in blocks if "[scene]" in b]
     (spec,) = [s for s in specs if s.kind == kind]
     assert spec.free_variables and spec.objective and spec.requirements
-    assert spec.verification.offsets or spec.verification.step_errors
+    assert spec.verification.has_stage_items
 
 
 def test_parse_spec_returns_a_spec():
@@ -593,3 +598,56 @@ def test_garbage_anywhere_gives_a_spec_or_a_spec_error(where, value, new_key, ke
         assert error.file == "garbage.toml" and str(error)
     else:
         assert isinstance(result, Spec)
+
+
+# --------------------------------------------------------------------------- a scene's own lists
+
+@checked(frozen=True, config=CONFIG)
+class Tilt:
+    """An item of a per-stage list a scene could declare: one stage's tilt (rad)."""
+
+    stage: Annotated[int, Strict(), Field(ge=1)]
+    angle: Number = 0.0
+
+
+@pytest.fixture
+def tilting(monkeypatch):
+    """The stairs scene with a second per-stage list, "tilts", declared before its own."""
+    scene = plugin.scene_kind("stairs")
+    lists = {"tilts": plugin.StageList(Tilt, "stage"), **scene.stage_lists()}
+    monkeypatch.setattr(type(scene), "stage_lists", lambda self: lists)
+    return base("stairs")
+
+
+def test_a_scene_s_own_per_stage_list_is_read_from_its_key(tilting):
+    tilts = [{"stage": 2, "angle": 0.01}, {"stage": 1}]
+    spec = parse_spec(with_value(tilting, ("verification", "tilts"), tilts))
+    assert spec.verification.stage_list("tilts") == (Tilt(2, 0.01), Tilt(1, 0.0))
+    assert spec.verification.tilts == spec.verification.stage_list("tilts")
+    assert [e.step for e in spec.verification.stage_list("step_errors")] == [3]
+    assert spec.verification.stage_list("offsets") == () and spec.verification.has_stage_items
+    untouched = parse_spec(tilting).verification
+    assert untouched.stage_list("tilts") == () and untouched.stage_list("step_errors")
+
+
+@pytest.mark.parametrize("tilts, key, expected", [
+    ([{"stage": 2}, {"stage": 2}], "verification.tilts[1].stage",
+     "a stage not listed before in verification.tilts"),
+    ([{"stage": 7}], "verification.tilts[0].stage", "an integer <= verification.stages (6)"),
+    ([{"stage": 0}], "verification.tilts[0].stage", "a number >= 1"),
+    ([{"stage": 1, "angel": 0.1}], "verification.tilts[0].angel", "a key of verification.tilts[0] "
+     "(stage, angle)"),
+    ([{"angle": 0.1}], "verification.tilts[0].stage", "a value (this key is required)"),
+    (0.1, "verification.tilts", "an array"),
+])
+def test_a_scene_s_own_per_stage_list_is_checked_like_every_other(tilting, tilts, key, expected):
+    data = with_value(with_value(tilting, ("verification", "stages"), 6), ("verification", "tilts"),
+                      tilts)
+    error = error_of(data)
+    assert (error.key, error.expected) == (key, expected)
+
+
+def test_the_scene_s_lists_are_the_keys_verification_takes_in_their_place(tilting):
+    error = error_of(with_value(tilting, ("verification", "tilt"), []))
+    assert error.key == "verification.tilt"
+    assert error.expected == "a key of verification (stages, accuracy, samples, tilts, step_errors)"

@@ -28,10 +28,10 @@ import numpy as np
 import pytest
 
 from pdm_design.formulation import formulate
+from pdm_design.scenes.common import StepError
 from pdm_design.scenes.stairs.sim import simulate_stairs
 from pdm_design.solve import optimize
 from pdm_design.spec import load_spec, parse_spec
-from pdm_design.spec.model import StepError
 from pdm_design.status import Status
 from pdm_design.verify.tolerance import verify_tolerance
 

@@ -11,6 +11,7 @@ from click.testing import CliRunner
 from scipy.special import ndtr
 
 from pdm_design.cli import main
+from pdm_design.plugin import scene_kind
 from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.scenes.manipulators.sim.geometry import Parts
 from pdm_design.scenes.manipulators.tolerances import meets_another_palm, simulate_build
@@ -21,6 +22,7 @@ from pdm_design.tolerances.yield_ import map_builds, wilson, yield_of
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 PAPER = str(PROBLEMS / "paper_manipulators.toml")
+ROW = scene_kind("manipulators")
 
 
 @pytest.fixture(scope="module")
@@ -34,19 +36,21 @@ def paper():
 def test_build_i_is_reproduced_alone_whatever_the_number_drawn():
     tols = [Tolerance("pivot_x", "each", 0.01), Tolerance("friction", "lot", 0.1, 1.0,
                                                            "uniform")]
-    many = draw(tols, 300, 7, seed=5)
-    alone = draw(tols, 1, 7, seed=5, start=211)
+    many = draw(tols, 300, 7, seed=5, scene=ROW)
+    alone = draw(tols, 1, 7, seed=5, scene=ROW, start=211)
     assert np.array_equal(many["pivot_x"][211], alone["pivot_x"][0])
     assert np.array_equal(many["friction"][211:212], alone["friction"])
     # another quantity's stream does not move this one's
-    more = draw(tols + [Tolerance("link_length", "each", 0.002)], 300, 7, seed=5)
+    more = draw(tols + [Tolerance("link_length", "each", 0.002)], 300, 7, seed=5,
+                scene=ROW)
     assert np.array_equal(more["pivot_x"], many["pivot_x"])
 
 
 @pytest.mark.parametrize("distribution", ["normal", "uniform"])
 def test_distributions_follow_the_convention(distribution):
     t = 0.03
-    x = draw([Tolerance("pivot_y", "lot", t, 1.0, distribution)], 400_000, 1, seed=1)["pivot_y"]
+    x = draw([Tolerance("pivot_y", "lot", t, 1.0, distribution)], 400_000, 1, seed=1,
+             scene=ROW)["pivot_y"]
     if distribution == "normal":  # sigma = t / 3: 99.73 % within +-t
         assert x.std() == pytest.approx(t / 3, rel=0.01)
         assert np.mean(np.abs(x) <= t) == pytest.approx(0.9973, abs=0.0006)
@@ -161,7 +165,7 @@ ALL = Tolerances((
 def test_vectorised_map_and_event_simulator_agree_build_by_build(paper):
     scene, design = paper
     stages, builds = 10, 200
-    dev = draw(ALL, builds, stages, seed=11)
+    dev = draw(ALL, builds, stages, seed=11, scene=scene)
     out = run_builds(scene, design, dev, stages)
     closed = np.flatnonzero(out.closed_form)
     assert len(closed) > 50 and "" in set(out.failure[closed])
@@ -331,7 +335,7 @@ def test_absurd_tolerances_fail_by_name_never_nan(paper):
     assert r.estimate == 0.0 and r.ci_low == 0.0 and 0.0 < r.ci_high < 0.1
     assert set(r.failures) <= set(FAILURE_KINDS) | {"invalid_part", "refused"}
     assert sum(r.failures.values()) == 60
-    out = run_builds(scene, design, draw(tols, 60, 5, seed=2), 5)
+    out = run_builds(scene, design, draw(tols, 60, 5, seed=2, scene=scene), 5)
     assert np.isfinite(out.min_margin).all() and (out.min_margin < 0).all()
 
 
@@ -346,7 +350,8 @@ def test_bouncing_landings_are_all_left_to_the_simulator(paper):
     scene, design = paper
     bouncy = scene.__class__(body=scene.body, palm=scene.palm.__class__(
         width=1.6, restitution=0.3), initial=scene.initial)
-    out = run_builds(bouncy, design, draw([Tolerance("pivot_x", "each", 0.01)], 20, 3, 0), 3)
+    out = run_builds(bouncy, design, draw([Tolerance("pivot_x", "each", 0.01)], 20, 3, 0,
+                                                scene=bouncy), 3)
     assert not out.closed_form.any()
 
 
@@ -370,7 +375,7 @@ def test_at_large_tolerances_the_map_judges_alone_only_what_it_follows(tolerance
     stages, builds = 12, 200
     scaled = [Tolerance(t.quantity, t.applies_to, t.value * scale, 1.0, t.distribution)
               for t in tolerances]
-    dev = draw(scaled, builds, stages, seed=3)
+    dev = draw(scaled, builds, stages, seed=3, scene=scene)
     out = run_builds(scene, design, dev, stages)
     others = 0
     for i in range(builds):

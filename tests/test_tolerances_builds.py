@@ -12,10 +12,10 @@ from click.testing import CliRunner
 
 from pdm_design.cli import main
 from pdm_design.commands.yield_ import yield_text
+from pdm_design.scenes.manipulators.model import ManipulatorOffset
 from pdm_design.scenes.manipulators.sim import simulate_manipulators
 from pdm_design.scenes.manipulators.tolerances import simulate_build
 from pdm_design.spec import load_spec
-from pdm_design.spec.model import ManipulatorOffset
 from pdm_design.tolerances import run_builds
 from pdm_design.tolerances.draw import draw
 from pdm_design.tolerances.yield_ import simulate_one, yield_of
@@ -82,7 +82,7 @@ def test_unbuildable_builds_agree_in_the_confirmation(tmp_path):
     tols = spec.tolerances
     r = yield_of(spec.scene, spec.design_at(), tols, builds=40, stages=2, seed=0, confirm=40,
                  scales=(), sensitivity_samples=0)
-    invalid = int((0.1 + draw(tols, 40, 2, 0)["palm_mass"] <= 0.0).sum())
+    invalid = int((0.1 + draw(tols, 40, 2, 0, scene=spec.scene)["palm_mass"] <= 0.0).sum())
     assert invalid >= 3 and r.failures.get("invalid_part") == invalid
     assert r.confirmed["random"] == 40 and r.confirmed["agreed"] == 40
 
@@ -90,7 +90,8 @@ def test_unbuildable_builds_agree_in_the_confirmation(tmp_path):
 def test_simulate_build_reports_an_unbuildable_part_as_its_failure(tmp_path):
     path = _spec(tmp_path)
     spec = load_spec(path)
-    index = int(np.flatnonzero(0.1 + draw(spec.tolerances, 100, 2, 0)["palm_mass"] <= 0.0)[0])
+    masses = 0.1 + draw(spec.tolerances, 100, 2, 0, scene=spec.scene)["palm_mass"]
+    index = int(np.flatnonzero(masses <= 0.0)[0])
     result = CliRunner().invoke(main, ["simulate", path, "--build", f"0:{index}", "--stages",
                                        "2"])
     assert result.exit_code == 1, result.output
@@ -163,7 +164,7 @@ def test_a_failure_is_at_stage_stages_passed_plus_one_on_both_scenes():
     spec = load_spec(str(PROBLEMS / "stairs_yield.toml"))
     run = simulate_one(spec.scene, spec.design_at(), spec.tolerances, 0, 48, 100).outcome
     mapped = run_builds(spec.scene, spec.design_at(),
-                        draw(spec.tolerances, 1, 100, 0, start=48), 100)
+                        draw(spec.tolerances, 1, 100, 0, scene=spec.scene, start=48), 100)
     assert run.failure.kind == "nose_hit" == mapped.failure[0]
     assert run.stages_passed == mapped.stages_passed[0]
     assert run.failure.stage == run.stages_passed + 1

@@ -46,7 +46,7 @@ def test_map_and_simulator_agree_build_by_build_on_real_links(real):
     # a grippier palm (mu 1.5): the optimum's binding slip margins left to the pivots and stops
     scene = dataclasses.replace(scene, palm=dataclasses.replace(scene.palm, friction=1.5))
     stages, builds = 6, 150
-    dev = draw(PARTS, builds, stages, seed=5)
+    dev = draw(PARTS, builds, stages, seed=5, scene=scene)
     out = run_builds(scene, design, dev, stages)
     closed = np.flatnonzero(out.closed_form)
     assert len(closed) > 100 and "" in set(out.failure[closed])

@@ -106,7 +106,7 @@ def test_a_chunks_deviations_are_each_builds_own_draw():
                             5, spec.verification.stages, "default")
     tasks = [(1.0, 3), (1.0, 4), (1.0, 9), (2.0, 0), (2.0, 700), (1.0, 2)]
     for (scale, index), got in zip(tasks, parallel._drawn(run, tasks, span=8)):
-        alone = one_build(run.tolerances[scale], 5, index, run.stages)
+        alone = one_build(run.tolerances[scale], 5, index, run.stages, scene=run.scene)
         assert got.keys() == alone.keys()
         for key in alone:
             assert got[key].shape == alone[key].shape

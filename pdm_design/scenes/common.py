@@ -10,6 +10,7 @@ import math
 from typing import Annotated
 
 from pydantic import ConfigDict, Field, Strict
+from pydantic.dataclasses import dataclass
 
 CONFIG = ConfigDict(extra="forbid", allow_inf_nan=False)
 
@@ -34,3 +35,27 @@ def is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 STANDARD_GRAVITY = 9.81
+
+
+@dataclass(frozen=True, config=CONFIG)
+class StepError:
+    """Construction error of one step (numbered from 1): rise and tread errors in m (the items
+    of the `[verification] step_errors` a stepping scene takes)."""
+
+    step: Annotated[int, Strict(), Field(ge=1)]
+    rise: Number = 0.0
+    tread: Number = 0.0
+
+
+# The random streams of the first scenes' toleranced quantities, in the order that
+# SeedSequence(seed).spawn gave them before the streams were keyed by name (tolerances/draw.py):
+# closed, never extended, so that those quantities' builds stay the same.
+FIRST_STREAMS = ("pivot_x", "pivot_y", "link_length", "back_stop", "palm_mass", "friction",
+                 "object_mass", "object_width", "feed_x", "feed_speed", "rise", "tread",
+                 "restitution", "launch_speed", "launch_x", "link_mass", "pivot_friction")
+
+
+def first_stream_keys(*names: str) -> dict[str, int]:
+    """{quantity: its place in FIRST_STREAMS}: the Scene.stream_keys of a scene's quantities
+    that are among them."""
+    return {name: FIRST_STREAMS.index(name) for name in names}

@@ -8,6 +8,7 @@ checks the layout around them and turns pydantic's errors into key paths of the 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import math
@@ -27,7 +28,6 @@ from ..accuracy import Accuracy, AccuracyError, accuracy
 from ..errors import SpecError, did_you_mean
 from ..scenes.common import CONFIG, is_number
 from .model import (
-    STAGE_LISTS,
     Bounds,
     Expectations,
     Spec,
@@ -189,29 +189,69 @@ def _objective(data: dict, scene: plugin.Scene) -> dict[str, float]:
 
 
 def _verification(table: dict, kind: _Kind) -> Verification:
+    """[verification]: its settings, and the per-stage lists of the scene (Scene.stage_lists)
+    built item by item, each stage listed once."""
     table = dict(table)
+    lists = kind.plugin.stage_lists()
     setting = table.pop("accuracy", _MISSING)
-    _check_fields(table, Verification, "verification", kind.verification_hints,
-                  exclude=kind.verification_hints)
+    _check_keys(table, _verification_keys(lists, kind.verification_hints), "verification",
+                kind.verification_hints)
+    given = {key: table.pop(key) for key in lists if key in table}
+    for key, items in given.items():
+        if isinstance(items, list):  # (a wrong type is reported when the list is built)
+            for i, item in enumerate(items):
+                _check_fields(item, lists[key].item, f"verification.{key}[{i}]")
     if setting is not _MISSING:
         table["accuracy"] = _accuracy(setting)
-    verification = _build(Verification, table, "verification")
-    for key, index in STAGE_LISTS:
-        _check_unique(getattr(verification, key), index, f"verification.{key}")
+    fields = tuple(Verification.__pydantic_fields__)
+    before = fields[:fields.index("stage_lists")]  # errors in the order of the table's fields
+    _build(Verification, {k: v for k, v in table.items() if k in before}, "verification")
+    built = tuple((key, _stage_list(given.get(key, []), found, f"verification.{key}"))
+                  for key, found in lists.items())
+    verification = _build(Verification, {**table, "stage_lists": built}, "verification")
+    for (key, items), found in zip(built, lists.values()):
+        _check_unique(items, found.index, f"verification.{key}")
     return verification
+
+
+def _verification_keys(lists: dict, hints: dict) -> tuple[str, ...]:
+    """The keys [verification] takes: Verification's settings, the scene's per-stage lists in
+    the place of its stage_lists, less those the scene refuses (its hints)."""
+    keys = []
+    for name in Verification.__pydantic_fields__:
+        keys += list(lists) if name == "stage_lists" else [name]
+    return tuple(key for key in keys if key not in hints)
+
+
+def _stage_list(data: Any, found: plugin.StageList, path: str) -> tuple:
+    """The items of one per-stage list (an array of tables of `found.item`); the first error
+    becomes an _Invalid at its key."""
+    try:
+        return _items_of(found.item).validate_python(data)
+    except pydantic.ValidationError as exc:
+        error = exc.errors()[0]
+        key, node = _locate(path, error["loc"], data)
+        raise _invalid(error, key, data=node) from None
+
+
+@functools.cache
+def _items_of(item: type) -> TypeAdapter:
+    return TypeAdapter(tuple[item, ...], config=CONFIG)
 
 
 def _check_stages(verification: Verification, kind: _Kind, design: dict) -> None:
     """What the number of stages allows: a run that fits in memory, an NLP IPOPT can solve,
-    and offsets or step errors on stages that are run."""
+    and the per-stage lists' items on stages that are run."""
     stages = verification.stages
     free = any(isinstance(v, Bounds) for v in design.values())
     for asked in (False, True) if free else (False,):  # what is run, then what is optimised
         limit, why = kind.plugin.stage_limit(asked)
         if stages > limit:
             raise _Invalid("verification.stages", f"an integer <= {limit} {why}", str(stages))
-    for key, attribute in STAGE_LISTS:
-        for i, item in enumerate(getattr(verification, key)):
+    lists = kind.plugin.stage_lists()
+    for key, items in verification.stage_lists:
+        attribute = lists[key].index
+        for i, item in enumerate(items):
             if getattr(item, attribute) > stages:
                 raise _Invalid(f"verification.{key}[{i}].{attribute}", f"an integer <= "
                                f"verification.stages ({stages})", str(getattr(item, attribute)))

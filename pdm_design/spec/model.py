@@ -63,40 +63,37 @@ def at_bound(value: float, low: float, high: float) -> str | None:
 
 
 @checked(frozen=True, config=CONFIG)
-class ManipulatorOffset:
-    """Assembly offset of one stage's pivot (the stage numbered from 1), in m, y up."""
-
-    manipulator: Annotated[int, Strict(), Field(ge=1)]
-    dx: Number = 0.0
-    dy: Number = 0.0
-
-
-@checked(frozen=True, config=CONFIG)
-class StepError:
-    """Construction error of one step (numbered from 1): rise and tread errors in m."""
-
-    step: Annotated[int, Strict(), Field(ge=1)]
-    rise: Number = 0.0
-    tread: Number = 0.0
-
-
-@checked(frozen=True, config=CONFIG)
 class Verification:
     """How designs are verified in the simulator. stages: the stages a run must pass (what a
-    scene calls one: Scene.stage_noun)."""
+    scene calls one: Scene.stage_noun). stage_lists: the scene's per-stage lists
+    (Scene.stage_lists) as ((key, items), ...), every key the scene has, in its order; the
+    spec's `[verification]` table holds them under those keys."""
 
     stages: Count = 6
     accuracy: AccuracyField = ACCURACY_PRESETS["default"]
     samples: SampleCount = 16
-    offsets: tuple[ManipulatorOffset, ...] = ()
-    step_errors: tuple[StepError, ...] = ()
+    stage_lists: tuple[tuple[str, tuple], ...] = ()
     # a run whose object skips a stage (lands on one further on) passes; by default it fails
     # (a scene whose runs cannot skip refuses the key: Scene.verification_hints)
     allow_skips: Annotated[bool, Strict()] = False
 
+    def stage_list(self, key: str) -> tuple:
+        """The items of the per-stage list `key`: () when the spec gives none, or when its
+        scene has no such list."""
+        return next((items for name, items in self.stage_lists if name == key), ())
 
-# [verification]'s per-stage lists, each with the field that numbers the stage of its items
-STAGE_LISTS = (("offsets", "manipulator"), ("step_errors", "step"))
+    @property
+    def has_stage_items(self) -> bool:
+        """Whether any per-stage list has an item (the runs are of another build than the
+        design's own)."""
+        return any(items for _, items in self.stage_lists)
+
+    def __getattr__(self, name: str):
+        # a per-stage list read as an attribute (spec.verification.KEY) where the scene has it
+        for key, items in self.__dict__.get("stage_lists", ()):
+            if key == name:
+                return items
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
 
 @checked(frozen=True, config=CONFIG)

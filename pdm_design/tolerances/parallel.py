@@ -122,7 +122,8 @@ def _drawn(run: BuildRun, tasks, span: int = 4 * MAX_CHUNK):
             last = max((i for s, i in tasks if s == scale and index <= i < index + span),
                        default=index)
             first, count = index, last - index + 1
-            drawn = draw(run.tolerances[scale], count, run.stages, run.seed, start=first)
+            drawn = draw(run.tolerances[scale], count, run.stages, run.seed, scene=run.scene,
+                         start=first)
             block = {(scale, first + n): n for n in range(count)}
         n = block[(scale, index)]
         yield {k: v[n:n + 1] for k, v in drawn.items()}

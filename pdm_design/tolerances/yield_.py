@@ -101,9 +101,10 @@ def build_command(source: str, seed: int, index: int, stages: int) -> str:
     return f"pdm-design simulate {source} --build {seed}:{index} --stages {stages}"
 
 
-def one_build(tolerances, seed: int, index: int, stages: int) -> dict:
-    """Deviations of build `index` alone (1-row arrays), as the yield run drew them."""
-    return draw(tolerances, 1, stages, seed, start=index)
+def one_build(tolerances, seed: int, index: int, stages: int, *, scene) -> dict:
+    """Deviations of build `index` of `scene` alone (1-row arrays), as the yield run drew
+    them."""
+    return draw(tolerances, 1, stages, seed, scene=scene, start=index)
 
 
 def simulate_one(scene, design, tolerances, seed, index, stages, *, accuracy="default",
@@ -112,7 +113,7 @@ def simulate_one(scene, design, tolerances, seed, index, stages, *, accuracy="de
     (allow_skips: the spec's [verification] allow_skips)."""
     from ..plugin import of
 
-    deviations = one_build(tolerances, seed, index, stages)
+    deviations = one_build(tolerances, seed, index, stages, scene=scene)
     return of(scene).simulate_build(scene, design, deviations, stages, accuracy=accuracy,
                                     record_trajectory=record_trajectory,
                                     allow_skips=allow_skips)
@@ -126,7 +127,7 @@ def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int) -
     parts = []
     for start in range(0, builds, chunk):
         count = min(chunk, builds - start)
-        deviations = draw(tolerances, count, stages, seed, start=start)
+        deviations = draw(tolerances, count, stages, seed, scene=scene, start=start)
         parts.append(run_builds(scene, design, deviations, stages))
     return BuildOutcome(*(np.concatenate([getattr(p, f) for p in parts]) for f in
                           ("stages_passed", "failure", "min_margin", "closed_form")))
@@ -233,7 +234,7 @@ def simulated(scene, design, tolerances, seed, index, stages, accuracy,
     from ..sim.core import SimulationRefused
 
     if deviations is None:
-        deviations = one_build(tolerances, seed, index, stages)
+        deviations = one_build(tolerances, seed, index, stages, scene=scene)
     try:
         result = of(scene).simulate_build(scene, design, deviations, stages,
                                           accuracy=accuracy, allow_skips=allow_skips)

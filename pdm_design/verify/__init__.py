@@ -52,7 +52,7 @@ def verify_nominal(spec: Spec, design, analysis: Analysis, *, accuracy=None) -> 
         what = f"{where.kind} at stage {where.stage}: {where.detail}" if where else "incomplete"
         failures.append(f"nominal run stopped after {counted(outcome.stages_passed, 'stage')} "
                         f"({what})")
-    exact_build = not spec.verification.offsets and not spec.verification.step_errors
+    exact_build = not spec.verification.has_stage_items
     # a run that left the closed forms' regime (an object that lifted off and flew) is judged
     # by its outcome: the closed forms describe neither that nor the stages after it
     left = of(spec).left_closed_forms(result)

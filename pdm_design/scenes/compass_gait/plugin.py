@@ -3,7 +3,8 @@ scipy, casadi) are imported only when a method is called."""
 
 from __future__ import annotations
 
-from ...plugin import Scene, lazily
+from ...plugin import Scene, StageList, lazily
+from ..common import StepError, first_stream_keys
 
 MARGINS = ("stance_contact", "no_slip", "stability", "hip_limit")
 
@@ -31,6 +32,9 @@ class CompassGait(Scene):
                                          "over)",
                           "offsets": "offsets are for manipulators scenes; a compass gait "
                                      "takes step_errors"}
+
+    def stage_lists(self):
+        return {"step_errors": StageList(StepError, "step")}
 
     # ------------------------------------------------------------------ the spec
     def scene_class(self):
@@ -65,7 +69,7 @@ class CompassGait(Scene):
     def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
         from .simulate import simulate_compass_gait
 
-        errors = spec.verification.step_errors if errors is None else errors
+        errors = spec.verification.stage_list("step_errors") if errors is None else errors
         slopes = [0.0] * stages
         for item in errors:
             if 1 <= item.step <= stages:
@@ -89,6 +93,8 @@ class CompassGait(Scene):
         from .quantities import QUANTITIES
 
         return QUANTITIES
+
+    stream_keys = first_stream_keys("rise")
 
     tolerance_refusal = lazily(".quantities:tolerance_refusal")
     run_builds = lazily(".builds:build_outcome")

@@ -24,7 +24,7 @@ def _manipulators(spec, result) -> dict:
 
     design = spec.design_at()
     stages = max(len(result.stages), max((e.stage for e in result.events), default=1), 1)
-    row = build_row(spec.scene, design, stages, spec.verification.offsets)
+    row = build_row(spec.scene, design, stages, spec.verification.stage_list("offsets"))
     keys = [[[0.0, -row.alpha]] for _ in range(len(row))]
     traj = result.trajectory
     for time, theta, carrier in zip(traj["time"], traj["theta"], traj["manipulator"]):

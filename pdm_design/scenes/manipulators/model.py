@@ -133,3 +133,13 @@ class ManipulatorsDesign:
     first_pivot_y: Number = 0.0
 
     VARIABLES = ("alpha", "beta", "link_length", "mass_ratio", "first_pivot_x", "first_pivot_y")
+
+
+@dataclass(frozen=True, config=CONFIG)
+class ManipulatorOffset:
+    """Assembly offset of one stage's pivot (the stage numbered from 1), in m, y up: the items
+    of `[verification] offsets`."""
+
+    manipulator: Annotated[int, Strict(), Field(ge=1)]
+    dx: Number = 0.0
+    dy: Number = 0.0

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from ...plugin import Scene, StageErrors, lazily
+from ...plugin import Scene, StageErrors, StageList, lazily
 from ...plugin_tolerances import BoxAxes
+from ..common import first_stream_keys
 
 # A manipulator run keeps every stage's record and event (about 15 kB a stage).
 MAX_MANIPULATOR_STAGES = 100_000
@@ -31,6 +32,11 @@ class Manipulators(Scene):
     outside_min_margin = ("parked_palms",)  # formulation.OUTSIDE_MIN_MARGIN
     verification_hints = {"step_errors": "step_errors are for stairs scenes; manipulators "
                                          "take offsets"}
+
+    def stage_lists(self):
+        from .model import ManipulatorOffset
+
+        return {"offsets": StageList(ManipulatorOffset, "manipulator")}
 
     # ------------------------------------------------------------------ the spec
     def scene_class(self):
@@ -65,6 +71,10 @@ class Manipulators(Scene):
 
         return QUANTITIES
 
+    stream_keys = first_stream_keys("pivot_x", "pivot_y", "link_length", "back_stop", "palm_mass",
+                                    "friction", "object_mass", "object_width", "feed_x",
+                                    "feed_speed", "link_mass", "pivot_friction")
+
     def max_yield_refusal(self, scene):
         if scene.pivots.damping == 0.0:
             return None
@@ -81,7 +91,7 @@ class Manipulators(Scene):
     def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
         from .sim import simulate_manipulators
 
-        offsets = spec.verification.offsets if errors is None else errors
+        offsets = spec.verification.stage_list("offsets") if errors is None else errors
         return simulate_manipulators(spec.scene, design, stages=stages, offsets=offsets,
                                      accuracy=accuracy, record_trajectory=record_trajectory,
                                      allow_skips=spec.verification.allow_skips)
@@ -250,6 +260,6 @@ class Manipulators(Scene):
 
 
 def _offset(**fields):
-    from ...spec.model import ManipulatorOffset
+    from .model import ManipulatorOffset
 
     return ManipulatorOffset(**fields)

@@ -587,7 +587,7 @@ def simulate_build(scene, design, deviations: dict, stages: int, *, accuracy="de
     import pydantic
 
     from ...sim.core import SimulationRefused
-    from ...spec.model import ManipulatorOffset
+    from .model import ManipulatorOffset
     from .sim import simulate_manipulators
     from .sim.geometry import Parts
 

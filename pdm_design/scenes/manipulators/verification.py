@@ -58,7 +58,7 @@ def simulate_box_build(scene_object, spec, design, errors, deviations: dict, acc
     the yield's per-part build, tolerances.simulate_build)."""
     stages = spec.verification.stages
     if not deviations:
-        from ...spec.model import ManipulatorOffset
+        from .model import ManipulatorOffset
 
         offsets = tuple(ManipulatorOffset(manipulator=k + 1, dx=a, dy=b)
                         for k, (a, b) in enumerate(errors))

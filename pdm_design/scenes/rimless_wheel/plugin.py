@@ -3,7 +3,8 @@
 
 from __future__ import annotations
 
-from ...plugin import Scene, lazily
+from ...plugin import Scene, StageList, lazily
+from ..common import StepError, first_stream_keys
 
 MARGINS = ("over_the_top", "no_flight", "no_slip", "impact_friction", "landing",
            "nose_clearance")
@@ -20,6 +21,9 @@ class RimlessWheel(Scene):
                           "offsets": "offsets are for manipulators scenes; a rimless wheel "
                                      "takes step_errors (slope on a ramp, rise and tread on "
                                      "stairs)"}
+
+    def stage_lists(self):
+        return {"step_errors": StageList(StepError, "step")}
 
     # ------------------------------------------------------------------ the spec
     def scene_class(self):
@@ -48,6 +52,8 @@ class RimlessWheel(Scene):
 
         return QUANTITIES
 
+    stream_keys = first_stream_keys("rise", "tread")
+
     # ------------------------------------------------------------------ closed forms
     analyse = lazily(".analysis:analyse_rimless_wheel")
 
@@ -55,7 +61,7 @@ class RimlessWheel(Scene):
     def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
         from .sim import simulate_rimless_wheel
 
-        errors = spec.verification.step_errors if errors is None else errors
+        errors = spec.verification.stage_list("step_errors") if errors is None else errors
         return simulate_rimless_wheel(spec.scene, design, stages=stages, accuracy=accuracy,
                                       step_errors=errors, record_trajectory=record_trajectory)
 

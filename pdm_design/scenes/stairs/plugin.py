@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from ...plugin import Scene, StageErrors, lazily
+from ...plugin import Scene, StageErrors, StageList, lazily
 from ...plugin_tolerances import BoxAxes
+from ..common import StepError, first_stream_keys
 
 # A stairs NLP has rows for every bounce, and IPOPT needs ever more iterations for them (23 at
 # 100 bounces, 327 at 300, one start), so a design with free variables is optimised over at
@@ -23,6 +24,9 @@ class Stairs(Scene):
                                      "step_errors",
                           "allow_skips": "allow_skips is for manipulators scenes (a palm flown "
                                          "over)"}
+
+    def stage_lists(self):
+        return {"step_errors": StageList(StepError, "step")}
 
     # ------------------------------------------------------------------ the spec
     def scene_class(self):
@@ -47,6 +51,9 @@ class Stairs(Scene):
 
         return QUANTITIES
 
+    stream_keys = first_stream_keys("friction", "rise", "tread", "restitution", "launch_speed",
+                                    "launch_x")
+
     def max_yield_refusal(self, scene):
         return None
 
@@ -59,7 +66,7 @@ class Stairs(Scene):
     def simulate(self, spec, design, *, stages, accuracy, errors=None, record_trajectory=False):
         from .sim import simulate_stairs
 
-        errors = spec.verification.step_errors if errors is None else errors
+        errors = spec.verification.stage_list("step_errors") if errors is None else errors
         return simulate_stairs(spec.scene, design, stages=stages, accuracy=accuracy,
                                step_errors=errors, record_trajectory=record_trajectory)
 
@@ -189,10 +196,4 @@ class Stairs(Scene):
     table_periodic = ("impact_speed", "vertical_impact_speed", "horizontal_speed",
                       "spin", "flight_time", "drift_per_bounce")
     stage_errors = StageErrors("--step-error", "K:DRISE,DTREAD", "step_errors", "step",
-                               lambda k, a, b: _step_error(step=k, rise=a, tread=b))
-
-
-def _step_error(**fields):
-    from ...spec.model import StepError
-
-    return StepError(**fields)
+                               lambda k, a, b: StepError(step=k, rise=a, tread=b))

@@ -37,7 +37,7 @@ def simulate_box_build(scene_object, spec, design, errors, deviations: dict, acc
     quantity of an allocated box (restitution, friction, launch_speed, launch_x)."""
     stages = spec.verification.stages
     if not deviations:
-        from ...spec.model import StepError
+        from ..common import StepError
 
         step_errors = tuple(StepError(step=k + 1, rise=a, tread=b)
                             for k, (a, b) in enumerate(errors))

@@ -136,7 +136,7 @@ def stairs_geometry(scene: StairsScene, design: StairsDesign, step_errors=()) ->
 
 def _step_error_fields(e):
     if isinstance(e, dict):  # as a spec's [verification] table takes it: checked alike
-        from ....spec.model import StepError
+        from ...common import StepError
 
         e = StepError(**e)
     step = int(e.step)
