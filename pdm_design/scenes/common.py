@@ -47,6 +47,22 @@ class StepError:
     tread: Number = 0.0
 
 
+@dataclass(frozen=True, config=CONFIG)
+class SlopeStepError(StepError):
+    """A walker's ground error at one step (numbered from 1): the step's slope error in rad on a
+    ramp; on stairs its rise and tread errors in m."""
+
+    slope: Number = 0.0
+
+
+@dataclass(frozen=True, config=CONFIG)
+class SlopeError:
+    """The slope error of one step (numbered from 1) in rad, of a ground made of ramps."""
+
+    step: Annotated[int, Strict(), Field(ge=1)]
+    slope: Number = 0.0
+
+
 # The random streams of the first scenes' toleranced quantities, in the order that
 # SeedSequence(seed).spawn gave them before the streams were keyed by name (tolerances/draw.py):
 # closed, never extended, so that those quantities' builds stay the same.

@@ -4,7 +4,7 @@ scipy, casadi) are imported only when a method is called."""
 from __future__ import annotations
 
 from ...plugin import Scene, StageList, lazily
-from ..common import StepError, first_stream_keys
+from ..common import SlopeError, first_stream_keys
 
 MARGINS = ("stance_contact", "no_slip", "stability", "hip_limit")
 
@@ -34,7 +34,7 @@ class CompassGait(Scene):
                                      "takes step_errors"}
 
     def stage_lists(self):
-        return {"step_errors": StageList(StepError, "step")}
+        return {"step_errors": StageList(SlopeError, "step")}
 
     # ------------------------------------------------------------------ the spec
     def scene_class(self):

@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from ...plugin import Scene, StageList, lazily
-from ..common import StepError, first_stream_keys
+from ..common import SlopeStepError, first_stream_keys
 
 MARGINS = ("over_the_top", "no_flight", "no_slip", "impact_friction", "landing",
            "nose_clearance")
@@ -23,7 +23,7 @@ class RimlessWheel(Scene):
                                      "stairs)"}
 
     def stage_lists(self):
-        return {"step_errors": StageList(StepError, "step")}
+        return {"step_errors": StageList(SlopeStepError, "step")}
 
     # ------------------------------------------------------------------ the spec
     def scene_class(self):

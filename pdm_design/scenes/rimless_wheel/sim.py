@@ -58,9 +58,12 @@ class RimlessWheelSimulationResult(SimulationResult):
         return out
 
 
-def _errors(step_errors, stages):
-    """Per-step (slope, rise, tread) errors, arrays indexed by step 1..stages (index 0 unused)."""
+def _errors(step_errors, stages, stairs=None):
+    """Per-step (slope, rise, tread) errors, arrays indexed by step 1..stages (index 0 unused).
+    stairs: the ground (True, False), whose errors alone are taken (the other ground's refused);
+    None takes any."""
     out = {name: np.zeros(stages + 2) for name in ("slope", "rise", "tread")}
+    _refuse_other_ground(step_errors, stairs)
     for err in step_errors:
         get = err.get if isinstance(err, dict) else (lambda k, d=0.0, e=err: getattr(e, k, d))
         step = int(get("step"))
@@ -70,6 +73,22 @@ def _errors(step_errors, stages):
             for name in out:
                 out[name][step] += float(get(name, 0.0) or 0.0)
     return out
+
+
+def _refuse_other_ground(step_errors, stairs) -> None:
+    """SimulationRefused for a step error of the other ground (a slope error on stairs, a rise
+    or tread error on a ramp), which the run would otherwise leave out unsaid."""
+    if stairs is None:
+        return
+    other = ("slope",) if stairs else ("rise", "tread")
+    for err in step_errors:
+        get = err.get if isinstance(err, dict) else (lambda k, d=0.0, e=err: getattr(e, k, d))
+        found = [name for name in other if get(name, 0.0)]
+        if found:
+            ground, takes = ("stairs", "rise and tread") if stairs else ("a ramp", "slope")
+            raise SimulationRefused(
+                f"step_errors: step {get('step')} gives a {' and '.join(found)} error, but the "
+                f"wheel rolls on {ground}, whose steps take {takes} errors only")
 
 
 def check_wheel_scales(scene: RimlessWheelScene, design: RimlessWheelDesign) -> None:
@@ -136,7 +155,7 @@ def simulate_rimless_wheel(scene: RimlessWheelScene, design: RimlessWheelDesign,
     if missing:
         raise SimulationRefused("; ".join(missing))
     wh, geo, _ = resolve(scene, design)
-    ground = _Ground(scene, design, wh, geo, _errors(step_errors, stages))
+    ground = _Ground(scene, design, wh, geo, _errors(step_errors, stages, scene.ground == "stairs"))
     run = _Run(scene, wh, ground, acc, record_trajectory, trajectory_samples, trajectory_limit)
     if spoke_lengths is not None:
         run.lengths = [float(v) for v in spoke_lengths]
