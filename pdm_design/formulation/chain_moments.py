@@ -131,6 +131,13 @@ class ChainPieces:
             previous += list(range(at - nr, at)) if crossed else [-1] * len(end_names)
         self.previous = previous
         self._taylor: dict = {}
+        self.shapes = shapes
+        # the state's entries that drift (None: the walk is not shortened; _drift)
+        self.drift = None
+        if not neighbours and self.step is not None:
+            from .chain_tail import _drift
+
+            self.drift = _drift(self.step, shapes)
 
     def compose(self, u, pieces=None, blocks: int = 1):
         """[g, variance(, cross)] of every row, MX of the MX column u; with pieces (head,
@@ -273,6 +280,13 @@ def second_order_term(pieces: ChainPieces, reduce, args):
                                                        *_second(J, v))])
     vm, eps = ca.MX.sym("v", nv), ca.MX.sym("eps", nv)
     moving = tuple(bool(n) for n in np.asarray(ca.sum2(ca.DM(J.sparsity(), 1.0))).ravel())
+    if pieces.drift is not None:  # walked call by call, the converged tail in closed form
+        from .chain_tail import Walked
+
+        plain = Walked(pieces, reduce, series, nv, None, u.numel())
+        taylor = Walked(pieces, reduce, series, nv, moving, u.numel())
+        _REMEMBERED.extend([plain, taylor])
+        return _differentiated(vm, plain(vm), taylor)(v)
     outs = pieces.compose(series(vm), pieces.taylor(nv, moving), 1 + nv + len(_pairs(nv)))
     g, var, *cross = [_series(o, eps) for o in outs]
     b = reduce(g, ca.sqrt(var + VARIANCE_FLOOR), *cross)
