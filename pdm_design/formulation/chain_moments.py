@@ -19,7 +19,8 @@ The chain is three SX Functions (the first stage, a call that carries the state 
 call) with the middle one iterated by mapaccum (ChainPieces): one graph at any number of
 stages. In an NLP the scene's bound is one node of the free symbols (second_order_term): its
 value the plain chain's, its gradient and Hessian carried along the chain as second-order
-Taylor coefficients (docs/optimizer.md section 10, "Cost").
+Taylor coefficients (docs/optimizer.md section 10, "Cost"); without neighbours the chain is
+walked call by call until it settles and its tail added in closed form (chain_tail.py).
 
 The failure probability: the union bound sum_i Phi(-beta_i) (failure_bound, nines), or
 Hunter's bound over each row and its own one call before (tree_nines, log_new_failure), in
