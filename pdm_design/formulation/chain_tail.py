@@ -32,7 +32,7 @@ TOL = 1e-14  # the bound on X_N's and D's relative change still to come where a 
 TOL_DERIVATIVES = 1e-11
 ROUNDING = 4e-16  # a relative change this small is rounding: settled
 FLOOR = 1e-9  # of a block's largest entry: the size an entry near 0 is measured against
-MIN_WALK = 4  # calls walked before the first test (three rows to fit and a ratio)
+MIN_WALK = 4  # calls walked before a stop
 
 
 def drift_entries(shapes, T) -> list[int]:
@@ -119,8 +119,9 @@ class _Settling:
 
 def walk(pieces, functions, u, blocks: int, tol: float = TOL):
     """Each output column's rows (g, variance) as arrays (blocks, rows) of the chain `pieces`
-    at the numbers u: the calls walked until the state settles (_Settling), the rest of the
-    middle calls fitted (degree 2 in the call) and the last call at the drifted state.
+    at the numbers u, and the calls walked: the calls walked until the state settles
+    (_Settling), the rest of the middle calls on the drift's line (_line) and the last call
+    at its end.
     functions: (head, step, tail), pieces' own or their Taylor versions (`blocks` stacked
     coefficients in each input and output)."""
     head, step, tail = functions
@@ -135,10 +136,8 @@ def walk(pieces, functions, u, blocks: int, tol: float = TOL):
         walked += 1
         for column, o in zip(columns, out[1:], strict=True):
             column.append(_blocked(o, blocks))
-        if walked >= MIN_WALK and walked < middle and settling.settled(X):
+        if settling.settled(X) and MIN_WALK <= walked < middle:
             break
-        if walked < MIN_WALK:
-            settling.settled(X)
     left = middle - walked
     if left:
         P = np.tile(np.isin(np.arange(X.size // blocks), pieces.drift), blocks)
