@@ -30,7 +30,10 @@ def row():
 def _pieces(spec, active, stages):
     chain = manip.Chain(spec.scene, active)
     sizes = (len(manip.DESIGN), sum(active[0]), sum(active[1]))
-    return cm.ChainPieces(chain.first, chain.middle, stages, *sizes, last=chain.last)
+    pieces = cm.ChainPieces(chain.first, chain.middle, stages, *sizes, last=chain.last)
+    if pieces.drift is None:  # a short row is one graph in the NLP; its walk is tested too
+        pieces.drift = chain_tail._drift(pieces.step, pieces.shapes)
+    return pieces
 
 
 def _walked_to_the_end(pieces, x, each, lot):

@@ -35,6 +35,10 @@ import casadi as ca
 
 FAILURE_FLOOR = 1e-300  # the union bound never below this: its logarithm stays finite
 VARIANCE_FLOOR = 1e-24  # added to every row's variance: a row no deviation moves has sd 1e-12
+# A row of more calls is walked until it settles, its tail in closed form (chain_tail.py); a
+# shorter one is one mapaccum graph (a walk, a Python call a call, could not stop much before
+# its end: the long row settles in about 60 calls)
+WALKED_FROM = 40
 
 
 def sigmas(tolerances, parts, lots, scale=1.0):
@@ -135,7 +139,7 @@ class ChainPieces:
         self.shapes = shapes
         # the state's entries that drift (None: the walk is not shortened; _drift)
         self.drift = None
-        if not neighbours and self.step is not None:
+        if not neighbours and calls > WALKED_FROM:
             from .chain_tail import _drift
 
             self.drift = _drift(self.step, shapes)
