@@ -1,19 +1,21 @@
 """The cost of `max_yield` and of a yield target on long rows, this code against an older
 checkout in the same run; writes results/bench_max_yield_speed.md.
 
-Each case runs `python -m pdm_design optimize SPEC --format json` as a subprocess under
-/usr/bin/time -v (wall time and peak resident memory, end to end: import, NLP build, every
-IPOPT start, the tie-break, the checks and the simulator's verification), once with this
-checkout and once with the old one (--old DIR: its own PYTHONPATH), on
-problems/manipulators_long_row_yield.toml at 20, 100 and 1,000 stages ([verification] stages
-rewritten in a copy) and problems/manipulators_yield_target.toml (20 stages). The old code is
-not run at 1,000 stages (its unrolled chain grows with the row: 2.3 GB at 100 stages). Each
-answer's design is then built `--builds` times with the spec's seed and judged as `pdm-design
-yield` judges it (tolerances.yield_.yield_of, this checkout's), both designs on the same builds.
-The machine is shared: the load average is written beside every run, and the ratios are the
-figures to read.
+Each case runs `python -m pdm_design optimize SPEC --format json [--no-verify]` as a
+subprocess under /usr/bin/time -v (wall time, CPU seconds (user + system) and peak resident
+memory, end to end: import, NLP build, every IPOPT start, the tie-break, the checks and,
+without --no-verify, the simulator's verification), once with this checkout and once with the
+old one (--old DIR: its own PYTHONPATH), on problems/manipulators_long_row_yield.toml at 20,
+100 and 1,000 stages ([verification] stages rewritten in a copy) and
+problems/manipulators_yield_target.toml (20 stages). A run longer than --timeout seconds is
+stopped and reported as such. Each answer's design is then built `--builds` times with the
+spec's seed and judged as `pdm-design yield` judges it (tolerances.yield_.yield_of, this
+checkout's), both designs on the same builds (one run where the designs agree to 12 digits).
+The machine is shared: the load average is written beside every run, and CPU seconds beside
+the wall's.
 
     python results/bench_max_yield_speed.py --old /path/to/old/checkout [--builds N]
+        [--cases 0,1,2] [--no-verify] [--timeout S]
 """
 
 from __future__ import annotations
@@ -32,8 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 LONG = "problems/manipulators_long_row_yield.toml"
 TARGET = "problems/manipulators_yield_target.toml"
-CASES = [(LONG, 20, True), (LONG, 100, True), (LONG, 1000, False), (TARGET, 20, True)]
-TIMEOUT = 1800
+CASES = [(LONG, 20, True), (LONG, 100, True), (LONG, 1000, True), (TARGET, 20, True)]
 
 
 def spec_copy(source: str, stages: int, folder: Path) -> Path:
@@ -44,24 +45,27 @@ def spec_copy(source: str, stages: int, folder: Path) -> Path:
     return path
 
 
-def optimize(checkout: Path, spec: Path) -> dict:
-    """Wall seconds, peak RSS (MB), the JSON answer and the load around one CLI run."""
+def optimize(checkout: Path, spec: Path, extra: list[str], timeout: float) -> dict:
+    """Wall and CPU seconds, peak RSS (MB), the JSON answer and the load around one CLI run."""
     env = dict(os.environ, PYTHONPATH=str(checkout))
     load = os.getloadavg()[0]
     tic = time.perf_counter()
     try:
         run = subprocess.run(["/usr/bin/time", "-v", sys.executable, "-m", "pdm_design",
-                              "optimize", str(spec), "--format", "json"], cwd=checkout, env=env,
-                             capture_output=True, text=True, timeout=TIMEOUT)
+                              "optimize", str(spec), "--format", "json", *extra], cwd=checkout,
+                             env=env, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
-        return {"wall": None, "rss": None, "answer": None, "load": load}
+        return {"wall": None, "rss": None, "cpu": None, "answer": None, "load": load,
+                "stopped": timeout}
     wall = time.perf_counter() - tic
     rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", run.stderr)
+    cpu = sum(float(m) for m in re.findall(r"(?:User|System) time \(seconds\): ([\d.]+)",
+                                           run.stderr))
     try:
         answer = json.loads(run.stdout)
     except json.JSONDecodeError:
         answer = None
-    return {"wall": wall, "rss": int(rss.group(1)) / 1024.0 if rss else None,
+    return {"wall": wall, "rss": int(rss.group(1)) / 1024.0 if rss else None, "cpu": cpu,
             "answer": answer, "load": (load + os.getloadavg()[0]) / 2.0}
 
 
@@ -76,6 +80,15 @@ def monte_carlo(spec_path: Path, design: dict, builds: int):
     return yield_of(spec.scene, spec.design_at(design), tolerances, builds=builds,
                     stages=spec.verification.stages, seed=tolerances.seed,
                     confirm=tolerances.confirm, scales=(), sensitivity_samples=0)
+
+
+def _seconds(run: dict | None) -> str:
+    """Wall seconds (CPU seconds), or the limit a stopped run reached."""
+    if run is None:
+        return "-"
+    if run.get("stopped"):
+        return f"stopped at {run['stopped']:.0f}"
+    return f"{cell(run, 'wall', '{:.1f}')} ({cell(run, 'cpu', '{:.1f}')})"
 
 
 def cell(run: dict | None, key: str, fmt: str) -> str:
@@ -104,6 +117,8 @@ def main() -> None:
     parser.add_argument("--old", type=Path, required=True)
     parser.add_argument("--builds", type=int, default=10000)
     parser.add_argument("--cases", default="all", help="'all' or indices, e.g. 0,1")
+    parser.add_argument("--no-verify", action="store_true", help="optimize --no-verify")
+    parser.add_argument("--timeout", type=float, default=1800.0, help="seconds a run may take")
     parser.add_argument("--out", type=Path, default=ROOT / "results" / "bench_max_yield_speed.md")
     args = parser.parse_args()
     chosen = range(len(CASES)) if args.cases == "all" else [int(i) for i in
@@ -113,12 +128,17 @@ def main() -> None:
         for i in chosen:
             source, stages, with_old = CASES[i]
             spec = spec_copy(source, stages, Path(tmp))
-            old = optimize(args.old, spec) if with_old else None
-            new = optimize(ROOT, spec)
-            yields = {}
+            extra = ["--no-verify"] if args.no_verify else []
+            old = optimize(args.old, spec, extra, args.timeout) if with_old else None
+            new = optimize(ROOT, spec, extra, args.timeout)
+            yields, seen = {}, {}
             for label, run in (("old", old), ("new", new)):
                 if run is not None and run["answer"] is not None:
-                    yields[label] = monte_carlo(spec, run["answer"]["design"], args.builds)
+                    design = run["answer"]["design"]
+                    key = tuple(f"{design[n]:.12e}" for n in sorted(design))
+                    if key not in seen:
+                        seen[key] = monte_carlo(spec, design, args.builds)
+                    yields[label] = seen[key]
             rows.append((source, stages, old, new, yields))
             print(source, stages, cell(old, "wall", "{:.1f}"), cell(new, "wall", "{:.1f}"),
                   flush=True)
@@ -129,27 +149,28 @@ def main() -> None:
 def report(rows, builds, command) -> str:
     lines = ["# max_yield and a yield target on long rows: this code against the old", "",
              f"Command: `{command}`. End to end `pdm-design optimize --format json` under "
-             "/usr/bin/time -v, old and new in the same run; the load average (2 cores, "
-             "shared) is the mean of its values before and after each run.", "",
-             "| spec | stages | old s | new s | old / new | old MB | new MB | old / new | "
-             "load old, new |", "|---|---|---|---|---|---|---|---|---|"]
+             "/usr/bin/time -v, old and new in the same run; CPU s is user + system time; the "
+             "load average (2 cores, shared) is the mean of its values before and after each "
+             "run.", "",
+             "| spec | stages | old s (CPU s) | new s (CPU s) | old / new | old MB | new MB | "
+             "old / new | load old, new |", "|---|---|---|---|---|---|---|---|---|"]
     for source, stages, old, new, _ in rows:
         ratio_t = (f"{old['wall'] / new['wall']:.1f}" if old and old["wall"] and new["wall"]
                    else "-")
         ratio_m = (f"{old['rss'] / new['rss']:.1f}" if old and old["rss"] and new["rss"]
                    else "-")
-        lines.append(f"| `{Path(source).name}` | {stages} | {cell(old, 'wall', '{:.1f}')} | "
-                     f"{cell(new, 'wall', '{:.1f}')} | {ratio_t} | {cell(old, 'rss', '{:.0f}')}"
-                     f" | {cell(new, 'rss', '{:.0f}')} | {ratio_m} | "
-                     f"{cell(old, 'load', '{:.1f}')}, {cell(new, 'load', '{:.1f}')} |")
+        lines.append(f"| `{Path(source).name}` | {stages} | {_seconds(old)} | {_seconds(new)} | "
+                     f"{ratio_t} | {cell(old, 'rss', '{:.0f}')} | {cell(new, 'rss', '{:.0f}')} | "
+                     f"{ratio_m} | {cell(old, 'load', '{:.1f}')}, {cell(new, 'load', '{:.1f}')} |")
     lines += ["", "Answers (the design to 10 digits, the solver's own counts) and the Monte "
               f"Carlo yield of each design on the same {builds} builds (95 % Wilson interval):",
               ""]
     for source, stages, old, new, yields in rows:
         lines.append(f"- `{Path(source).name}`, {stages} stages:")
         for label, run in (("old", old), ("new", new)):
-            if run is None:
-                lines.append(f"  - {label}: not run")
+            if run is None or run.get("stopped"):
+                lines.append(f"  - {label}: " + ("not run" if run is None else
+                                                 f"stopped after {run['stopped']:.0f} s"))
                 continue
             y = yields.get(label)
             mc = (f"; MC yield {100 * y.estimate:.2f} % ({100 * y.ci_low:.2f} - "

@@ -19,7 +19,8 @@ The chain is three SX Functions (the first stage, a call that carries the state 
 call) with the middle one iterated by mapaccum (ChainPieces): one graph at any number of
 stages. In an NLP the scene's bound is one node of the free symbols (second_order_term): its
 value the plain chain's, its gradient and Hessian carried along the chain as second-order
-Taylor coefficients (docs/optimizer.md section 10, "Cost").
+Taylor coefficients (docs/optimizer.md section 10, "Cost"); without neighbours the chain is
+walked call by call until it settles and its tail added in closed form (chain_tail.py).
 
 The failure probability: the union bound sum_i Phi(-beta_i) (failure_bound, nines), or
 Hunter's bound over each row and its own one call before (tree_nines, log_new_failure), in
@@ -34,6 +35,10 @@ import casadi as ca
 
 FAILURE_FLOOR = 1e-300  # the union bound never below this: its logarithm stays finite
 VARIANCE_FLOOR = 1e-24  # added to every row's variance: a row no deviation moves has sd 1e-12
+# A row of more calls is walked until it settles, its tail in closed form (chain_tail.py); a
+# shorter one is one mapaccum graph (a walk, a Python call a call, could not stop much before
+# its end: the long row settles in about 60 calls)
+WALKED_FROM = 40
 
 
 def sigmas(tolerances, parts, lots, scale=1.0):
@@ -131,6 +136,13 @@ class ChainPieces:
             previous += list(range(at - nr, at)) if crossed else [-1] * len(end_names)
         self.previous = previous
         self._taylor: dict = {}
+        self.shapes = shapes
+        # the state's entries that drift (None: the walk is not shortened; _drift)
+        self.drift = None
+        if not neighbours and calls > WALKED_FROM:
+            from .chain_tail import _drift
+
+            self.drift = _drift(self.step, shapes)
 
     def compose(self, u, pieces=None, blocks: int = 1):
         """[g, variance(, cross)] of every row, MX of the MX column u; with pieces (head,
@@ -273,6 +285,13 @@ def second_order_term(pieces: ChainPieces, reduce, args):
                                                        *_second(J, v))])
     vm, eps = ca.MX.sym("v", nv), ca.MX.sym("eps", nv)
     moving = tuple(bool(n) for n in np.asarray(ca.sum2(ca.DM(J.sparsity(), 1.0))).ravel())
+    if pieces.drift is not None:  # walked call by call, the converged tail in closed form
+        from .chain_tail import Walked
+
+        plain = Walked(pieces, reduce, series, nv, None, u.numel())
+        taylor = Walked(pieces, reduce, series, nv, moving, u.numel())
+        _REMEMBERED.extend([plain, taylor])
+        return _differentiated(vm, plain(vm), taylor)(v)
     outs = pieces.compose(series(vm), pieces.taylor(nv, moving), 1 + nv + len(_pairs(nv)))
     g, var, *cross = [_series(o, eps) for o in outs]
     b = reduce(g, ca.sqrt(var + VARIANCE_FLOOR), *cross)

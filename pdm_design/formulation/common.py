@@ -137,6 +137,10 @@ class SceneModel:
     # Stacking shares IPOPT's per-iteration overhead, so it pays only where that overhead, not the
     # rows' evaluation, is an iteration's cost, and where the starts need alike iteration counts.
     stack_starts: bool = True
+    # Whether optimize screens the multistart (solve/screen.py): IPOPT runs from the guess and
+    # from only those sampled designs no better sample lies near, for an objective whose every
+    # iteration costs a long walk (a row's yield), not from every start.
+    screened_starts: bool = False
     # a term maximised besides the [objective] table's (None: none): the allocated scale's
     # log s of a yield target (formulation/yield_target.py)
     extra_objective: object = None
@@ -175,6 +179,7 @@ class Formulation:
     deferred: object = None
     deferred_conditions: tuple[ConditionInfo, ...] = ()
     stack_starts: bool = True  # SceneModel.stack_starts
+    screened_starts: bool = False  # SceneModel.screened_starts
     # scene numbers taken as parameters (formulation/parametric.py), after the backoff in p;
     # a generic Formulation (aux_init of (design, numbers), norms_of) until `bind`
     parameter_names: tuple[str, ...] = ()
@@ -392,6 +397,7 @@ def assemble(spec, model: SceneModel, *, key: str, bounds: dict,
         tolerance_index=tol_index, margin_index=m_index, fixed=fixed,
         derived_names=derived_names, norms=norms, scenario_source=model.scenario,
         deferred=deferred, deferred_conditions=deferred_infos, stack_starts=model.stack_starts,
+        screened_starts=model.screened_starts,
         parameter_names=scene_names, norms_of=norms_of if parameters is not None else None,
     )
 

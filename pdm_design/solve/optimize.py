@@ -16,6 +16,7 @@ from ..status import Status
 from . import check, elastic
 from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
 from .result import LinearisedTolerance, OptimizeResult, Solution, SolverStats
+from .screen import SAMPLE, screened
 from .stacked import groups, solve_stacked, stacked_solver_for
 from .tiebreak import nearest_optimum
 from .words import bounds_hint, normalised_margin, summarise
@@ -145,12 +146,19 @@ def _start_points(spec, form, p, starts, seed, start_from):
     guess = {n: spec.design[n].guess for n in names}
     lows = [spec.design[n].min for n in names]
     highs = [spec.design[n].max for n in names]
-    designs = start_designs(names, lows, highs, guess, max(starts, 1), seed)
+    screen = form.screened_starts and starts > 1 and names
+    designs = start_designs(names, lows, highs, guess, SAMPLE if screen else max(starts, 1),
+                            seed)
+    always = 1  # the guess
     if start_from:  # first, so that it is tried even with one start
         designs = [{n: float(start_from.get(n, guess[n])) for n in names}] + designs
+        always = 2
     anchor = form.defined_anchor(guess, lambda: designs + start_designs(
         names, lows, highs, guess, ANCHOR_CANDIDATES, seed + 1), p)
-    return guess, lows, highs, form.defined_starts(designs, anchor, p)
+    x_starts = form.defined_starts(designs, anchor, p)
+    if screen:  # the starts worth a run of the sample (solve/screen.py)
+        x_starts = screened(form, p, x_starts, always, starts)
+    return guess, lows, highs, x_starts
 
 
 def _stacks(form, was_cached: bool) -> bool:

@@ -121,20 +121,27 @@ def pinned(form, run, p, tol: float, lows, highs) -> bool:
         return False
     jac, hess = _derivatives(form)
     equality = form.lbg == form.ubg
-    rows = equality | (np.abs(lam_g) > ACTIVE * largest)
-    bounds = np.abs(lam_x) > ACTIVE * largest
-    A = np.vstack([np.asarray(jac(x, p), float)[rows], np.eye(x.size)[bounds]])
+    # active: a multiplier above ACTIVE of the largest, and of the objective (at an interior
+    # optimum every multiplier is IPOPT's barrier residue, 1e-11, none of them a row's)
+    floor = ACTIVE * max(largest, abs(run.f))
+    rows = equality | (np.abs(lam_g) > floor)
+    bounds = np.abs(lam_x) > floor
+    A = np.vstack([np.asarray(jac(x, p), float)[rows], np.eye(x.size)[bounds],
+                   np.zeros((0, x.size))])
     slack = (RELATIVE + 10.0) * tol * max(abs(run.f), ABSOLUTE)
     lam = np.concatenate([np.abs(lam_g[rows]), np.abs(lam_x[bounds])])
     reach = np.where(np.concatenate([equality[rows], np.zeros(bounds.sum(), bool)]), 0.0,
                      slack / np.where(lam > 0.0, lam, np.inf))
     n = form.n_design
     # first order: off the active rows, d = pinv(A) (A d), each |A_i d| <= slack / |lam_i|
-    first = np.abs(np.linalg.pinv(A)[:n]) @ reach
+    first = np.abs(np.linalg.pinv(A)[:n]) @ reach if A.shape[0] else np.zeros(n)
     # second order: along them, d = N z with z' H z / 2 <= slack (H: the Lagrangian's Hessian
     # on the null space N of A), so |d_k| <= sqrt(2 slack c' H^+ c), c = N' e_k
-    u, sv, vt = np.linalg.svd(A)
-    null = vt[int(np.sum(sv > 1e-9 * sv[0])):].T
+    if A.shape[0]:
+        u, sv, vt = np.linalg.svd(A)
+        null = vt[int(np.sum(sv > 1e-9 * sv[0])):].T
+    else:  # an interior optimum: every direction is along the (no) active rows
+        null = np.eye(x.size)
     second = np.zeros(n)
     if null.shape[1]:
         full = np.asarray(hess(x, p, lam_g), float)

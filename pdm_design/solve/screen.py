@@ -1,0 +1,84 @@
+"""The screened multistart: IPOPT only from the sampled designs that can lead somewhere new.
+
+Where every IPOPT iteration walks a long chain (a row's linearised yield, docs/optimizer.md
+section 10) the 8 starts of the plain multistart, each run to convergence, are most of the
+cost, and on the yield's smooth landscape they end at one optimum. Multi-level single linkage
+(Rinnooy Kan and Timmer 1987) keeps the multistart's reach at the cost of a sample: SAMPLE
+designs (the guess, then the multistart's own scrambled-Sobol points and more of them) are
+evaluated (the objective and the rows, no derivatives), and a local search starts from a
+sampled design only when no better one lies within the critical distance
+
+    r = pi^(-1/2) (Gamma(1 + n / 2) SIGMA log N / N)^(1 / n)
+
+of it (in units of each variable's bounds; n free variables, N designs sampled; SIGMA = 4,
+above which the method's expected number of local searches stays finite as N grows): a
+design with a better one that near lies in a basin a better start already reaches. The guess
+(and a `start_from` design) always runs, better designs first, at most `starts` runs in all.
+Deterministic: the sample is fixed by the seed, so one spec gives one set of starts and one
+answer every run (the tie-break still picks one design of a flat optimum).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+SAMPLE = 32  # designs sampled
+SIGMA = 4.0
+
+
+def radius(n: int, sampled: int) -> float:
+    """MLSL's critical distance in the unit cube (module docstring)."""
+    if n == 0 or sampled < 2:
+        return math.inf
+    volume = math.gamma(1.0 + n / 2.0) * SIGMA * math.log(sampled) / sampled
+    return volume ** (1.0 / n) / math.sqrt(math.pi)
+
+
+def screened(form, p, sample: list[np.ndarray], always: int, starts: int) -> list[np.ndarray]:
+    """The NLP start points to run of `sample` (NLP start vectors; the first `always` run
+    whatever the sample shows): MLSL's rule (module docstring), better designs first."""
+    from .tiebreak import form_objective
+
+    n = form.n_design
+    xs = np.column_stack(sample)
+    f = np.asarray(form_objective(form).map(len(sample))(xs, p), float).ravel()
+    g = np.asarray(_rows(form).map(len(sample))(xs, p), float)
+    violation = np.max(np.maximum(form.lbg[:, None] - g, g - form.ubg[:, None]), axis=0,
+                       initial=0.0)
+    usable = np.isfinite(f) & np.isfinite(violation)
+    # better: feasible (to IPOPT's scale of a row) first, then the lower objective
+    order = sorted(range(len(sample)), key=lambda k: (not usable[k], violation[k] > 1e-6,
+                                                       violation[k] if violation[k] > 1e-6
+                                                       else f[k]))
+    rank = np.empty(len(sample), int)
+    rank[order] = np.arange(len(sample))
+    span = form.ubx[:n] - form.lbx[:n]
+    span = np.where(np.isfinite(span) & (span > 0.0), span, 1.0)
+    unit = (xs[:n] - form.lbx[:n, None]) / span[:, None]
+    r = radius(n, len(sample))
+    chosen = list(range(min(always, len(sample))))
+    for k in order:
+        if len(chosen) >= starts:
+            break
+        if k in chosen or not usable[k]:
+            continue
+        near = np.sqrt(np.sum((unit - unit[:, [k]]) ** 2, axis=0)) <= r
+        if not np.any(near & (rank < rank[k])):
+            chosen.append(k)
+    return [sample[k] for k in chosen]
+
+
+def _rows(form):
+    """The NLP's rows as a Function (x, p) (cached per formulation)."""
+    import casadi as ca
+
+    from .tiebreak import _OBJECTIVES
+
+    key = form.key + " rows"
+    fn = _OBJECTIVES.get(key)
+    if fn is None:
+        fn = ca.Function("g", [form.nlp["x"], form.nlp["p"]], [form.nlp["g"]])
+        _OBJECTIVES[key] = fn
+    return fn

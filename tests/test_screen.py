@@ -1,0 +1,67 @@
+"""The screened multistart (solve/screen.py): the critical distance against its closed form,
+the rule on a landscape of two basins, and the long row's answer against the plain 8-start
+multistart's."""
+
+import importlib
+import math
+import re
+import tomllib
+from pathlib import Path
+from types import SimpleNamespace
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from pdm_design.solve import screen
+from pdm_design.solve.sobol import sobol
+from pdm_design.spec.loader import parse_spec
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+
+
+def test_the_critical_distance_is_mlsls():
+    # n = 2: r = (Gamma(2) 4 log N / (pi N))^(1/2); n = 1: Gamma(3/2) = sqrt(pi) / 2
+    assert screen.radius(2, 32) == pytest.approx(math.sqrt(4 * math.log(32) / (math.pi * 32)))
+    assert screen.radius(1, 32) == pytest.approx(0.5 * 4 * math.log(32) / 32)
+    assert screen.radius(0, 32) == math.inf
+
+
+def _two_basins():
+    """A form-like NLP in [0, 1]^2: two wells, the deeper at (0.2, 0.2), the other at
+    (0.8, 0.8), 0.85 apart (beyond the critical distance 0.37 of 32 designs)."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 0)
+    f = -(ca.exp(-ca.sumsqr(x - 0.2) / 0.02) + 0.9 * ca.exp(-ca.sumsqr(x - 0.8) / 0.02))
+    return SimpleNamespace(key="two basins", n_design=2, nlp={"x": x, "p": p, "f": f,
+                                                              "g": ca.SX(0, 1)},
+                           lbx=np.zeros(2), ubx=np.ones(2), lbg=np.zeros(0), ubg=np.zeros(0))
+
+
+def test_each_basin_gets_a_start_and_a_basin_one_only():
+    form = _two_basins()
+    sample = [np.array([0.5, 0.5])] + list(sobol(2, 31, 0))  # the guess, then the sample
+    chosen = screen.screened(form, np.zeros(0), sample, always=1, starts=8)
+    assert np.allclose(chosen[0], [0.5, 0.5])  # the guess always runs, first
+    near = [np.linalg.norm(c - 0.2) < np.linalg.norm(c - 0.8) for c in chosen[1:]]
+    assert any(near) and not all(near)  # a start in each basin
+    # no start with a better sampled design within the critical distance
+    values = ca.Function("f", [form.nlp["x"]], [form.nlp["f"]])
+    r = screen.radius(2, len(sample))
+    for c in chosen[1:]:
+        better = [s for s in sample if float(values(s)) < float(values(c))]
+        assert all(np.linalg.norm(s - c) > r for s in better)
+
+
+def test_the_screened_answer_is_the_eight_starts_answer(monkeypatch):
+    """The long row at 20 stages: the screened multistart (one start here) and the plain one
+    (8 starts, none screened) give the same design."""
+    module = importlib.import_module("pdm_design.solve.optimize")
+    text = (PROBLEMS / "manipulators_long_row_yield.toml").read_text()
+    spec = parse_spec(tomllib.loads(re.sub(r"(?m)^stages = \d+", "stages = 20", text)))
+    screened = module.optimize(spec)
+    monkeypatch.setattr(module, "SAMPLE", 8)
+    monkeypatch.setattr(module, "screened", lambda form, p, xs, always, starts: xs)
+    plain = module.optimize(spec)
+    assert plain.stats.starts == 8 and screened.stats.starts < 8
+    for name in ("alpha", "beta"):
+        assert screened.design[name] == pytest.approx(plain.design[name], abs=1e-7)
