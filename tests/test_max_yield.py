@@ -161,6 +161,7 @@ def test_allocation_for_a_yield_target_matches_the_exact_one_quantity_answer(lon
         allocate_for_yield(scene, design, wide, stages=stages)
 
 
+@pytest.mark.slow  # a 100-stage yield target sized, then its Monte Carlo run twice: about 27 s
 def test_yield_sizes_allocated_tolerances_for_the_target_and_reproduces_its_builds(tmp_path):
     # `pdm-design yield` of a row with the pivots to allocate and a yield target: the table
     # shows the allocated values (the allocation's), and a failing build's simulate command

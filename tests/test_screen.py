@@ -52,6 +52,7 @@ def test_each_basin_gets_a_start_and_a_basin_one_only():
         assert all(np.linalg.norm(s - c) > r for s in better)
 
 
+@pytest.mark.slow  # the eight starts solved besides the screened one: about 11 s
 def test_the_screened_answer_is_the_eight_starts_answer(monkeypatch):
     """The long row at 20 stages: the screened multistart (one start here) and the plain one
     (8 starts, none screened) give the same design."""

@@ -27,7 +27,7 @@ NODES = 801
 BINS = (40, 40)  # stance-energy bins, nose-distance bins
 COARSE = (30, 30)  # the second resolution of the interval
 SPAN = 8.0  # sigmas of the rise error integrated over
-CHUNK = 64  # states whose transitions are computed together
+CHUNK = 16  # states whose transitions are computed together
 
 
 def _stairs(scene, design):
