@@ -64,6 +64,7 @@ def test_flux_sampling_agrees_with_monte_carlo():
     assert found["ci_high"] / found["ci_low"] < 1.5
 
 
+@pytest.mark.slow  # 10,000 walkers of 100 steps and the flux sampling: about 13 s
 def test_rare_falls_agree_with_the_yield_over_a_hundred_steps():
     """t = 0.007 rad: falls too rare for walkers walked until they fall (thousands of steps);
     over 100 steps the yield of 2000 walkers on the step map sees a few dozen. With the hazard
