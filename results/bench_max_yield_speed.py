@@ -7,7 +7,7 @@ memory, end to end: import, NLP build, every IPOPT start, the tie-break, the che
 without --no-verify, the simulator's verification), once with this checkout and once with the
 old one (--old DIR: its own PYTHONPATH), on problems/manipulators_long_row_yield.toml at 20,
 100 and 1,000 stages ([verification] stages rewritten in a copy) and
-problems/manipulators_yield_target.toml (20 stages). A run longer than --timeout seconds is
+problems/manipulators_yield_target.toml (20 and 100 stages). A run longer than --timeout seconds is
 stopped and reported as such. Each answer's design is then built `--builds` times with the
 spec's seed and judged as `pdm-design yield` judges it (tolerances.yield_.yield_of, this
 checkout's), both designs on the same builds (one run where the designs agree to 12 digits).
@@ -34,7 +34,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 LONG = "problems/manipulators_long_row_yield.toml"
 TARGET = "problems/manipulators_yield_target.toml"
-CASES = [(LONG, 20, True), (LONG, 100, True), (LONG, 1000, True), (TARGET, 20, True)]
+CASES = [(LONG, 20, True), (LONG, 100, True), (LONG, 1000, True), (TARGET, 20, True),
+         (TARGET, 100, True)]
 
 
 def spec_copy(source: str, stages: int, folder: Path) -> Path:

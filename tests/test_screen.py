@@ -66,3 +66,57 @@ def test_the_screened_answer_is_the_eight_starts_answer(monkeypatch):
     assert plain.stats.starts == 8 and screened.stats.starts < 8
     for name in ("alpha", "beta"):
         assert screened.design[name] == pytest.approx(plain.design[name], abs=1e-7)
+
+
+def _target_spec(stages: int):
+    text = (PROBLEMS / "manipulators_yield_target.toml").read_text()
+    return parse_spec(tomllib.loads(re.sub(r"(?m)^stages = \d+", f"stages = {stages}", text)))
+
+
+def test_a_yield_targets_score_is_its_largest_scale_meeting_the_target():
+    """Each sampled design's score: its nines row (the linearised yield against the target)
+    evaluated directly at the score is on its bound, and broken a millionth above it."""
+    from pdm_design.formulation import formulate
+    from pdm_design.solve.ipopt import start_designs
+
+    spec = _target_spec(20)
+    form = formulate(spec)
+    names = form.design_names
+    guess = {n: spec.design[n].guess for n in names}
+    designs = start_designs(names, [spec.design[n].min for n in names],
+                            [spec.design[n].max for n in names], guess, 32, 0)
+    xs = np.column_stack(form.defined_starts(designs, guess, form.p_default))
+    scales = screen.target_scales(form, form.p_default, xs)
+    k, row = form.x_names.index(screen.AUX), screen.target_row(form)
+    rows = ca.Function("g", [form.nlp["x"], form.nlp["p"]], [form.nlp["g"]])
+    met = 0
+    for j, s in enumerate(scales):
+        x = xs[:, j].copy()
+        x[k] = s
+        at = float(rows(x, form.p_default)[row])
+        if s <= 1.0001e-9:  # held nowhere: broken at the smallest scale
+            assert not at >= 0.0
+            continue
+        met += 1
+        x[k] = s * (1.0 + 1e-6)
+        assert at == pytest.approx(0.0, abs=1e-9)
+        assert float(rows(x, form.p_default)[row]) < 0.0
+    assert met >= 2
+
+
+@pytest.mark.slow  # the eight starts solved besides the screened one: about 10 s
+def test_the_screened_yield_target_is_the_eight_starts_answer(monkeypatch):
+    """The yield target at 20 stages: the screened multistart (each sampled design scored at
+    its largest scale meeting the target) and the plain one (8 starts) agree."""
+    module = importlib.import_module("pdm_design.solve.optimize")
+    spec = _target_spec(20)
+    screened = module.optimize(spec)
+    monkeypatch.setattr(module, "SAMPLE", 8)
+    monkeypatch.setattr(module, "screened", lambda form, p, xs, always, starts: xs)
+    plain = module.optimize(spec)
+    assert plain.stats.starts == 8 and screened.stats.starts < 8
+    for name in ("alpha", "beta"):
+        assert screened.design[name] == pytest.approx(plain.design[name], abs=1e-7)
+    allocated = {t["quantity"]: t["value"] for t in plain.tolerances if t["allocated"]}
+    assert allocated and {t["quantity"]: t["value"] for t in screened.tolerances
+                          if t["allocated"]} == pytest.approx(allocated, rel=1e-7)

@@ -24,8 +24,12 @@ import math
 
 import numpy as np
 
+from ..formulation.yield_target import AUX, CONDITION
+
 SAMPLE = 32  # designs sampled
 SIGMA = 4.0
+ROOT = 1e-12  # a sampled design's score: its nines row within this of its bound
+ITERATIONS = 100  # at most, of the root find
 
 
 def radius(n: int, sampled: int) -> float:
@@ -43,6 +47,9 @@ def screened(form, p, sample: list[np.ndarray], always: int, starts: int) -> lis
 
     n = form.n_design
     xs = np.column_stack(sample)
+    if target_row(form) is not None:  # scored at its own largest scale (target_scales)
+        xs[form.x_names.index(AUX)] = target_scales(form, p, xs)
+        sample = [xs[:, k].copy() for k in range(len(sample))]
     f = np.asarray(form_objective(form).map(len(sample))(xs, p), float).ravel()
     g = np.asarray(_rows(form).map(len(sample))(xs, p), float)
     violation = np.max(np.maximum(form.lbg[:, None] - g, g - form.ubg[:, None]), axis=0,
@@ -68,6 +75,68 @@ def screened(form, p, sample: list[np.ndarray], always: int, starts: int) -> lis
         if not np.any(near & (rank < rank[k])):
             chosen.append(k)
     return [sample[k] for k in chosen]
+
+
+def target_row(form) -> int | None:
+    """The index in g of a yield target's nines row (formulation/yield_target.py), or None."""
+    if AUX not in getattr(form, "x_names", ()):
+        return None
+    return next((c.index for c in form.conditions if CONDITION in c.keys), None)
+
+
+def target_scales(form, p, xs: np.ndarray) -> np.ndarray:
+    """Each sampled design's (the columns of NLP start vectors `xs`) largest scale s at which
+    its nines row holds, to ROOT of the row: the yield falls as s grows, so a root find in
+    log s bracketed by the scale's bounds and the start's s, every design at once (regula
+    falsi, Illinois' halving of a kept end's value; bisection where an end's row is not
+    finite). The lower bound where the row does not hold there (the design then ranks by
+    its violation), the upper where it holds there."""
+    from ..formulation.yield_target import SCALE_BOUNDS
+
+    k, row = form.x_names.index(AUX), target_row(form)
+    rows = _rows(form).map(xs.shape[1])
+    xs = np.array(xs, float)
+
+    def value(logs):
+        xs[k] = np.exp(logs)
+        with np.errstate(all="ignore"):  # a chain undefined at a large scale: NaN
+            return np.asarray(rows(xs, p), float)[row] - form.lbg[row]  # NaN: not held
+
+    ends = [np.full(xs.shape[1], math.log(b)) for b in SCALE_BOUNDS]
+    lo, hi = ends
+    glo, ghi = value(lo), value(hi)
+    mid = np.clip(np.log(xs[k]), lo, hi)
+    lo, hi, glo, ghi = _narrowed(lo, hi, glo, ghi, mid, value(mid))
+    true = glo.copy()  # the row at lo (glo is halved as Illinois' rule asks)
+    last = np.zeros(xs.shape[1])  # the end kept by the last step: 1 hi, -1 lo
+    for _ in range(ITERATIONS):
+        busy = (glo >= 0.0) & ~(ghi >= 0.0) & (true > ROOT) & (hi - lo > 1e-14)
+        if not busy.any():
+            break
+        finite = np.isfinite(glo) & np.isfinite(ghi)
+        with np.errstate(all="ignore"):
+            falsi = (lo * -ghi + hi * glo) / (glo - ghi)
+        mid = np.where(finite & np.isfinite(falsi), falsi, 0.5 * (lo + hi))
+        mid = np.clip(mid, lo + 1e-3 * (hi - lo), hi - 1e-3 * (hi - lo))
+        gmid = value(mid)
+        held = gmid >= 0.0
+        kept = np.where(held, 1.0, -1.0)
+        lo, hi, glo, ghi = _narrowed(lo, hi, glo, ghi, mid, gmid)
+        true = np.where(held, gmid, true)
+        again = kept == last  # the same end kept twice: its value halved (Illinois)
+        ghi = np.where(again & held, 0.5 * ghi, ghi)
+        glo = np.where(again & ~held, 0.5 * glo, glo)
+        last = kept
+    low, high = (math.log(b) for b in SCALE_BOUNDS)
+    out = np.where(glo >= 0.0, lo, low)
+    return np.exp(np.where(ghi >= 0.0, high, out))
+
+
+def _narrowed(lo, hi, glo, ghi, mid, gmid):
+    """The bracket [lo, hi] (row held at lo, not at hi) with `mid` in place of its end."""
+    held = gmid >= 0.0
+    return (np.where(held, mid, lo), np.where(held, hi, mid), np.where(held, gmid, glo),
+            np.where(held, ghi, gmid))
 
 
 def _rows(form):

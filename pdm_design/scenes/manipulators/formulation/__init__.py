@@ -135,8 +135,9 @@ def build(spec, parameters=None):
         # are, and the shipped problems' NLP stays as measured (results/bench_optimize.md)
         objective_scale=objective_scale(spec.objective, min(l_max, 1.0)),
         extra_objective=target.objective if target is not None else None,
-        # max_yield walks the row every iteration: the starts are screened (solve/screen.py)
-        screened_starts=float(spec.objective.get("max_yield", 0.0)) > 0.0,
+        # max_yield and a yield target walk the row every iteration: the starts are
+        # screened (solve/screen.py)
+        screened_starts=float(spec.objective.get("max_yield", 0.0)) > 0.0 or target is not None,
     )
     return model, bounds, m
 
