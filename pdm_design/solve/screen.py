@@ -94,13 +94,21 @@ def target_scales(form, p, xs: np.ndarray) -> np.ndarray:
     from ..formulation.yield_target import SCALE_BOUNDS
 
     k, row = form.x_names.index(AUX), target_row(form)
-    rows = _rows(form).map(xs.shape[1])
+    fn, maps = _rows(form), {}
     xs = np.array(xs, float)
 
-    def value(logs):
-        xs[k] = np.exp(logs)
-        with np.errstate(all="ignore"):  # a chain undefined at a large scale: NaN
-            return np.asarray(rows(xs, p), float)[row] - form.lbg[row]  # NaN: not held
+    def value(logs, busy=None):
+        """The row at the scales exp(logs), of the `busy` designs only (NaN elsewhere)."""
+        busy = np.ones(xs.shape[1], bool) if busy is None else busy
+        out = np.full(xs.shape[1], np.nan)
+        m = int(busy.sum())
+        if m:
+            x = xs[:, busy]
+            x[k] = np.exp(logs[busy])
+            rows = maps.setdefault(m, fn.map(m))
+            with np.errstate(all="ignore"):  # a chain undefined at a large scale: NaN
+                out[busy] = np.asarray(rows(x, p), float)[row] - form.lbg[row]
+        return out
 
     ends = [np.full(xs.shape[1], math.log(b)) for b in SCALE_BOUNDS]
     lo, hi = ends
@@ -118,11 +126,13 @@ def target_scales(form, p, xs: np.ndarray) -> np.ndarray:
             falsi = (lo * -ghi + hi * glo) / (glo - ghi)
         mid = np.where(finite & np.isfinite(falsi), falsi, 0.5 * (lo + hi))
         mid = np.clip(mid, lo + 1e-3 * (hi - lo), hi - 1e-3 * (hi - lo))
-        gmid = value(mid)
+        gmid = np.where(busy, value(mid, busy), np.nan)
+        mid = np.where(busy, mid, np.where(glo >= 0.0, lo, hi))
+        gmid = np.where(busy, gmid, np.where(glo >= 0.0, glo, ghi))
         held = gmid >= 0.0
         kept = np.where(held, 1.0, -1.0)
         lo, hi, glo, ghi = _narrowed(lo, hi, glo, ghi, mid, gmid)
-        true = np.where(held, gmid, true)
+        true = np.where(held & busy, gmid, true)
         again = kept == last  # the same end kept twice: its value halved (Illinois)
         ghi = np.where(again & held, 0.5 * ghi, ghi)
         glo = np.where(again & ~held, 0.5 * glo, glo)
