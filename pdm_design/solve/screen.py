@@ -16,6 +16,10 @@ design with a better one that near lies in a basin a better start already reache
 (and a `start_from` design) always runs, better designs first, at most `starts` runs in all.
 Deterministic: the sample is fixed by the seed, so one spec gives one set of starts and one
 answer every run (the tie-break still picks one design of a flat optimum).
+
+A yield target's objective is its scale s (formulation/yield_target.py), which every sampled
+design has at the guess's start: each is scored, and started, at its own largest s meeting the
+target (target_scales), and ranked by that.
 """
 
 from __future__ import annotations
