@@ -56,21 +56,30 @@ def test_each_basin_gets_a_start_and_a_basin_one_only():
 def test_the_screened_answer_is_the_eight_starts_answer(monkeypatch):
     """The long row at 20 stages: the screened multistart (one start here) and the plain one
     (8 starts, none screened) give the same design."""
-    module = importlib.import_module("pdm_design.solve.optimize")
-    text = (PROBLEMS / "manipulators_long_row_yield.toml").read_text()
-    spec = parse_spec(tomllib.loads(re.sub(r"(?m)^stages = \d+", "stages = 20", text)))
-    screened = module.optimize(spec)
-    monkeypatch.setattr(module, "SAMPLE", 8)
-    monkeypatch.setattr(module, "screened", lambda form, p, xs, always, starts: xs)
-    plain = module.optimize(spec)
+    screened, plain = _screened_and_plain(monkeypatch,
+                                          _spec_at("manipulators_long_row_yield.toml", 20))
     assert plain.stats.starts == 8 and screened.stats.starts < 8
     for name in ("alpha", "beta"):
         assert screened.design[name] == pytest.approx(plain.design[name], abs=1e-7)
 
 
-def _target_spec(stages: int):
-    text = (PROBLEMS / "manipulators_yield_target.toml").read_text()
+def _spec_at(problem: str, stages: int):
+    """The problem's spec with its row cut (or grown) to `stages`."""
+    text = (PROBLEMS / problem).read_text()
     return parse_spec(tomllib.loads(re.sub(r"(?m)^stages = \d+", f"stages = {stages}", text)))
+
+
+def _target_spec(stages: int):
+    return _spec_at("manipulators_yield_target.toml", stages)
+
+
+def _screened_and_plain(monkeypatch, spec):
+    """The answers of the screened multistart and of the plain one (8 starts, none screened)."""
+    module = importlib.import_module("pdm_design.solve.optimize")
+    screened = module.optimize(spec)
+    monkeypatch.setattr(module, "SAMPLE", 8)
+    monkeypatch.setattr(module, "screened", lambda form, p, xs, always, starts: xs)
+    return screened, module.optimize(spec)
 
 
 def test_a_yield_targets_score_is_its_largest_scale_meeting_the_target():
@@ -108,12 +117,7 @@ def test_a_yield_targets_score_is_its_largest_scale_meeting_the_target():
 def test_the_screened_yield_target_is_the_eight_starts_answer(monkeypatch):
     """The yield target at 20 stages: the screened multistart (each sampled design scored at
     its largest scale meeting the target) and the plain one (8 starts) agree."""
-    module = importlib.import_module("pdm_design.solve.optimize")
-    spec = _target_spec(20)
-    screened = module.optimize(spec)
-    monkeypatch.setattr(module, "SAMPLE", 8)
-    monkeypatch.setattr(module, "screened", lambda form, p, xs, always, starts: xs)
-    plain = module.optimize(spec)
+    screened, plain = _screened_and_plain(monkeypatch, _target_spec(20))
     assert plain.stats.starts == 8 and screened.stats.starts < 8
     for name in ("alpha", "beta"):
         assert screened.design[name] == pytest.approx(plain.design[name], abs=1e-7)
