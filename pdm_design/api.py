@@ -185,6 +185,12 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
     if result.status is Status.INFEASIBLE and (
             cause := of(spec).infeasible_cause(spec, analysis.design)):
         violations = (cause, *violations)
+    reach = ""
+    if result.status is Status.INFEASIBLE and _sized_for_yield(spec):
+        from .solve.yield_allocation import out_of_reach_words
+
+        reach = out_of_reach_words(spec, point)
+        violations = (reach, *violations) if reach else violations
     verification = None
     if verify and result.status.is_success:
         samples = round(spec.verification.samples * preset["sample_factor"])
@@ -220,7 +226,7 @@ def optimize(spec: Spec, *, verify: bool = True, accuracy: AccuracySetting | Non
                          tolerances=tolerances, verification=verification, solver=solver,
                          accuracy=accuracy, optima=result.optima,
                          tolerances_yield=checked.record if checked else None,
-                         tolerances_yield_words=checked.words if checked else "")
+                         tolerances_yield_words=checked.words if checked else reach)
 
 
 def _sized_for_yield(spec: Spec) -> bool:

@@ -78,7 +78,8 @@ def _screened_and_plain(monkeypatch, spec):
     module = importlib.import_module("pdm_design.solve.optimize")
     screened = module.optimize(spec)
     monkeypatch.setattr(module, "SAMPLE", 8)
-    monkeypatch.setattr(module, "screened", lambda form, p, xs, always, starts: xs)
+    monkeypatch.setattr(module, "screened",  # every start, each at its own target scale
+                        lambda form, p, xs, always, starts: screen.at_target_scales(form, p, xs))
     return screened, module.optimize(spec)
 
 
@@ -101,13 +102,13 @@ def test_a_yield_targets_score_is_its_largest_scale_meeting_the_target():
     met = 0
     for j, s in enumerate(scales):
         x = xs[:, j].copy()
-        x[k] = s
+        x[k] = np.log(s)  # the NLP's variable is log s
         at = float(rows(x, form.p_default)[row])
         if s <= 1.0001e-9:  # held nowhere: broken at the smallest scale
             assert not at >= 0.0
             continue
         met += 1
-        x[k] = s * (1.0 + 1e-6)
+        x[k] = np.log(s * (1.0 + 1e-6))
         assert at == pytest.approx(0.0, abs=1e-9)
         assert float(rows(x, form.p_default)[row]) < 0.0
     assert met >= 2

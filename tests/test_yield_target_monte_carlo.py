@@ -11,6 +11,7 @@ builds pass 94.91 % (94.69-95.12 %), about the target, and 400 builds' Wilson in
 +-2.2 %, so its lower end is below 95 % there: the check must shrink them."""
 
 import json
+import math
 import re
 from dataclasses import replace
 
@@ -20,7 +21,7 @@ from test_yield_target_stairs import free_text, sized_text
 
 from pdm_design.cli import main
 from pdm_design.solve.yield_allocation import allocate_for_yield
-from pdm_design.solve.yield_check import LADDER, STEPS, TINY
+from pdm_design.solve.yield_check import LADDER, STEPS
 from pdm_design.spec import load_spec
 from pdm_design.tolerances.yield_ import Z95, yield_of
 
@@ -147,13 +148,18 @@ def test_a_target_too_few_builds_can_show_is_refused_in_words(tmp_path):
     code, out = optimize_json(path)
     assert code == 1 and out["status"] == "infeasible"
     words = out["status_message"]
-    assert "cannot be met" in words and "raise tolerances.builds" in words, words
+    # the fewest builds whose lower end with none failing reaches 99.5 %: n >= z^2 t / (1 - t)
+    need = math.ceil(Z95**2 * 0.995 / 0.005)
+    assert need / (need + Z95**2) >= 0.995 > (need - 1) / (need - 1 + Z95**2)
+    assert "cannot be shown by 400 builds" in words, words
+    assert f"raise tolerances.builds to at least {need}" in words, words
+    assert f"lower end is {100 * n / (n + Z95**2):.2f} %" in words, words
+    # no smaller factor can show it either: the run at 1 alone
     assert out["tolerances_yield"]["met"] is False
-    tiny = next(s for s in out["tolerances_yield"]["steps"] if s["scale"] == TINY)
-    assert tiny["estimate"] == 1.0 and tiny["ci_low"] == pytest.approx(n / (n + Z95**2))
+    assert [s["scale"] for s in out["tolerances_yield"]["steps"]] == [1.0]
     # `pdm-design yield` of it says so too (exit 1, no traceback)
     run = CliRunner().invoke(main, ["yield", str(path)])
-    assert run.exit_code == 1 and "cannot be met" in run.output, run.output
+    assert run.exit_code == 1 and "cannot be shown" in run.output, run.output
 
 
 def test_a_design_whose_given_tolerances_fail_too_often_is_refused_in_words(tmp_path):

@@ -143,3 +143,31 @@ def test_the_build_sheet_lists_the_statistical_pivot_tolerances_with_their_targe
     assert {e.limited_by for e in entries if e not in pivots} == {"given in the spec"}
     # a worst-case answer's sheet lists its pivots in its own box instead
     assert not any(e.quantity.startswith("pivot") for e in allocated_entries(out["tolerances"]))
+
+
+def test_a_target_the_given_tolerances_alone_miss_is_refused_in_words(tmp_path):
+    # back stops +-0.2 rad each (given) over 5 stages: no design and no pivot tolerance, however
+    # small, reaches 99.73 %. optimize says why (exit 1), and the Monte Carlo judges the claim:
+    # the answer's design with its pivots exact passes fewer builds than the target asks.
+    from pdm_design.solve.yield_allocation import SCALE_RANGE
+    from pdm_design.tolerances.yield_ import yield_of
+
+    text = target_spec_text().replace("stages = 20", "stages = 5").replace(
+        "back_stop = { value = 0.01745,", "back_stop = { value = 0.2,")
+    path = tmp_path / "out_of_reach.toml"
+    path.write_text(text)
+    run = CliRunner().invoke(main, ["optimize", str(path), "--no-verify", "--format", "json"])
+    assert run.exit_code == 1, run.output
+    out = json.loads(run.output)
+    words = out["status_message"]
+    assert out["status"] == "infeasible" and "out of reach" in words, words
+    assert "the given tolerances alone fail more often" in words and "tip" in words, words
+    assert words in out["violations"]
+    spec = load_spec(path)
+    design = spec.design_at({n: out["design"][n] for n in spec.free_variables})
+    exact = with_scale(spec.tolerances, SCALE_RANGE[0])
+    lin = linearised_yield(spec.scene, design, exact, 5)["yield"]
+    assert f"over 5 stages is {100 * lin:.4g} %" in words and lin < TARGET
+    mc = yield_of(spec.scene, design, exact, builds=400, stages=5, seed=1, confirm=0,
+                  scales=(), sensitivity_samples=0, workers=1)
+    assert mc.ci_high < TARGET, (mc.estimate, mc.ci_high)

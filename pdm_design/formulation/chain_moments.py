@@ -229,12 +229,15 @@ def _taylor(fn, nv, moving):
     coefficients = [[_block(a, k, blocks) for k in range(blocks)] for a in ins]
     coefficients[-1] = coefficients[-1][:1] + [c * mask for c in coefficients[-1][1:]]
     outs = fn(*[_series(c, eps) for c in coefficients])
-    stacked = []
-    for o in outs:
-        J = ca.jacobian(o, eps)
-        stacked.append(ca.vertcat(o, *[J[:, i] for i in range(nv)], *_second(J, eps)))
-    stacked = ca.substitute(stacked, [eps], [ca.DM.zeros(nv)])
-    return ca.Function(f"{fn.name()}_taylor", ins, ca.cse(stacked))
+    o = ca.vertcat(*outs)  # differentiated together: one graph, its parts shared
+    J = ca.jacobian(o, eps)
+    parts = ca.substitute([o, *[J[:, i] for i in range(nv)], *_second(J, eps)], [eps],
+                          [ca.DM.zeros(nv)])
+    stacked, at = [], 0
+    for size in (out.size1() for out in outs):
+        stacked.append(ca.vertcat(*[q[at:at + size] for q in parts]))
+        at += size
+    return ca.Function(f"{fn.name()}_taylor", ins, stacked)
 
 
 def _second(J, v):

@@ -7,11 +7,13 @@ whose `[objective]` does not ask for the worst-case box (`max_offset_tolerance`)
 (t_q = s * w_min / w_q: tolerance_model.allocation_shares) at which the scene's linearised
 yield reaches the target. One NLP:
 
-    maximise  log s
+    maximise  z = log s
     subject to  the design's nominal rows (every condition at zero tolerance, as for any spec)
-                nines(x, s) >= -log10(1 - target)                           (the nines row)
+                nines(x, exp z) >= -log10(1 - target)                       (the nines row)
 
-s an auxiliary variable (`yield_scale`), the allocated quantities' sigmas s times their shares
+z an auxiliary variable (`yield_scale`: log s, so that IPOPT's steps in it are relative steps
+in s, as the yield's own dependence on s is), the allocated quantities' sigmas s times their
+shares
 (given tolerances at their values), nines the scene's -log10 of its bound on the failure
 probability (a union bound, or Hunter's bound: the scene's formulation,
 scenes/<kind>/formulation). The nines row is well scaled (2.57 for 99.73 %) where
@@ -26,7 +28,6 @@ from dataclasses import dataclass, replace
 
 AUX = "yield_scale"
 SCALE_BOUNDS = (1e-9, 1e3)  # s within these (SI units of the smallest-weight quantity)
-START_GRID = 49  # scales tried at the spec's guess for the start of s (evenly in log s)
 CONDITION = "yield_target"  # the nines row's name (a validity row: no margin, no requirement)
 
 
@@ -61,35 +62,37 @@ def needed_nines(target: float) -> float:
 
 @dataclass(frozen=True)
 class TargetRows:
-    """What the yield target adds to the NLP: the scale variable, its bounds and start, the
-    nines row and the objective term (log s, maximised)."""
+    """What the yield target adds to the NLP: the variable z = log s, its bounds and start,
+    the nines row and the objective term (z, maximised)."""
 
-    scale: object
-    bounds: tuple[float, float]
-    start: float
+    scale: object  # the variable z = log s
+    bounds: tuple[float, float]  # of z
+    start: float  # a stand-in: every start's own s is set by solve/screen.at_target_scales
     condition: object
     objective: object
 
 
-def target_rows(spec, symbols: dict, bounds: dict, nines_of, at_start=None) -> TargetRows:
+def target_rows(spec, symbols: dict, bounds: dict, nines_of) -> TargetRows:
     """The yield target's variable, row and objective: nines_of(s) the scene's nines (SX in s
-    and the free design `symbols`); at_start(expression): the expression in the design and s
-    alone (the scene's auxiliaries at their starts), for the start of s."""
+    and the free design `symbols`). The start of s in every start point is that design's own
+    largest s meeting the target (solve/screen.at_target_scales), not a number fixed here."""
     import casadi as ca
 
     from .common import VALIDITY, Condition
 
-    s = ca.SX.sym(AUX)
+    z = ca.SX.sym(AUX)  # log s
     target = spec.tolerances.yield_target
-    nines = nines_of(s)
+    nines = nines_of(ca.exp(z))
     need = needed_nines(target)
     row = Condition((CONDITION,), f"linearised yield >= {target:g}", nines - need, need,
                     kind=VALIDITY)
-    xd = ca.vertcat(*symbols.values()) if symbols else ca.SX(0, 1)
-    guess = [bounds[n][2] for n in symbols]
-    alone = nines if at_start is None else at_start(nines)
-    start = start_scale(ca.Function("nines", [xd, s], [alone]), guess, need)
-    return TargetRows(s, SCALE_BOUNDS, start, row, ca.log(s))
+    bounds = tuple(math.log(b) for b in SCALE_BOUNDS)
+    return TargetRows(z, bounds, bounds[0], row, z)
+
+
+def scale_of(z: float) -> float:
+    """The scale s of the NLP's variable z = log s."""
+    return math.exp(z)
 
 
 def scaled_sigmas(tolerances, s, sigmas):
@@ -102,24 +105,3 @@ def scaled_sigmas(tolerances, s, sigmas):
     given = sigmas([t for t in tolerances if not t.allocate])
     unit = sigmas([replace(t, value=shares[t.quantity]) for t in tolerances if t.allocate], s)
     return tuple([a + b for a, b in zip(x, y)] for x, y in zip(given, unit))
-
-
-def start_scale(nines, guess, need: float) -> float:
-    """The start of s: the largest of START_GRID scales (evenly in log s over SCALE_BOUNDS)
-    whose nines at the spec's guess meet the target, refined once on a grid up to the next
-    (the smallest scale when none meets it: IPOPT starts from infeasible there)."""
-    import numpy as np
-
-    lo, hi = SCALE_BOUNDS
-    for _ in range(2):
-        grid = np.geomspace(lo, hi, START_GRID)
-        xs = np.tile(np.asarray(guess, dtype=float).reshape(-1, 1), (1, START_GRID))
-        values = np.asarray(nines.map(START_GRID)(xs, grid[None, :])).ravel()
-        meets = np.flatnonzero(values >= need)  # NaN: not met
-        if not meets.size:
-            return float(lo)
-        last = int(meets[-1])
-        if last + 1 == START_GRID:
-            return float(grid[last])
-        lo, hi = grid[last], grid[last + 1]
-    return float(lo)

@@ -12,11 +12,12 @@ from ..formulation.allocation import allocating, pivot_box, values_at
 from ..formulation.build import FULL
 from ..formulation.common import BACKOFF_FACTOR, MODEL, OBJECTIVE_SENSE
 from ..formulation.yield_target import AUX as TARGET_SCALE
+from ..formulation.yield_target import scale_of
 from ..status import Status
 from . import check, elastic
 from .ipopt import SolverOptions, best, solve_once, solver_for, start_designs
 from .result import LinearisedTolerance, OptimizeResult, Solution, SolverStats
-from .screen import SAMPLE, screened
+from .screen import SAMPLE, at_target_scales, screened
 from .stacked import groups, solve_stacked, stacked_solver_for
 from .tiebreak import nearest_optimum
 from .words import bounds_hint, normalised_margin, summarise
@@ -158,6 +159,8 @@ def _start_points(spec, form, p, starts, seed, start_from):
     x_starts = form.defined_starts(designs, anchor, p)
     if screen:  # the starts worth a run of the sample (solve/screen.py)
         x_starts = screened(form, p, x_starts, always, starts)
+    else:  # a yield target's scale: each start's own largest meeting it
+        x_starts = at_target_scales(form, p, x_starts)
     return guess, lows, highs, x_starts
 
 
@@ -271,7 +274,8 @@ def _tolerance(spec, form, x):
     (None, None) for a spec without a tolerance."""
     if form.tolerance_index is None:
         if TARGET_SCALE in form.x_names:  # sized for a yield target (formulation/yield_target)
-            return None, tuple(values_at(spec, float(x[form.x_names.index(TARGET_SCALE)])))
+            z = float(x[form.x_names.index(TARGET_SCALE)])
+            return None, tuple(values_at(spec, scale_of(z)))
         return None, None
     tol_value = float(x[form.tolerance_index])
     tolerance = {axis: tol_value for axis in form.tolerance_axes}

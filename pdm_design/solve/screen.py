@@ -50,10 +50,8 @@ def screened(form, p, sample: list[np.ndarray], always: int, starts: int) -> lis
     from .tiebreak import form_objective
 
     n = form.n_design
+    sample = at_target_scales(form, p, sample)  # scored at its own largest scale
     xs = np.column_stack(sample)
-    if target_row(form) is not None:  # scored at its own largest scale (target_scales)
-        xs[form.x_names.index(AUX)] = target_scales(form, p, xs)
-        sample = [xs[:, k].copy() for k in range(len(sample))]
     f = np.asarray(form_objective(form).map(len(sample))(xs, p), float).ravel()
     g = np.asarray(_rows(form).map(len(sample))(xs, p), float)
     violation = np.max(np.maximum(form.lbg[:, None] - g, g - form.ubg[:, None]), axis=0,
@@ -81,6 +79,16 @@ def screened(form, p, sample: list[np.ndarray], always: int, starts: int) -> lis
     return [sample[k] for k in chosen]
 
 
+def at_target_scales(form, p, starts: list[np.ndarray]) -> list[np.ndarray]:
+    """The start points `starts` (NLP start vectors), a yield target's scale s in each set to
+    that design's largest s meeting the target (target_scales); unchanged without a target."""
+    if target_row(form) is None or not starts:
+        return starts
+    xs = np.column_stack(starts)
+    xs[form.x_names.index(AUX)] = np.log(target_scales(form, p, xs))  # the NLP's z = log s
+    return [xs[:, k].copy() for k in range(len(starts))]
+
+
 def target_row(form) -> int | None:
     """The index in g of a yield target's nines row (formulation/yield_target.py), or None."""
     if AUX not in getattr(form, "x_names", ()):
@@ -91,10 +99,11 @@ def target_row(form) -> int | None:
 def target_scales(form, p, xs: np.ndarray) -> np.ndarray:
     """Each sampled design's (the columns of NLP start vectors `xs`) largest scale s at which
     its nines row holds, to ROOT of the row: the yield falls as s grows, so a root find in
-    log s bracketed by the scale's bounds and the start's s, every design at once (regula
-    falsi, Illinois' halving of a kept end's value; bisection where an end's row is not
-    finite). The lower bound where the row does not hold there (the design then ranks by
-    its violation), the upper where it holds there."""
+    log s bracketed by the scale's bounds, narrowed first at the start's s where it lies
+    between them (else halfway in log s), every design at once (regula falsi, Illinois'
+    halving of a kept end's value; bisection where an end's row is not finite). The lower
+    bound where the row does not hold there (the design then ranks by its violation), the
+    upper where it holds there."""
     from ..formulation.yield_target import SCALE_BOUNDS
 
     k, row = form.x_names.index(AUX), target_row(form)
@@ -108,7 +117,7 @@ def target_scales(form, p, xs: np.ndarray) -> np.ndarray:
         m = int(busy.sum())
         if m:
             x = xs[:, busy]
-            x[k] = np.exp(logs[busy])
+            x[k] = logs[busy]  # the NLP's variable is log s
             rows = maps.setdefault(m, fn.map(m))
             with np.errstate(all="ignore"):  # a chain undefined at a large scale: NaN
                 out[busy] = np.asarray(rows(x, p), float)[row] - form.lbg[row]
@@ -117,7 +126,8 @@ def target_scales(form, p, xs: np.ndarray) -> np.ndarray:
     ends = [np.full(xs.shape[1], math.log(b)) for b in SCALE_BOUNDS]
     lo, hi = ends
     glo, ghi = value(lo), value(hi)
-    mid = np.clip(np.log(xs[k]), lo, hi)
+    mid = xs[k]
+    mid = np.where((mid > lo) & (mid < hi), mid, 0.5 * (lo + hi))
     lo, hi, glo, ghi = _narrowed(lo, hi, glo, ghi, mid, value(mid))
     true = glo.copy()  # the row at lo (glo is halved as Illinois' rule asks)
     last = np.zeros(xs.shape[1])  # the end kept by the last step: 1 hi, -1 lo

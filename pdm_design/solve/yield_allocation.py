@@ -90,6 +90,27 @@ def allocate_for_yield(scene, design, tolerances: Tolerances, *, stages: int,
     return Allocation(lo, target, allocated, meets(lo)[1])
 
 
+def out_of_reach_words(spec, design) -> str:
+    """Why an optimisation sized for the spec's yield target found no design, in words, when
+    the target is out of reach at `design` (the least-violation answer, valued): the linearised
+    yield with the allocated tolerances at the smallest scale, the given tolerances alone near
+    enough, and what fails most; "" when that yield reaches the target (the cause is then
+    elsewhere: the design's own rows)."""
+    tolerances = with_scale(spec.tolerances, SCALE_RANGE[0])
+    stages, target = spec.verification.stages, spec.tolerances.yield_target
+    best = linearised_yield_function(spec.scene)(spec.scene, design, tolerances, stages)["yield"]
+    if best >= target:
+        return ""
+    limits = "; ".join(f"{e['condition']} {100.0 * e['share']:.0f} % ({e['where']})"
+                       for e in dominant_rows(spec.scene, design, tolerances, stages)[:3])
+    return (f"the yield target {100.0 * target:g} % is out of reach: at the best design found "
+            f"the linearised yield over {stages} stages is {100.0 * best:.4g} % with the "
+            f"allocated tolerances at the smallest scale ({SCALE_RANGE[0]:g}), so the given "
+            f"tolerances alone fail more often than the target allows"
+            + (f" (the failures: {limits})" if limits else "")
+            + ": tighten the given tolerances, lower the target or run fewer stages")
+
+
 def dominant_rows(scene, design, tolerances: Tolerances, stages: int, *,
                   floor: float = 0.01) -> list[dict]:
     """What limits tolerances sized for a yield: the failures that make up the union bound

@@ -24,6 +24,7 @@ The answer is always a factor that was checked: its run is the one reported.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 TINY = 1e-3  # the factor that stands for the design with its given tolerances alone
@@ -79,7 +80,7 @@ def _check(scene, design, tolerances, allocated, target, stages, accuracy):
                                 accuracy=accuracy, scales=(), sensitivity_samples=0)
         return runs[factor].ci_low >= target
 
-    best, met = _search(judge)
+    best, met = _search(judge, _showable(target, tolerances.builds))
     if not met:  # the factor whose lower end came nearest the target
         best = max(runs, key=lambda f: (runs[f].ci_low, f))
     sized = shrunk(tolerances, allocated, best)
@@ -90,12 +91,23 @@ def _check(scene, design, tolerances, allocated, target, stages, accuracy):
     return CheckedAllocation(sized, best, met, record, words)
 
 
-def _search(judge) -> tuple[float, bool]:
+def _showable(target: float, builds: int) -> bool:
+    """Whether `builds` builds can show `target` at all: the interval's lower end with every
+    build passing (the most any factor can give) reaches it."""
+    from ..tolerances.yield_ import wilson
+
+    return float(wilson(builds, builds)[0]) >= target
+
+
+def _search(judge, showable: bool = True) -> tuple[float, bool]:
     """(the largest factor found that meets the target, True), or (0, False) when none of 1
-    and LADDER does: the ladder down from 1, then STEPS bisections below the rung above."""
+    and LADDER does: the ladder down from 1, then STEPS bisections below the rung above. When
+    the builds cannot show the target (not showable), the run at 1 alone, for the record."""
     above = 1.0
     if judge(above):
         return above, True
+    if not showable:
+        return 0.0, False
     for rung in LADDER:
         if judge(rung):
             good, bad = rung, above
@@ -131,7 +143,14 @@ def _unmet_words(runs, best, target, builds, stages) -> str:
     its given tolerances fails more often than the target allows."""
     from ..tolerances.yield_ import Z95
 
-    near, tiny = runs[best], runs[TINY]
+    near, tiny = runs[best], runs.get(TINY)
+    if tiny is None:  # the builds cannot show the target (_showable): the run at 1 alone
+        need = math.ceil(Z95 ** 2 * target / (1.0 - target))
+        return (f"the yield target {_pct(target)} cannot be shown by {builds} builds: with "
+                f"none failing the 95 % interval's lower end is "
+                f"{_pct(builds / (builds + Z95 ** 2))} (at the allocated tolerances' "
+                f"linearised size {_pct(near.estimate)} of them pass all {stages} stages): "
+                f"raise tolerances.builds to at least {need}")
     head = (f"the yield target {_pct(target)} cannot be met: at no common factor of the "
             f"allocated tolerances' linearised size from 1 down to {TINY:g} does the Monte Carlo "
             f"interval's lower end reach it (the nearest at {best:.4g}: {_pct(near.estimate)} "

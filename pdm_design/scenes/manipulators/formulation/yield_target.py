@@ -11,12 +11,10 @@ from ....formulation.yield_target import (  # noqa: F401 (the names callers read
     AUX,
     CONDITION,
     SCALE_BOUNDS,
-    START_GRID,
     TargetRows,
     active,
     needed_nines,
     refuse_objectives,
-    start_scale,
 )
 
 

@@ -132,7 +132,8 @@ def build(spec):
     if epigraph:
         aux.append(("min_margin", t, 0.0, 1.0))
         start.append(0.0)
-    target = _target(spec, m, symbols, bounds, start[:1]) if yield_target.active(spec) else None
+    target = (statistical_stairs.target_rows(spec, m, symbols, bounds)
+              if yield_target.active(spec) else None)
     if target is not None:  # tolerances sized for a yield target
         aux.append((yield_target.AUX, target.scale, *target.bounds))
         start.append(target.start)
@@ -166,13 +167,6 @@ def build(spec):
         extra_objective=target.objective if target is not None else None,
     )
     return model, bounds, m
-
-
-def _target(spec, m, symbols, bounds, v_start):
-    """The yield target's rows (stairs/statistical.py target_rows), the periodic vertical
-    speed of a given rise at its start (v_start: [] when the rise is derived)."""
-    aux_start = {m.V_symbol: v_start[0]} if m.V_symbol is not None else {}
-    return statistical_stairs.target_rows(spec, m, symbols, bounds, aux_start)
 
 
 # Lots the exact nose rows are not shown monotone in (docs/optimizer.md section 4a): why.

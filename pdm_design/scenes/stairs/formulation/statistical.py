@@ -260,11 +260,10 @@ def model_design(model) -> dict:
             "tread": model.tread, "landing_offset": model.L1}
 
 
-def target_rows(spec, model, symbols: dict, bounds: dict, aux_start: dict):
+def target_rows(spec, model, symbols: dict, bounds: dict):
     """A yield target's variable, row and objective (formulation/yield_target.py) on the
     closed forms `model`, the nines row Hunter's bound's (yield_term's) with the allocated
-    sigmas s times their shares; aux_start: {auxiliary symbol: its start, an expression of
-    the design} (the periodic vertical speed of a given rise), for the start of s."""
+    sigmas s times their shares."""
     from ....formulation import yield_target
 
     yield_target.refuse_objectives(spec)
@@ -274,12 +273,7 @@ def target_rows(spec, model, symbols: dict, bounds: dict, aux_start: dict):
         each, lot = yield_target.scaled_sigmas(spec.tolerances, s, sigmas)
         return _nines(spec.scene, design, spec.verification.stages, each, lot)
 
-    def at_start(expression):
-        for symbol, start in aux_start.items():
-            expression = ca.substitute(expression, symbol, start)
-        return expression
-
-    return yield_target.target_rows(spec, symbols, bounds, nines_of, at_start)
+    return yield_target.target_rows(spec, symbols, bounds, nines_of)
 
 
 def placed_rows(scene, design, tolerances, stages: int):
