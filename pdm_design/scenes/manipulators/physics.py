@@ -158,6 +158,40 @@ def friction_demand(theta, ratio=None):
     return fabs(tan(theta) if ratio is None else ratio)
 
 
+def slide_accelerations(theta, omega, *, object_mass, palm_mass, friction, sgn, gravity,
+                        link_length, weight=None, pivot=0.0):
+    """Accelerations and normal force of the sliding carry (the object sliding on a palm that
+    swings at th' = omega; sgn the sign of the slip speed s', the friction on the object -mu N
+    sgn).
+
+    Object: m (l th'' t - l th'^2 r + s'' i) = (-f, N - m g), f = mu N sgn.
+    Palm along t: M l th'' = f cos th + N sin th + M g sin th. With c = mu sgn cos th + sin th:
+      th'' = [m c (g - l th'^2 cos th) + M g sin th] / (l (M + m c sin th))
+    (with links and pivots: M is the palm-plus-links mass felt along the swing, M g becomes the
+    `weight` that turns the palm, and `pivot` = (tau + d th') / l is taken off the numerator:
+    the phase moves forward, th' >= 0)
+      N    = m (g - l th'' sin th - l th'^2 cos th)
+      s''  = -mu sgn N / m - l th'' cos th + l th'^2 sin th
+    Returns (th'', N, s'', D) with D = M + m c sin th (the sliding contact is consistent iff
+    D > 0)."""
+    m, M, mu, g, l = object_mass, palm_mass, friction, gravity, link_length
+    sn, cs = sin(theta), cos(theta)
+    c = mu * sgn * cs + sn
+    d = M + m * c * sn
+    w2 = omega * omega
+    weight = M if weight is None else weight
+    thdd = (m * c * (g - l * w2 * cs) + weight * g * sn - pivot) / (l * d)
+    normal = m * (g - l * thdd * sn - l * w2 * cs)
+    sdd = -mu * sgn * normal / m - l * thdd * cs + l * w2 * sn
+    return thdd, normal, sdd, d
+
+
+def slide_force_point(sgn, friction, height):
+    """Where the sliding contact force N (-mu sgn, 1) crosses the object's base, from its
+    centre."""
+    return 0.5 * height * friction * sgn
+
+
 # ---------------------------------------------------------------- the mechanism as built
 # Palm (mass M) on a parallelogram of links whose inertia about their pivots is I (all links)
 # and whose weight acts at half their length (a link symmetric end to end), with a Coulomb

@@ -20,6 +20,8 @@ per-stage logic of formulation/manipulators/offsets.py, extended to every part's
                   where the object's base comes down to it: cos th = (C'_y - P_k,y) / l_k,
                   speed v^2 = u^2 + 2 g l_k (cos a_k - cos th) along t(th), new offset
                   o' = P_k,x + o + l_k sin th - C'_x; it lands iff |o'| < (w + W)/2
+  a slip first    on the paper's device, a carry that passes atan(mu) before the handover
+                  (or beta) slides from there: integrated in the angle (slide_to_handover)
   the last palm   carries the object to the design's beta: the run is complete.
   other palms     the feed's flight and every carry's arc meet no palm but the one they end
                   on (exact for the next AHEAD palms beyond it: the path's heights over its
@@ -27,10 +29,11 @@ per-stage logic of formulation/manipulators/offsets.py, extended to every part's
                   parked palms behind those parked_palms checks); else closed_form = False.
 
 These are the simulator's own judgements in the regime it follows in closed form (plastic
-landings that stick, stuck carries; with a palm restitution > 0 no build is in it). A build
-that leaves it (a slip, a lift-off, a landing that drives the palm into its stop, a miss, a
-palm in the way, a palm other than the next met) is marked closed_form = False with the
-failure the closed forms expect; the event simulator has the last word on it.
+landings that stick, stuck carries, and a slide on to the handover; with a palm restitution > 0
+no build is in it). A build that leaves it (any other slip, a lift-off, a landing that drives
+the palm into its stop, a miss, a palm in the way, a palm other than the next met) is marked
+closed_form = False with the failure the closed forms expect; the event simulator has the last
+word on it.
 """
 
 from __future__ import annotations
@@ -57,6 +60,7 @@ PARKED_CAP = 16  # palms parked behind the carrying one checked, at most
 # cells of a carry on real links whose rows hold over the whole carry (its guards compared at
 # their inner ends)
 INSIDE_CELLS = 32
+SLIDE_STEPS = 16  # fourth-order Runge-Kutta steps of a slide before the handover, in the angle
 AHEAD = 2  # palms beyond the one the object goes to checked one by one; the rest by a bound
 
 
@@ -308,16 +312,100 @@ class _Builds:
             self.inside(k, u, a, theta, offset, w, mu, terms)
             if not last:
                 self.held_short(k, theta)
-        self.group(k, [*self.guards(k, theta, v2, offset, w, mu, terms),
-                       *self.parked_palms(k, theta, offset, w)])
+        slips = self.slips_before_handover(k, a, theta, mu)
+        stuck_end = np.where(slips, np.arctan(mu), theta)  # the stuck part's end
+        v2_stuck = np.where(slips, phys.carry_speed_squared(u, a, stuck_end, gravity=terms[1],
+                                                            link_length=l), v2)
+        guards = self.guards(k, stuck_end, v2_stuck, offset, w, mu, terms)
+        guards = [(kind, np.where(slips, np.maximum(value, 0.0), value), closed)
+                  if kind == "slip" else (kind, value, closed) for kind, value, closed in guards]
+        self.group(k, guards)
+        speed = np.sqrt(np.maximum(v2, 0.0))
+        vx, vy = speed * np.cos(theta), -speed * np.sin(theta)
+        slid, slips = offset, slips & self.alive
+        if slips.any():  # the slide to the handover, or to beta (slide_to_handover)
+            vx, vy, slid = self.slide_to_handover(k, slips, stuck_end, v2_stuck, theta, offset,
+                                                  vx, vy, w, mu)
+        # the palms parked behind, the object anywhere between its place and where it slid to
+        self.group(k, self.parked_palms(k, theta, offset, w, np.minimum(offset, slid)))
+        offset = slid
         if last:
             return u, offset
-        speed = np.sqrt(np.maximum(v2, 0.0))
         offset = px + offset + l * np.sin(theta) - nx
         self.meets(k, offset, w)
-        vx, vy = speed * np.cos(theta), -speed * np.sin(theta)
         u = self.land(k + 1, vx, vy, offset, v["object_mass"], w, mu, passed=k + 1)
         return u, offset
+
+    # -- a slip before the handover ---------------------------------------------------------
+    def slips_before_handover(self, k, a, theta, mu):
+        """Builds (alive) whose stuck carry on palm k reaches the slip onset |tan th| = mu
+        forward, at th_s = atan(mu), before the handover at theta: on the paper's device
+        (plastic landings, no links' mass or pivot friction: the friction demand is tan th).
+        The object then slides to the handover, or on the last palm to beta
+        (slide_to_handover)."""
+        if self.real or self.restitution > 0.0 or self.scene.pivots.damping > 0.0:
+            return np.zeros(self.n, bool)
+        onset = np.arctan(mu)
+        return self.alive & (onset < theta) & (onset > -a) & (onset > 0.0)
+
+    def slide_to_handover(self, k, slips, start, v2, theta, offset, vx, vy, w, mu):
+        """The sliding carry of the `slips` builds on palm k from the slip onset `start` (speed
+        squared v2, s' = 0) to the handover angle theta (the height at which palm k + 1's top
+        is met does not depend on the slide), integrated in th (physics.slide_accelerations,
+        the simulator's sliding carry, forward: sgn 1) with SLIDE_STEPS fourth-order Runge-Kutta
+        steps. The slide stays in the map where it goes on to theta: s' > 0, N > 0, D > 0 and
+        th' > 0 at every node, the force point (h/2) mu inside the support at the end (the
+        support only shrinks as the object slides on), and the arc shifted by the slide meets
+        no other palm (arc_meets_others: with the unshifted one it brackets the path). Returns
+        (vx, vy, offset) at the handover, the slipping builds' the slide's."""
+        v, g = self.v, self.g
+        i = np.flatnonzero(slips)
+        l, M = v["link_length"][k][i], v["palm_mass"][k][i]
+        m, f = np.broadcast_to(v["object_mass"], (self.n,))[i], np.broadcast_to(mu, (self.n,))[i]
+        th0, th1 = start[i], theta[i]
+        y = np.array([v2[i] / l**2, offset[i], np.zeros(len(i))])
+        h = (th1 - th0) / SLIDE_STEPS  # the direction just past the onset, where s'' at
+        # s' = 0 is no longer 0 (at the onset it is, to rounding)
+        sgn, ok = self._slide_direction(th0 + 1e-3 * h, np.sqrt(y[0]), m, M, f, l)
+
+        def rates(th, y):
+            omega = np.sqrt(np.maximum(y[0], 0.0))
+            thdd, normal, sdd, d = phys.slide_accelerations(
+                th, omega, object_mass=m, palm_mass=M, friction=f, sgn=sgn, gravity=g,
+                link_length=l)
+            inv = 1.0 / np.where(omega > 0.0, omega, np.nan)
+            return np.array([2.0 * thdd, y[2] * inv, sdd * inv]), normal, d
+
+        for n in range(SLIDE_STEPS + 1):
+            k1, normal, d = rates(th0 + n * h, y)
+            ok &= (normal > 0.0) & (d > 0.0) & ((sgn * y[2] > 0.0) | (n == 0)) & (y[0] > 0.0)
+            if n == SLIDE_STEPS:
+                break
+            k2 = rates(th0 + (n + 0.5) * h, y + 0.5 * h * k1)[0]
+            k3 = rates(th0 + (n + 0.5) * h, y + 0.5 * h * k2)[0]
+            k4 = rates(th0 + (n + 1) * h, y + h * k3)[0]
+            y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        point = phys.slide_force_point(sgn, f, self.h)
+        lo, hi = self.support(y[1], w if np.ndim(w) == 0 else w[i])
+        ok &= (point < hi) & (point > lo)
+        self.closed[i[~ok]] = False  # the simulator follows what the map does not
+        slid = np.array(offset, float)
+        slid[i] = y[1]
+        self.arc_meets_others(k, theta, slid)
+        omega = np.sqrt(np.maximum(y[0], 0.0))
+        vx, vy = np.array(vx, float), np.array(vy, float)
+        vx[i] = l * omega * np.cos(th1) + y[2]
+        vy[i] = -l * omega * np.sin(th1)
+        return vx, vy, slid
+
+    def _slide_direction(self, theta, omega, m, M, mu, l):
+        """(sgn, known) of slips from relative rest at (theta, omega): the sgn whose s'' agrees
+        with it (phases.slide_direction); unknown (the simulator's) where neither does."""
+        sdd = [phys.slide_accelerations(theta, omega, object_mass=m, palm_mass=M, friction=mu,
+                                        sgn=sgn, gravity=self.g, link_length=l)[2]
+               for sgn in (1.0, -1.0)]
+        forward, back = sdd[0] > 0.0, sdd[1] < 0.0
+        return np.where(forward, 1.0, -1.0), forward | back
 
     # -- other palms in the way -------------------------------------------------------------
     def row_boxes(self, w):
@@ -469,11 +557,12 @@ class _Builds:
                 np.fmin(inner, value, out=inner)
         self.closed &= ~(self.alive & ~(held & (inner >= low)))
 
-    def parked_palms(self, k, theta, offset, w):
+    def parked_palms(self, k, theta, offset, w, low=None):
         """Clearance, in link lengths, to the palms 1 .. parked places behind palm k, each at
         its front stop (taken as there from the handover on: conservative, so a failure here
-        is left to the simulator, which follows the timing). The clearance is at least the
-        distance the palm stays behind the object from the start of the carry
+        is left to the simulator, which follows the timing), the object anywhere on the palm
+        from `low` (default: offset; a slide back along the palm) to `offset`. The clearance
+        is at least the distance the palm stays behind the object from the start of the carry
         (physics.parked_palm_clearance's `behind`), so it is computed in full only where that
         bound, in link lengths, is under the build's smallest margin so far: elsewhere the
         clearance cannot be the build's smallest margin, and the bound stands for it."""
@@ -481,6 +570,7 @@ class _Builds:
         l, a = v["link_length"][k], v["back_stop"][k]
         sf, cf = math.sin(self.fs), math.cos(self.fs)
         reach = 0.5 * (w + self.W)
+        low = offset if low is None else low
         back = -l * np.sin(a)
         out = []
         for n in range(1, min(k, self.parked) + 1):
@@ -488,7 +578,7 @@ class _Builds:
             lj = v["link_length"][j]
             # palm j's pivot and link as palm k's link and an effective pitch (exact)
             pitch_x = v["pivot_x"][k] - v["pivot_x"][j] + (l - lj) * sf
-            behind = back - (l * sf - pitch_x + reach - offset)
+            behind = back - (l * sf - pitch_x + reach - low)
             near = np.flatnonzero(self.alive & (behind < l * self.worst))
             gap = behind
             if len(near):
@@ -497,7 +587,7 @@ class _Builds:
                 gap[near] = phys.parked_palm_clearance(
                     1, alpha=a[near], theta_end=theta[near], link_length=l[near],
                     front_stop=self.fs, pitch_x=pitch_x[near], pitch_y=pitch_y[near],
-                    offset_lo=offset[near], offset_hi=offset[near],
+                    offset_lo=low[near], offset_hi=offset[near],
                     reach=np.broadcast_to(reach, (self.n,))[near], depth=self.T + self.h)
             out.append(("blocked", gap / l, False))
         return out

@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass, replace
 
 from ....sim.numerics import carlson_rf
+from .. import physics as phys
 
 # ---------------------------------------------------------------- impacts
 
@@ -333,29 +334,11 @@ class SlideParams:
 
 
 def slide_accelerations(theta, omega, p: SlideParams):
-    """Accelerations and normal force of the sliding carry.
-
-    Object: m (l th'' t - l th'^2 r + s'' i) = (-f, N - m g), f = mu N sgn.
-    Palm along t: M l th'' = f cos th + N sin th + M g sin th. With c = mu sgn cos th + sin th:
-      th'' = [m c (g - l th'^2 cos th) + M g sin th] / (l (M + m c sin th))
-    (with links and pivots: M is the palm-plus-links mass felt along the swing, M g becomes the
-    weight that turns the palm, and (tau + d th') / l is taken off the numerator: the phase
-    moves forward, th' >= 0)
-      N    = m (g - l th'' sin th - l th'^2 cos th)
-      s''  = -mu sgn N / m - l th'' cos th + l th'^2 sin th
-    Returns (th'', N, s'', D) with D = M + m c sin th (the sliding contact is consistent iff D > 0).
-    """
-    m, M, mu, g, l = p.m, p.M, p.mu, p.gravity, p.link_length
-    sn, cs = math.sin(theta), math.cos(theta)
-    c = mu * p.sgn * cs + sn
-    d = M + m * c * sn
-    w2 = omega * omega
-    weight = M if p.weight is None else p.weight
-    pivot = (p.torque + p.damping * omega) / l
-    thdd = (m * c * (g - l * w2 * cs) + weight * g * sn - pivot) / (l * d)
-    normal = m * (g - l * thdd * sn - l * w2 * cs)
-    sdd = -mu * p.sgn * normal / m - l * thdd * cs + l * w2 * sn
-    return thdd, normal, sdd, d
+    """(th'', N, s'', D) of the sliding carry (physics.slide_accelerations)."""
+    return phys.slide_accelerations(
+        theta, omega, object_mass=p.m, palm_mass=p.M, friction=p.mu, sgn=p.sgn,
+        gravity=p.gravity, link_length=p.link_length, weight=p.weight,
+        pivot=(p.torque + p.damping * omega) / p.link_length)
 
 
 def slide_rhs(p: SlideParams):
@@ -380,7 +363,7 @@ def slide_direction(theta, omega, p: SlideParams) -> float:
 
 def slide_force_point(sgn, mu, height):
     """Where the sliding contact force N (-mu sgn, 1) crosses the base, from its centre."""
-    return 0.5 * height * mu * sgn
+    return phys.slide_force_point(sgn, mu, height)
 
 
 def object_state_on_palm(pivot, theta, omega, s, sd, link_length):
