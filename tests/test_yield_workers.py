@@ -111,3 +111,21 @@ def test_a_chunks_deviations_are_each_builds_own_draw():
         for key in alone:
             assert got[key].shape == alone[key].shape
             np.testing.assert_array_equal(got[key], alone[key])
+
+
+def test_the_map_on_two_workers_is_the_map_in_one_process(monkeypatch):
+    # the closed-form map cut into chunks a worker (forced here for a small run): every
+    # build's outcome the same, in order, as one process' single chunk
+    import numpy as np
+
+    from pdm_design.commands.yield_ import spec_tolerances
+    from pdm_design.tolerances import yield_ as yield_module
+
+    spec = load_spec(str(SPEC))
+    tolerances = spec_tolerances(spec, str(SPEC))
+    design = spec.design_at()
+    one = yield_module.map_builds(spec.scene, design, tolerances, 300, 8, 5)
+    monkeypatch.setattr(yield_module, "PARALLEL_ENTRIES", 1)
+    two = yield_module.map_builds(spec.scene, design, tolerances, 300, 8, 5, workers=2)
+    for field in ("stages_passed", "failure", "min_margin", "closed_form"):
+        assert np.array_equal(getattr(one, field), getattr(two, field)), field

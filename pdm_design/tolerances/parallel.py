@@ -51,19 +51,52 @@ def start_builds(run: BuildRun, tasks, *, workers=None, scheduler=None, progress
     tasks = list(tasks)
     if scheduler:
         return _on_dask(run, tasks, scheduler, progress)
-    from ..sweep.run import default_workers
+    workers = local_workers(workers)
+    if workers == 1 or len(tasks) < MIN_PER_WORKER * workers:
+        return Started(lambda: [_chunk(run, tasks, progress)], progress=None)
+    return _on_pool(run, tasks, workers, progress)
 
-    if workers is None:  # one process per core; in a worker process of its own (a table's
-        # row, a Dask worker) the builds stay in it: its siblings have the other cores
+
+def local_workers(workers=None) -> int:
+    """The local worker processes to run on: `workers`, or by default one per core (1 in a
+    process that is itself a worker: a table's row, a Dask worker, whose siblings have the
+    other cores)."""
+    if workers is None:
         import multiprocessing
+
+        from ..sweep.run import default_workers
 
         workers = default_workers() if multiprocessing.parent_process() is None else 1
     workers = int(workers)
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
-    if workers == 1 or len(tasks) < MIN_PER_WORKER * workers:
-        return Started(lambda: [_chunk(run, tasks, progress)], progress=None)
-    return _on_pool(run, tasks, workers, progress)
+    return workers
+
+
+def map_chunks(fn, tasks: list, workers: int) -> list:
+    """[fn(task) for task in tasks], on `workers` local processes (a pool of the context
+    _context picks) when more than one; in order either way."""
+    if workers <= 1 or len(tasks) < 2:
+        return [fn(task) for task in tasks]
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=min(workers, len(tasks)),
+                             mp_context=_context()) as pool:
+        return list(pool.map(fn, tasks))
+
+
+def _context():
+    """A forked pool (fast start, the modules already imported) when this process runs no
+    other thread, else one started from a fork server (or spawned)."""
+    import multiprocessing
+    import threading
+
+    methods = multiprocessing.get_all_start_methods()
+    if "fork" in methods and threading.active_count() == 1:
+        return multiprocessing.get_context("fork")
+    if "forkserver" in methods:
+        return multiprocessing.get_context("forkserver")
+    return multiprocessing.get_context("spawn")
 
 
 class Started:
@@ -148,19 +181,10 @@ def _worker_chunk(tasks) -> list[tuple[int, str]]:
 
 
 def _on_pool(run, tasks, workers, progress):
-    """A local process pool: forked (fast start, the modules already imported) when this
-    process runs no other thread, else started from a fork server."""
-    import multiprocessing
-    import threading
+    """A local process pool (_context)."""
     from concurrent.futures import ProcessPoolExecutor
 
-    methods = multiprocessing.get_all_start_methods()
-    if "fork" in methods and threading.active_count() == 1:
-        context = multiprocessing.get_context("fork")
-    elif "forkserver" in methods:
-        context = multiprocessing.get_context("forkserver")
-    else:
-        context = multiprocessing.get_context("spawn")
+    context = _context()
     if context.get_start_method() == "fork":  # the integrator's tableaux, imported once here
         from ..sim.rk import tableau
 

@@ -27,6 +27,7 @@ from .outcome import BuildOutcome
 
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 CHUNK_ENTRIES = 2_000_000  # builds x stages drawn and mapped at once (memory: ~16 MB an array)
+PARALLEL_ENTRIES = 1_000_000  # builds x stages from which the map runs on the local workers
 SCALES = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0)  # tolerance scales of the yield curve
 SCALE_BUILDS = 500  # builds per point of that curve, at most
 SHOWN_COMMANDS = 100  # failing builds listed with their simulate command, at most
@@ -119,18 +120,32 @@ def simulate_one(scene, design, tolerances, seed, index, stages, *, accuracy="de
                                     allow_skips=allow_skips)
 
 
-def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int) -> BuildOutcome:
-    """The closed-form outcome of builds 0 .. builds - 1, drawn and mapped chunk by chunk."""
-    from . import run_builds
+def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int,
+               workers: int = 1) -> BuildOutcome:
+    """The closed-form outcome of builds 0 .. builds - 1, drawn and mapped chunk by chunk: on
+    `workers` local processes where the run has PARALLEL_ENTRIES builds x stages or more (each
+    build drawn alone: the same outcome whatever the chunks, tolerances.parallel)."""
+    from .parallel import map_chunks
 
     chunk = max(1, CHUNK_ENTRIES // stages)
-    parts = []
-    for start in range(0, builds, chunk):
-        count = min(chunk, builds - start)
-        deviations = draw(tolerances, count, stages, seed, scene=scene, start=start)
-        parts.append(run_builds(scene, design, deviations, stages))
+    if workers > 1 and builds * stages >= PARALLEL_ENTRIES:  # a few chunks a worker
+        chunk = min(chunk, max(1, -(-builds // (2 * workers))))
+    else:
+        workers = 1
+    tasks = [(scene, design, tolerances, start, min(chunk, builds - start), stages, seed)
+             for start in range(0, builds, chunk)]
+    parts = map_chunks(_mapped_chunk, tasks, workers)
     return BuildOutcome(*(np.concatenate([getattr(p, f) for p in parts]) for f in
                           ("stages_passed", "failure", "min_margin", "closed_form")))
+
+
+def _mapped_chunk(task) -> BuildOutcome:
+    """The closed-form outcome of `count` builds from `start` (map_builds' task)."""
+    from . import run_builds
+
+    scene, design, tolerances, start, count, stages, seed = task
+    deviations = draw(tolerances, count, stages, seed, scene=scene, start=start)
+    return run_builds(scene, design, deviations, stages)
 
 
 def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int, seed: int = 0,
@@ -148,7 +163,12 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     if missing or not len(tolerances):
         raise ValueError("a yield needs tolerances with values" + (
             f"; {', '.join(missing)} are still to be allocated" if missing else ""))
-    outcome = map_builds(scene, design, tolerances, builds, stages, seed)
+    from .parallel import local_workers
+
+    if workers is None:
+        workers = getattr(tolerances, "workers", None)
+    outcome = map_builds(scene, design, tolerances, builds, stages, seed,
+                         workers=local_workers(workers) if scheduler is None else 1)
     passed = outcome.stages_passed.copy()
     failure = outcome.failure.copy()
     sample, open_builds = _to_confirm(outcome, seed, confirm)
@@ -161,8 +181,6 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     run = BuildRun(scene, design, {1.0: tolerances} | {
         scale: tolerances.scaled(scale) for scale, _ in curve}, seed, stages, accuracy,
         allow_skips)
-    if workers is None:
-        workers = getattr(tolerances, "workers", None)
     started = start_builds(run, tasks, workers=workers, scheduler=scheduler, progress=progress)
     try:  # the sensitivity and the scene's extras while the workers simulate
         sensitivity, note = _sensitivity(scene, design, tolerances, stages, seed,

@@ -60,7 +60,7 @@ PARKED_CAP = 16  # palms parked behind the carrying one checked, at most
 # cells of a carry on real links whose rows hold over the whole carry (its guards compared at
 # their inner ends)
 INSIDE_CELLS = 32
-SLIDE_STEPS = 16  # fourth-order Runge-Kutta steps of a slide before the handover, in the angle
+SLIDE_STEP = 0.01  # rad: the largest fourth-order Runge-Kutta step of a slide in the angle
 AHEAD = 2  # palms beyond the one the object goes to checked one by one; the rest by a bound
 
 
@@ -352,9 +352,9 @@ class _Builds:
         """The sliding carry of the `slips` builds on palm k from the slip onset `start` (speed
         squared v2, s' = 0) to the handover angle theta (the height at which palm k + 1's top
         is met does not depend on the slide), integrated in th (physics.slide_accelerations,
-        the simulator's sliding carry, forward: sgn 1) with SLIDE_STEPS fourth-order Runge-Kutta
-        steps. The slide stays in the map where it goes on to theta: s' > 0, N > 0, D > 0 and
-        th' > 0 at every node, the force point (h/2) mu inside the support at the end (the
+        the simulator's sliding carry) in fourth-order Runge-Kutta steps of at most SLIDE_STEP.
+        The slide stays in the map where it goes on to theta: sgn s' > 0, N > 0, D > 0 and
+        th' > 0 at every node, the force point (h/2) mu sgn inside the support at the end (the
         support only shrinks as the object slides on), and the arc shifted by the slide meets
         no other palm (arc_meets_others: with the unshifted one it brackets the path). Returns
         (vx, vy, offset) at the handover, the slipping builds' the slide's."""
@@ -364,7 +364,8 @@ class _Builds:
         m, f = np.broadcast_to(v["object_mass"], (self.n,))[i], np.broadcast_to(mu, (self.n,))[i]
         th0, th1 = start[i], theta[i]
         y = np.array([v2[i] / l**2, offset[i], np.zeros(len(i))])
-        h = (th1 - th0) / SLIDE_STEPS  # the direction just past the onset, where s'' at
+        steps = max(2, math.ceil(float(np.max(th1 - th0)) / SLIDE_STEP))
+        h = (th1 - th0) / steps  # the direction just past the onset, where s'' at
         # s' = 0 is no longer 0 (at the onset it is, to rounding)
         sgn, ok = self._slide_direction(th0 + 1e-3 * h, np.sqrt(y[0]), m, M, f, l)
 
@@ -376,10 +377,10 @@ class _Builds:
             inv = 1.0 / np.where(omega > 0.0, omega, np.nan)
             return np.array([2.0 * thdd, y[2] * inv, sdd * inv]), normal, d
 
-        for n in range(SLIDE_STEPS + 1):
+        for n in range(steps + 1):
             k1, normal, d = rates(th0 + n * h, y)
             ok &= (normal > 0.0) & (d > 0.0) & ((sgn * y[2] > 0.0) | (n == 0)) & (y[0] > 0.0)
-            if n == SLIDE_STEPS:
+            if n == steps:
                 break
             k2 = rates(th0 + (n + 0.5) * h, y + 0.5 * h * k1)[0]
             k3 = rates(th0 + (n + 0.5) * h, y + 0.5 * h * k2)[0]
