@@ -7,7 +7,8 @@ memory, end to end: import, NLP build, every IPOPT start, the tie-break, the che
 without --no-verify, the simulator's verification), once with this checkout and once with the
 old one (--old DIR: its own PYTHONPATH), on problems/manipulators_long_row_yield.toml at 20,
 100 and 1,000 stages ([verification] stages rewritten in a copy) and
-problems/manipulators_yield_target.toml (20 and 100 stages). A run longer than --timeout seconds is
+problems/manipulators_yield_target.toml (20 and 100 stages) and
+results/specs/manipulators_yield_target_1000.toml (its given tolerances a tenth). A run longer than --timeout seconds is
 stopped and reported as such. Each answer's design is then built `--builds` times with the
 spec's seed and judged as `pdm-design yield` judges it (tolerances.yield_.yield_of, this
 checkout's), both designs on the same builds (one run where the designs agree to 12 digits).
@@ -34,8 +35,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 LONG = "problems/manipulators_long_row_yield.toml"
 TARGET = "problems/manipulators_yield_target.toml"
+TARGET_1000 = "results/specs/manipulators_yield_target_1000.toml"  # its given tolerances a tenth
 CASES = [(LONG, 20, True), (LONG, 100, True), (LONG, 1000, True), (TARGET, 20, True),
-         (TARGET, 100, True)]
+         (TARGET, 100, True), (TARGET_1000, 1000, True)]
 
 
 def spec_copy(source: str, stages: int, folder: Path) -> Path:
@@ -107,10 +109,15 @@ def describe(answer: dict | None) -> str:
         extra = " pivot " + ", ".join(f"{t['quantity']} {t['value']:.6g}"
                                       for t in answer["tolerances"][:1]
                                       if isinstance(t, dict) and "value" in t)
-    return (f"alpha {d['alpha']:.10f}, beta {d['beta']:.10f}, objective "
-            f"{answer['objective']['value']:.10g}{extra}; {solver['total_iterations']} "
-            f"iterations, build {solver['build_time']:.1f} s, IPOPT "
-            f"{solver['total_solve_time']:.1f} s")
+    value = answer["objective"]["value"]
+    checked = answer.get("tolerances_yield") or {}
+    check = (f"; Monte Carlo check {100 * checked['estimate']:.2f} % "
+             f"(from {100 * checked['ci_low']:.2f} %) at {checked['scale']:.4g} of the size, "
+             f"{len(checked['steps'])} runs" if checked else "")
+    return (f"{answer['status']}: alpha {d['alpha']:.10f}, beta {d['beta']:.10f}, objective "
+            f"{'none' if value is None else f'{value:.10g}'}{extra}; "
+            f"{solver['total_iterations']} iterations, build {solver['build_time']:.1f} s, "
+            f"IPOPT {solver['total_solve_time']:.1f} s{check}")
 
 
 def main() -> None:

@@ -317,7 +317,8 @@ class _Builds:
         v2_stuck = np.where(slips, phys.carry_speed_squared(u, a, stuck_end, gravity=terms[1],
                                                             link_length=l), v2)
         guards = self.guards(k, stuck_end, v2_stuck, offset, w, mu, terms)
-        guards = [(kind, np.where(slips, np.maximum(value, 0.0), value), closed)
+        # a slip that slides on to the handover is no failure, nor its margin the build's least
+        guards = [(kind, np.where(slips, np.inf, value), closed)
                   if kind == "slip" else (kind, value, closed) for kind, value, closed in guards]
         self.group(k, guards)
         speed = np.sqrt(np.maximum(v2, 0.0))
