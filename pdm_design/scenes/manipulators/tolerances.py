@@ -328,7 +328,8 @@ class _Builds:
             vx, vy, slid = self.slide_to_handover(k, slips, stuck_end, v2_stuck, theta, offset,
                                                   vx, vy, w, mu)
         # the palms parked behind, the object anywhere between its place and where it slid to
-        self.group(k, self.parked_palms(k, theta, offset, w, np.minimum(offset, slid)))
+        self.group(k, self.parked_palms(k, theta, np.maximum(offset, slid), w,
+                                        np.minimum(offset, slid)))
         offset = slid
         if last:
             return u, offset
@@ -563,7 +564,7 @@ class _Builds:
         """Clearance, in link lengths, to the palms 1 .. parked places behind palm k, each at
         its front stop (taken as there from the handover on: conservative, so a failure here
         is left to the simulator, which follows the timing), the object anywhere on the palm
-        from `low` (default: offset; a slide back along the palm) to `offset`. The clearance
+        from `low` (default: offset; a slide along the palm) to `offset`. The clearance
         is at least the distance the palm stays behind the object from the start of the carry
         (physics.parked_palm_clearance's `behind`), so it is computed in full only where that
         bound, in link lengths, is under the build's smallest margin so far: elsewhere the
