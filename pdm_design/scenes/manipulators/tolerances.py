@@ -367,8 +367,8 @@ class _Builds:
         th0, th1 = start[i], theta[i]
         y = np.array([v2[i] / l**2, offset[i], np.zeros(len(i))])
         steps = max(2, math.ceil(float(np.max(th1 - th0)) / SLIDE_STEP))
-        h = (th1 - th0) / steps  # the direction just past the onset, where s'' at
-        # s' = 0 is no longer 0 (at the onset it is, to rounding)
+        h = (th1 - th0) / steps
+        # the direction just past the onset: at the onset s'' (s' = 0) is 0, to rounding
         sgn, ok = self._slide_direction(th0 + 1e-3 * h, np.sqrt(y[0]), m, M, f, l)
 
         def rates(th, y):
