@@ -64,10 +64,9 @@ def test_the_slide_to_each_handover_is_the_simulators(tmp_path):
     outcome, seen = _mapped_handovers(spec, {"pivot_x": np.zeros((1, STAGES))})
     assert outcome.closed_form[0] and outcome.failure[0] == ""
     assert [k for k, slips, *_ in seen if slips[0]] == list(range(STAGES))  # the last to beta
-    run = simulate_manipulators(spec.scene, spec.design_at(), stages=STAGES,
-                                accuracy=resolve("precise"))
-    assert run.outcome.completed
     design = spec.design_at()
+    run = simulate_manipulators(spec.scene, design, stages=STAGES, accuracy=resolve("precise"))
+    assert run.outcome.completed
     # the next landing offset = the offset slid to + l sin(beta) - (pitch_x - l sin(alpha))
     # (the nominal row's handover geometry, the same at every stage)
     pitch_x = float(phys.pitch(design.alpha, design.beta, design.link_length)[0])

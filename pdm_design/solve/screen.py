@@ -17,9 +17,9 @@ design with a better one that near lies in a basin a better start already reache
 Deterministic: the sample is fixed by the seed, so one spec gives one set of starts and one
 answer every run (the tie-break still picks one design of a flat optimum).
 
-A yield target's objective is its scale s (formulation/yield_target.py), which every sampled
-design has at the guess's start: each is scored, and started, at its own largest s meeting the
-target (target_scales), and ranked by that.
+A yield target's objective is its scale s (formulation/yield_target.py), which a sampled
+design does not carry: each is scored, and started, at its own largest s meeting the target
+(target_scales), and ranked by that.
 """
 
 from __future__ import annotations
@@ -99,11 +99,10 @@ def target_row(form) -> int | None:
 def target_scales(form, p, xs: np.ndarray) -> np.ndarray:
     """Each sampled design's (the columns of NLP start vectors `xs`) largest scale s at which
     its nines row holds, to ROOT of the row: the yield falls as s grows, so a root find in
-    log s bracketed by the scale's bounds, narrowed first at the start's s where it lies
-    between them (else halfway in log s), every design at once (regula falsi, Illinois'
-    halving of a kept end's value; bisection where an end's row is not finite). The lower
-    bound where the row does not hold there (the design then ranks by its violation), the
-    upper where it holds there."""
+    log s bracketed by the scale's bounds, narrowed first halfway in log s, every design at
+    once (regula falsi, Illinois' halving of a kept end's value; bisection where an end's row
+    is not finite). The lower bound where the row does not hold there (the design then ranks
+    by its violation), the upper where it holds there."""
     from ..formulation.yield_target import SCALE_BOUNDS
 
     k, row = form.x_names.index(AUX), target_row(form)
@@ -126,8 +125,7 @@ def target_scales(form, p, xs: np.ndarray) -> np.ndarray:
     ends = [np.full(xs.shape[1], math.log(b)) for b in SCALE_BOUNDS]
     lo, hi = ends
     glo, ghi = value(lo), value(hi)
-    mid = xs[k]
-    mid = np.where((mid > lo) & (mid < hi), mid, 0.5 * (lo + hi))
+    mid = 0.5 * (lo + hi)
     lo, hi, glo, ghi = _narrowed(lo, hi, glo, ghi, mid, value(mid))
     true = glo.copy()  # the row at lo (glo is halved as Illinois' rule asks)
     last = np.zeros(xs.shape[1])  # the end kept by the last step: 1 hi, -1 lo
