@@ -22,7 +22,8 @@ value the plain chain's, its gradient and Hessian carried along the chain as sec
 Taylor coefficients (docs/optimizer.md section 10, "Cost"); without neighbours the chain is
 walked call by call until it settles and its tail added in closed form (chain_tail.py).
 
-The failure probability: the union bound sum_i Phi(-beta_i) (failure_bound, nines), or
+The failure probability: the union bound sum_i Phi(-beta_i) (failure_bound, nines; in
+logarithms union_nines), or
 Hunter's bound over each row and its own one call before (tree_nines, log_new_failure), in
 logarithms with a tail-accurate log Phi (log_tail).
 """
@@ -438,6 +439,34 @@ def nines(bound):
     return -ca.log10(ca.fmax(bound, FAILURE_FLOOR))
 
 
+EXACT_BELOW = 5.0  # log Phi(-beta) from erf below this beta (1 - erf keeps 10 digits there)
+
+
+def union_nines(g, sd, counted):
+    """-log10 of the union bound sum_i Phi(-beta_i) over the counted rows (a 0/1 DM a row),
+    summed in logarithms: each log Phi(-beta_i) from erf where beta_i < EXACT_BELOW (the
+    numbers of failure_bound), from log_tail above, where 1 - erf cancels to 0. Its value and
+    derivatives stay finite and consistent at any beta: in linear terms a design far inside
+    (every beta above 8.3) has a bound of 0 while the bound's derivatives are not, and the
+    nines' gradient came out 1e280. A NaN row stays a NaN."""
+    import numpy as np
+
+    rows = [int(i) for i in np.flatnonzero(np.asarray(ca.DM(counted)).ravel())]
+    beta = (g / sd)[rows]
+    # each branch's argument kept in its own range (a NaN stays one: fmin, fmax would drop it)
+    near = beta - ca.fmax(beta - EXACT_BELOW, 0.0)
+    exact = ca.log(0.5 * (1.0 - ca.erf(near / math.sqrt(2.0))))
+    far = log_tail(beta + ca.fmax(EXACT_BELOW - beta, 0.0))
+    return nines_of_logs(ca.if_else(beta < EXACT_BELOW, exact, far))
+
+
+def nines_of_logs(logs):
+    """-log10 of sum_i exp(logs_i): the nines of failure probabilities given by their
+    logarithms (a log-sum-exp, exact at any size)."""
+    top = ca.mmax(logs)
+    return -(top + ca.log(ca.sum1(ca.exp(logs - top)))) / math.log(10.0)
+
+
 def summary(g, sd, counted) -> dict:
     """The linearised yield of numeric rows (numpy g, sd; counted: a boolean mask): the union
     bound's yield, the failure bound, the smallest reliability index and the row count."""
@@ -539,6 +568,4 @@ def tree_nines(g, sd, previous, cross):
         before = [int(previous[i]) for i in after]
         rho = cross[after] / (sd[before] * sd[after])
         logs.append(log_new_failure(beta[before], beta[after], rho))
-    logs = ca.vertcat(*logs)
-    top = ca.mmax(logs)
-    return -(top + ca.log(ca.sum1(ca.exp(logs - top)))) / math.log(10.0)
+    return nines_of_logs(ca.vertcat(*logs))

@@ -9,7 +9,7 @@ yield reaches the target. One NLP:
 
     maximise  z = log s
     subject to  the design's nominal rows (every condition at zero tolerance, as for any spec)
-                nines(x, exp z) >= -log10(1 - target)                       (the nines row)
+                log(nines(x, exp z) / need) >= 0,  need = -log10(1 - target)  (the nines row)
 
 z an auxiliary variable (`yield_scale`: log s, so that IPOPT's steps in it are relative steps
 in s, as the yield's own dependence on s is), the allocated quantities' sigmas s times their
@@ -84,7 +84,9 @@ def target_rows(spec, symbols: dict, bounds: dict, nines_of) -> TargetRows:
     target = spec.tolerances.yield_target
     nines = nines_of(ca.exp(z))
     need = needed_nines(target)
-    row = Condition((CONDITION,), f"linearised yield >= {target:g}", nines - need, need,
+    # log(nines / need) >= 0: nines falls about as s^-2 (a reliability index ~ 1 / s), so
+    # its logarithm is about linear in z, and IPOPT's Newton steps in z are about exact
+    row = Condition((CONDITION,), f"linearised yield >= {target:g}", ca.log(nines / need),
                     kind=VALIDITY)
     bounds = tuple(math.log(b) for b in SCALE_BOUNDS)
     return TargetRows(z, bounds, bounds[0], row, z)

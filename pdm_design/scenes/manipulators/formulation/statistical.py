@@ -265,16 +265,17 @@ def _functions(scene, stages: int, active):
 CACHED = 4  # chains kept (a spec's NLP and its checks share one)
 
 
-def union_bound(scene, values: dict, stages: int, each, lot):
+def union_bound(scene, values: dict, stages: int, each, lot, reduce=None):
     """The union bound of a row of `stages` palms at the design `values` (by name, numbers or
     SX) and the part and lot sigmas `each`, `lot` (lists of numbers or SX): one node of an SX
     graph with its value, gradient and Hessian in the free symbols (chain_moments.
-    second_order_term), the same size at any number of stages."""
+    second_order_term), the same size at any number of stages. reduce: (g, sd, counted) -> the
+    node's value, chain_moments.failure_bound unless given (union_nines: its nines)."""
     active, each, lot = kept(each, lot)
     _, names, pieces, _ = _functions(scene, stages, active)
-    mask = counted(names)
+    mask, reduce = counted(names), reduce or chain_moments.failure_bound
     return chain_moments.second_order_term(
-        pieces, lambda g, sd: chain_moments.failure_bound(g, sd, mask),
+        pieces, lambda g, sd: reduce(g, sd, mask),
         [design_vector(values), ca.vertcat(*each), ca.vertcat(*lot)])
 
 

@@ -48,19 +48,19 @@ def modelled_quantities(spec, what) -> None:
 
 def target_rows(spec, values: dict, symbols: dict, bounds: dict) -> TargetRows:
     """The yield target's variable, row and objective on the design `values` (SX where free)."""
-    import casadi as ca
 
     from ....formulation import yield_target
+    from ....formulation.chain_moments import union_nines
     from .statistical import union_bound
 
     check(spec)
 
     def nines_of(s):
         each, lot = scaled_sigmas(spec.tolerances, s)
-        bound = union_bound(spec.scene, values, spec.verification.stages, each, lot)
-        # not statistical.nines: its floor hides a NaN (a spread the closed forms cannot
-        # follow) as 300 nines; here a NaN stays one, and IPOPT steps back from it
-        return -ca.log10(bound + 1e-300)
+        # in logarithms (finite derivatives far inside, where the bound itself is 0), and
+        # a NaN (a spread the closed forms cannot follow) stays one: IPOPT steps back from it
+        return union_bound(spec.scene, values, spec.verification.stages, each, lot,
+                           reduce=union_nines)
 
     return yield_target.target_rows(spec, symbols, bounds, nines_of)
 
