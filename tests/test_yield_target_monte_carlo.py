@@ -15,15 +15,17 @@ import math
 import re
 from dataclasses import replace
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 from test_yield_target_stairs import free_text, sized_text
 
 from pdm_design.cli import main
+from pdm_design.solve import yield_check
 from pdm_design.solve.yield_allocation import allocate_for_yield
-from pdm_design.solve.yield_check import LADDER, STEPS
+from pdm_design.solve.yield_check import LADDER, STEPS, _search
 from pdm_design.spec import load_spec
-from pdm_design.tolerances.yield_ import Z95, yield_of
+from pdm_design.tolerances.yield_ import Z95, map_builds, map_subset, yield_of
 
 TARGET, BUILDS, STAGES = 0.95, 400, 10
 
@@ -196,8 +198,6 @@ def test_a_design_whose_given_tolerances_fail_too_often_is_refused_in_words(tmp_
     (lambda c: 0.3 <= c <= 0.9, 0.9, 0.125),
 ])
 def test_the_search_finds_the_largest_factor_that_meets_the_target(meets, edge, gap):
-    from pdm_design.solve.yield_check import _search
-
     tried = []
 
     def judge(c):
@@ -210,8 +210,66 @@ def test_the_search_finds_the_largest_factor_that_meets_the_target(meets, edge, 
 
 
 def test_the_search_gives_up_when_no_factor_meets_the_target():
-    from pdm_design.solve.yield_check import _search
-
     tried = []
     assert _search(lambda c: tried.append(c) or False) == (0.0, False)
     assert tried == [1.0, *LADDER]
+
+
+# -- long runs: the ladder and the bisections on a screen of the builds at risk, one run judging
+# the factor they end at (yield_check._screen), against the plain search and the run's own map
+
+
+def test_the_screens_factor_is_judged_once_when_it_meets_the_target():
+    tried = []
+    factor, met = _search(lambda c: tried.append(c) or c <= 0.6, screen=lambda: (0.59, True))
+    assert (factor, met) == (0.59, True) and tried == [1.0, 0.59]
+
+
+def test_below_a_screened_factor_that_fails_the_ladder_goes_on():
+    """The screen was optimistic: its 0.8 fails; the rungs below 0.8 and the bisection
+    between 0.75 and 0.8 find the edge at 0.77 as the plain search's resolution allows."""
+    tried = []
+    factor, met = _search(lambda c: tried.append(c) or c <= 0.77, screen=lambda: (0.8, True))
+    assert met and 0.77 - 0.05 / 2**STEPS <= factor <= 0.77
+    assert tried[:3] == [1.0, 0.8, 0.75] and len(tried) == 3 + STEPS
+
+
+def test_a_screen_that_finds_nothing_leaves_the_plain_ladder():
+    tried = []
+    assert _search(lambda c: tried.append(c) or False, screen=lambda: (0.0, False)) == (
+        0.0, False)
+    assert tried == [1.0, *LADDER]
+
+
+def test_the_screens_builds_are_the_yield_runs_own(answer):
+    """map_subset draws each build alone: entry by entry the run's map of all builds."""
+    _, spec, design, out = answer
+    tolerances = reported(spec, out)
+    whole = map_builds(spec.scene, design, tolerances, 400, STAGES, 0)
+    chosen = np.array([3, 17, 18, 250, 399])
+    part = map_subset(spec.scene, design, tolerances, chosen, STAGES, 0)
+    for name in ("stages_passed", "failure", "min_margin", "closed_form"):
+        assert np.array_equal(getattr(part, name), getattr(whole, name)[chosen]), name
+
+
+def test_the_screened_check_meets_the_target_in_two_runs(answer, monkeypatch):
+    """The check at the NLP's size, screened (every run counts as long) and plain: the same
+    factor here, the screened one from two full runs (the NLP's size and the answer), and its
+    reported run is the yield run of the answer."""
+    _, spec, design, out = answer
+    record = out["tolerances_yield"]
+    allocated = frozenset(t.quantity for t in spec.tolerances if t.allocate)
+    nlp = reported(spec, out)
+    nlp = replace(nlp, items=tuple(t.scaled(1.0 / record["scale"]) if t.quantity in allocated
+                                   else t for t in nlp))
+    monkeypatch.setattr(yield_check, "SCREEN_ENTRIES", 1)
+    checked = yield_check._check(spec.scene, design, nlp, allocated, TARGET, STAGES, "default")
+    assert checked.met and checked.factor == pytest.approx(record["scale"], rel=1e-12)
+    steps = checked.record["steps"]
+    assert [s["scale"] for s in steps] == [1.0, checked.factor]
+    assert checked.record["screened"][0]["scale"] == 1.0
+    run = yield_of(spec.scene, design, checked.tolerances, builds=spec.tolerances.builds,
+                   stages=STAGES, seed=spec.tolerances.seed, confirm=spec.tolerances.confirm,
+                   scales=(), sensitivity_samples=0)
+    assert (run.estimate, run.ci_low) == (checked.record["estimate"], checked.record["ci_low"])
+    assert run.ci_low >= TARGET

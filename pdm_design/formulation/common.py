@@ -253,21 +253,21 @@ class Formulation:
         return np.clip(x, self.lbx, self.ubx)
 
     def defined_start(self, design: dict[str, float], anchor: dict[str, float],
-                      p, halvings: int = 12) -> np.ndarray:
+                      p, halvings: int = 12, *, checked: bool = False) -> np.ndarray:
         """start_vector(design), moved toward `anchor` (the spec's guess) until every row is a
         number. A start where a closed form is undefined (beta below alpha: no handover, a
         square root of a negative speed) ends IPOPT at once with Invalid_Number_Detected, and
         one at the edge of where they are defined soon after; halfway from that edge to the
-        guess is a start worth a run. Unchanged when the anchor is undefined too."""
+        guess is a start worth a run. Unchanged when the anchor is undefined too. checked: the
+        design is known undefined and the anchor defined (not evaluated again)."""
         def defined(values):
             x = self.start_vector(values)
-            rows, _, terms, _ = self.evaluate(x, p)
-            return x, bool(np.isfinite(np.asarray(rows)).all()
-                           and np.isfinite(np.asarray(terms)).all())
+            return x, self.is_defined(x, p)
 
-        x, ok = defined(design)
-        if ok or not defined(anchor)[1]:
-            return x
+        if not checked:
+            x, ok = defined(design)
+            if ok or not defined(anchor)[1]:
+                return x
         lo, hi = 0.0, 1.0  # fractions of the way from the anchor to the design: defined, not
         for _ in range(halvings):
             mid = 0.5 * (lo + hi)
@@ -280,13 +280,16 @@ class Formulation:
         where a closed form is undefined (beta below a fixed alpha), and starts moved toward
         it stay there. The anchor itself when no candidate is defined either."""
         def defined(values):
-            rows, _, terms, _ = self.evaluate(self.start_vector(values), p)
-            return bool(np.isfinite(np.asarray(rows)).all()
-                        and np.isfinite(np.asarray(terms)).all())
+            return self.is_defined(self.start_vector(values), p)
 
         if defined(anchor):
             return anchor
         return next((d for d in candidates() if defined(d)), anchor)
+
+    def is_defined(self, x, p) -> bool:
+        """Whether every row and objective term is a number at the start vector x."""
+        rows, _, terms, _ = self.evaluate(x, p)
+        return bool(np.isfinite(np.asarray(rows)).all() and np.isfinite(np.asarray(terms)).all())
 
     def defined_starts(self, designs: list[dict[str, float]], anchor: dict[str, float],
                        p) -> list[np.ndarray]:
@@ -299,7 +302,10 @@ class Formulation:
         rows, _, terms, _ = self.evaluate.map(len(designs))(xs, p)
         finite = (np.isfinite(np.asarray(rows)).all(axis=0)
                   & np.isfinite(np.asarray(terms)).all(axis=0))
-        return [xs[:, k].copy() if finite[k] else self.defined_start(d, anchor, p)
+        # none moves where all are defined, or toward an anchor that is not (defined_start)
+        if finite.all() or not self.is_defined(self.start_vector(anchor), p):
+            return [xs[:, k].copy() for k in range(len(designs))]
+        return [xs[:, k].copy() if finite[k] else self.defined_start(d, anchor, p, checked=True)
                 for k, d in enumerate(designs)]
 
 

@@ -32,7 +32,7 @@ from ..formulation.yield_target import AUX, CONDITION
 
 SAMPLE = 32  # designs sampled
 SIGMA = 4.0
-ROOT = 1e-12  # a sampled design's score: its nines row within this of its bound
+ROOT = 1e-9  # a sampled design's score: its nines row within this of its bound
 ITERATIONS = 100  # at most, of the root find
 
 

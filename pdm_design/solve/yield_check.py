@@ -30,6 +30,10 @@ from dataclasses import dataclass, replace
 TINY = 1e-3  # the factor that stands for the design with its given tolerances alone
 LADDER = (0.875, 0.75, 0.5, 0.25, TINY)  # factors tried after 1, until one meets the target
 STEPS = 4  # bisections between that factor and the one above it: 1/128 of the size near 1
+# builds x stages from which the ladder and the bisections run on a screen of the builds at
+# risk (_screen) and one run judges the factor they end at; below, every step is a run
+SCREEN_ENTRIES = 1_000_000
+SCREEN_SHARE = 0.02  # of the builds passing in closed form at 1, those the screen maps too
 _CACHE: dict = {}  # the last few checks, by their inputs (optimize, then yield, of one spec)
 _CACHE_SIZE = 4
 
@@ -67,27 +71,53 @@ def check_allocation(scene, design, tolerances, allocated, *, target: float, sta
 
 
 def _check(scene, design, tolerances, allocated, target, stages, accuracy):
-    from ..tolerances.yield_ import yield_of
+    from ..tolerances.yield_ import map_builds, yield_of
     from .yield_allocation import linearised_yield_function
 
     linearised = linearised_yield_function(scene)
-    runs = {}
+    builds, seed = tolerances.builds, tolerances.seed
+    runs, first = {}, {}
+    screening, showable = builds * stages >= SCREEN_ENTRIES, _showable(target, builds)
 
-    def judge(factor):
+    def run(factor, confirm, meanwhile=None):
         sized = shrunk(tolerances, allocated, factor)
-        runs[factor] = yield_of(scene, design, sized, builds=tolerances.builds, stages=stages,
-                                seed=tolerances.seed, confirm=tolerances.confirm,
-                                accuracy=accuracy, scales=(), sensitivity_samples=0)
+        if screening and factor == 1.0 and "mapped" not in first:  # the screen's margins
+            from ..tolerances.parallel import local_workers
+
+            first["mapped"] = map_builds(scene, design, sized, builds, stages, seed,
+                                         workers=local_workers(getattr(sized, "workers", None)))
+        runs[factor] = yield_of(scene, design, sized, builds=builds, stages=stages, seed=seed,
+                                confirm=confirm, accuracy=accuracy, scales=(),
+                                sensitivity_samples=0, mapped=first.get("mapped")
+                                if factor == 1.0 else None, meanwhile=meanwhile)
         return runs[factor].ci_low >= target
 
-    best, met = _search(judge, _showable(target, tolerances.builds))
+    screened, ahead = {}, {}
+
+    def screen():  # the screen's own ladder, found while the run at 1 simulates
+        if "found" not in ahead:
+            ahead["found"] = _search(_screen(scene, design, tolerances, allocated,
+                                             first["mapped"], target, stages, screened))
+        return ahead["found"]
+
+    def judge(factor):
+        if not (screening and factor == 1.0):
+            return run(factor, tolerances.confirm)
+        # screening: the run at 1 without the random confirmations, the screen meanwhile;
+        # run again with them where it meets the target (it is the answer then)
+        return (run(1.0, 0, meanwhile=screen if showable else None)
+                and run(1.0, tolerances.confirm))
+
+    best, met = _search(judge, showable, screen if screening else None)
     if not met:  # the factor whose lower end came nearest the target
         best = max(runs, key=lambda f: (runs[f].ci_low, f))
     sized = shrunk(tolerances, allocated, best)
     record = _record(runs, best, target, stages, tolerances,
                      linearised(scene, design, sized, stages)["yield"],
                      linearised(scene, design, tolerances, stages)["yield"], met)
-    words = "" if met else _unmet_words(runs, best, target, tolerances.builds, stages)
+    if screened:
+        record["screened"] = [{"scale": f, "failures": n} for f, n in screened.items()]
+    words = "" if met else _unmet_words(runs, best, target, builds, stages)
     return CheckedAllocation(sized, best, met, record, words)
 
 
@@ -99,16 +129,32 @@ def _showable(target: float, builds: int) -> bool:
     return float(wilson(builds, builds)[0]) >= target
 
 
-def _search(judge, showable: bool = True) -> tuple[float, bool]:
+def _search(judge, showable: bool = True, screen=None) -> tuple[float, bool]:
     """(the largest factor found that meets the target, True), or (0, False) when none of 1
     and LADDER does: the ladder down from 1, then STEPS bisections below the rung above. When
-    the builds cannot show the target (not showable), the run at 1 alone, for the record."""
-    above = 1.0
-    if judge(above):
-        return above, True
+    the builds cannot show the target (not showable), the run at 1 alone, for the record.
+    screen: () -> (a factor, whether found) of the same ladder and bisections on a cheaper
+    judge (_screen), asked after the run at 1; that factor is judged once, and where that run
+    does not meet the target the ladder goes on below it."""
+    if judge(1.0):
+        return 1.0, True
     if not showable:
         return 0.0, False
-    for rung in LADDER:
+    if screen is None:
+        return _ladder(judge, 1.0, LADDER)
+    guess, found = screen()
+    if not found or guess >= 1.0:
+        return _ladder(judge, 1.0, LADDER)
+    if judge(guess):
+        return guess, True
+    return _ladder(judge, guess, [r for r in LADDER if r < guess])
+
+
+def _ladder(judge, above: float, rungs) -> tuple[float, bool]:
+    """The first of `rungs` (falling, below `above`, which does not meet the target) that
+    judge passes, then STEPS bisections between it and the rung above it; (0, False) when none
+    does."""
+    for rung in rungs:
         if judge(rung):
             good, bad = rung, above
             for _ in range(STEPS):
@@ -117,6 +163,32 @@ def _search(judge, showable: bool = True) -> tuple[float, bool]:
             return good, True
         above = rung
     return 0.0, False
+
+
+def _screen(scene, design, tolerances, allocated, mapped, target, stages, screened):
+    """A judge of a factor on the builds most at risk alone: every build the map at factor 1
+    (`mapped`) fails or leaves to the simulator, and the SCREEN_SHARE of the others with the
+    smallest margins. At a factor, the closed-form map of those builds (tolerances.yield_.
+    map_subset, the same draws); a build that fails there or leaves the closed forms counts as
+    failing, every other build as passing; the judge passes where the Wilson interval's lower
+    end of that count reaches the target. `screened`: factor -> failures counted, filled."""
+    import numpy as np
+
+    from ..tolerances.yield_ import map_subset, wilson
+
+    builds = mapped.builds
+    risky = (mapped.failure != "") | ~mapped.closed_form
+    margin = np.where(risky, -np.inf, mapped.min_margin)
+    count = int(risky.sum()) + math.ceil(SCREEN_SHARE * builds)
+    chosen = np.sort(np.argsort(margin, kind="stable")[:count])
+
+    def judge(factor):
+        sized = shrunk(tolerances, allocated, factor)
+        outcome = map_subset(scene, design, sized, chosen, stages, tolerances.seed)
+        screened[factor] = int(((outcome.failure != "") | ~outcome.closed_form).sum())
+        return float(wilson(builds - screened[factor], builds)[0]) >= target
+
+    return judge
 
 
 def _record(runs, best, target, stages, tolerances, linearised, first_linearised, met) -> dict:

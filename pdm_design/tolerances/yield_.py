@@ -139,6 +139,16 @@ def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int,
                           ("stages_passed", "failure", "min_margin", "closed_form")))
 
 
+def map_subset(scene, design, tolerances, indices, stages: int, seed: int) -> BuildOutcome:
+    """The closed-form outcome of the builds `indices` (a non-empty sequence) of a yield run,
+    each drawn alone as map_builds draws it: entry by entry that run's outcome of them."""
+    from . import run_builds
+
+    parts = [draw(tolerances, 1, stages, seed, scene=scene, start=int(i)) for i in indices]
+    deviations = {q: np.concatenate([part[q] for part in parts]) for q in parts[0]}
+    return run_builds(scene, design, deviations, stages)
+
+
 def _mapped_chunk(task) -> BuildOutcome:
     """The closed-form outcome of `count` builds from `start` (map_builds' task)."""
     from . import run_builds
@@ -152,13 +162,17 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
              confirm: int = 20, accuracy="default", source: str = "SPEC",
              scales=SCALES, sensitivity_samples: int = SOBOL_SAMPLES,
              progress=None, allow_skips: bool = False, workers: int | None = None,
-             scheduler: str | None = None) -> YieldResult:
+             scheduler: str | None = None, mapped: BuildOutcome | None = None,
+             meanwhile=None) -> YieldResult:
     """Yield of `design` built with `tolerances` (every one with a value), K = `stages`.
     scales: the tolerance scales of the yield curve (() for none); sensitivity_samples: the
     Sobol' base sample (0: no sensitivity); allow_skips: the spec's [verification]
     allow_skips. A build passes iff its run completes (failure "").
     workers, scheduler: where the event simulator runs the builds (tolerances.parallel;
-    default: the tolerances' workers, else one process per core); the result is the same."""
+    default: the tolerances' workers, else one process per core); the result is the same.
+    mapped: the closed-form outcome of these builds (map_builds of the same arguments) when
+    the caller has it already. meanwhile: the caller's own work (a callable), done while the
+    workers simulate."""
     missing = [t.quantity for t in tolerances if t.value is None]
     if missing or not len(tolerances):
         raise ValueError("a yield needs tolerances with values" + (
@@ -167,8 +181,9 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
 
     if workers is None:
         workers = getattr(tolerances, "workers", None)
-    outcome = map_builds(scene, design, tolerances, builds, stages, seed,
-                         workers=local_workers(workers) if scheduler is None else 1)
+    outcome = mapped if mapped is not None else map_builds(
+        scene, design, tolerances, builds, stages, seed,
+        workers=local_workers(workers) if scheduler is None else 1)
     passed = outcome.stages_passed.copy()
     failure = outcome.failure.copy()
     sample, open_builds = _to_confirm(outcome, seed, confirm)
@@ -182,7 +197,9 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
         scale: tolerances.scaled(scale) for scale, _ in curve}, seed, stages, accuracy,
         allow_skips)
     started = start_builds(run, tasks, workers=workers, scheduler=scheduler, progress=progress)
-    try:  # the sensitivity and the scene's extras while the workers simulate
+    try:  # the sensitivity, the scene's extras and the caller's work while the workers simulate
+        if meanwhile is not None:
+            meanwhile()
         sensitivity, note = _sensitivity(scene, design, tolerances, stages, seed,
                                          sensitivity_samples)
         extras = of(scene).yield_extras(scene, design, tolerances, stages)
