@@ -82,11 +82,15 @@ def _zero(J) -> bool:
 def _relative(change, value, blocks):
     """The largest relative change, entry by entry, over the Taylor blocks (an entry below
     FLOOR of its block's largest measured against that floor)."""
-    change, value = change.reshape(blocks, -1), np.abs(value.reshape(blocks, -1))
-    size = np.maximum(value, FLOOR * np.max(value, axis=1, initial=0.0)[:, None])
+    value = np.abs(value).reshape(blocks, -1)
+    if value.size == 0:
+        return 0.0
+    size = np.maximum(value, FLOOR * value.max(axis=1)[:, None])
+    change = np.abs(change).reshape(blocks, -1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(change != 0.0, np.abs(change) / size, 0.0)
-    return float(np.max(ratio, initial=0.0))
+        ratio = change / size
+    ratio[change == 0.0] = 0.0  # no change is settled, whatever its size (0 / 0 too)
+    return float(ratio.max())
 
 
 class _Settling:
@@ -126,13 +130,13 @@ def walk(pieces, functions, u, blocks: int, tol: float = TOL):
     coefficients in each input and output)."""
     head, step, tail = functions
     out = head(u)
-    X, columns = out[0].full().ravel(), [[_blocked(o, blocks)] for o in out[1:]]
+    X, columns = _flat(out[0]), [[_blocked(o, blocks)] for o in out[1:]]
     middle = pieces.calls - 1
     walked, settling = 0, _Settling(X.size // blocks, pieces.drift, blocks, tol)
     settling.settled(X)
     while walked < middle:
         out = step(X, u)
-        before, X = X, out[0].full().ravel()
+        before, X = X, _flat(out[0])
         walked += 1
         for column, o in zip(columns, out[1:], strict=True):
             column.append(_blocked(o, blocks))
@@ -170,7 +174,45 @@ def _line(step, X, D, u, calls, blocks):
 
 
 def _blocked(o, blocks):
-    return np.asarray(o.full()).reshape(blocks, -1)
+    return np.asarray(o, float).reshape(blocks, -1)
+
+
+def _flat(o):
+    return np.asarray(o, float).ravel()
+
+
+class Buffered:
+    """A Function evaluated through CasADi's numeric buffer (Function.buffer): numpy arrays in
+    and out, no DM built a call (the walk's step costs its arithmetic and about as much again
+    in conversions otherwise); every output dense, shaped as the Function's. Inputs must be
+    dense (the chain's are)."""
+
+    def __init__(self, fn):
+        import casadi as ca
+
+        args = [ca.MX.sym(f"i{k}", fn.sparsity_in(k)) for k in range(fn.n_in())]
+        self.fn = ca.Function(f"{fn.name()}_buffered", args,
+                              [ca.densify(o) for o in fn.call(args)])
+        self.ins = [np.zeros(fn.nnz_in(k)) for k in range(fn.n_in())]
+        self.outs = [np.zeros(self.fn.nnz_out(k)) for k in range(self.fn.n_out())]
+        self.shapes = [self.fn.size_out(k) for k in range(self.fn.n_out())]
+        self.buffer, self.trigger = self.fn.buffer()
+        for k, a in enumerate(self.ins):
+            self.buffer.set_arg(k, memoryview(a))
+        for k, o in enumerate(self.outs):
+            self.buffer.set_res(k, memoryview(o))
+
+    def __call__(self, *values):
+        for a, v in zip(self.ins, values, strict=True):
+            a[:] = np.asarray(v, float).ravel()
+        self.trigger()
+        return [o.reshape(shape, order="F").copy() for o, shape in zip(self.outs, self.shapes)]
+
+
+def buffered(functions):
+    """(head, step, tail) as Buffered, where every input is dense (else as they are)."""
+    return tuple(f if f is None or not all(f.sparsity_in(k).is_dense() for k in range(f.n_in()))
+                 else Buffered(f) for f in functions)
 
 
 class Walked(ca.Callback):
@@ -185,8 +227,8 @@ class Walked(ca.Callback):
 
         self.pieces, self.series, self.nv, self.nu = pieces, series, nv, nu
         self.blocks = 1 if moving is None else 1 + nv + len(_pairs(nv))
-        self.functions = ((pieces.head, pieces.step, pieces.tail) if moving is None else
-                          pieces.taylor(nv, moving))
+        self.functions = buffered((pieces.head, pieces.step, pieces.tail) if moving is None
+                                  else pieces.taylor(nv, moving))
         self.reduce = _reducer(reduce, len(pieces.names), nv, self.blocks)
         self.last, self.walked = (None, None), 0
         self.construct(f"chain_walked_{self.blocks}", {})
