@@ -267,7 +267,11 @@ def test_the_screened_check_meets_the_target_in_two_runs(answer, monkeypatch):
     assert checked.met and checked.factor == pytest.approx(record["scale"], rel=1e-12)
     steps = checked.record["steps"]
     assert [s["scale"] for s in steps] == [1.0, checked.factor]
-    assert checked.record["screened"][0]["scale"] == 1.0
+    # the screen mapped the first rung's grid (2^STEPS factors from LADDER[0] up) at once
+    grid = [s["scale"] for s in checked.record["screened"]]
+    assert grid[:2**STEPS] == [LADDER[0] + (1.0 - LADDER[0]) * k / 2**STEPS
+                               for k in range(2**STEPS)]
+    assert checked.factor in grid
     run = yield_of(spec.scene, design, checked.tolerances, builds=spec.tolerances.builds,
                    stages=STAGES, seed=spec.tolerances.seed, confirm=spec.tolerances.confirm,
                    scales=(), sensitivity_samples=0)

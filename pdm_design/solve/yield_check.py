@@ -94,10 +94,10 @@ def _check(scene, design, tolerances, allocated, target, stages, accuracy):
 
     screened, ahead = {}, {}
 
-    def screen():  # the screen's own ladder, found while the run at 1 simulates
+    def screen():  # the screen's factor, found while the run at 1 simulates
         if "found" not in ahead:
-            ahead["found"] = _search(_screen(scene, design, tolerances, allocated,
-                                             first["mapped"], target, stages, screened))
+            ahead["found"] = _screen(scene, design, tolerances, allocated, first["mapped"],
+                                     target, stages, screened)
         return ahead["found"]
 
     def judge(factor):
@@ -133,9 +133,9 @@ def _search(judge, showable: bool = True, screen=None) -> tuple[float, bool]:
     """(the largest factor found that meets the target, True), or (0, False) when none of 1
     and LADDER does: the ladder down from 1, then STEPS bisections below the rung above. When
     the builds cannot show the target (not showable), the run at 1 alone, for the record.
-    screen: () -> (a factor, whether found) of the same ladder and bisections on a cheaper
-    judge (_screen), asked after the run at 1; that factor is judged once, and where that run
-    does not meet the target the ladder goes on below it."""
+    screen: () -> (a factor, whether found) of the same ladder and the bisections' grid on a
+    cheaper judge (_screen), asked after the run at 1; that factor is judged once, and where
+    that run does not meet the target the ladder goes on below it."""
     if judge(1.0):
         return 1.0, True
     if not showable:
@@ -166,29 +166,38 @@ def _ladder(judge, above: float, rungs) -> tuple[float, bool]:
 
 
 def _screen(scene, design, tolerances, allocated, mapped, target, stages, screened):
-    """A judge of a factor on the builds most at risk alone: every build the map at factor 1
-    (`mapped`) fails or leaves to the simulator, and the SCREEN_SHARE of the others with the
-    smallest margins. At a factor, the closed-form map of those builds (tolerances.yield_.
-    map_subset, the same draws); a build that fails there or leaves the closed forms counts as
-    failing, every other build as passing; the judge passes where the Wilson interval's lower
-    end of that count reaches the target. `screened`: factor -> failures counted, filled."""
+    """(a factor, whether found): the ladder's on the builds most at risk alone. Those are
+    every build the map at factor 1 (`mapped`) fails or leaves to the simulator, and the
+    SCREEN_SHARE of the others with the smallest margins. At a factor each is drawn as the
+    run draws it (its allocated deviations that factor times those at 1) and mapped; one that
+    fails there or leaves the closed forms counts as failing, every other build as passing,
+    and the factor passes where the Wilson interval's lower end of that count reaches the
+    target. Each rung of 1 and LADDER with the 2^STEPS factors above it up to the rung above
+    (the bisections' grid) in one map: the first rung that passes, and the last factor
+    above it before one that does not. `screened`: factor -> failures counted, filled."""
     import numpy as np
 
-    from ..tolerances.yield_ import map_subset, wilson
+    from ..tolerances import run_builds
+    from ..tolerances.yield_ import drawn, wilson
 
     builds = mapped.builds
     risky = (mapped.failure != "") | ~mapped.closed_form
     margin = np.where(risky, -np.inf, mapped.min_margin)
-    count = int(risky.sum()) + math.ceil(SCREEN_SHARE * builds)
-    chosen = np.sort(np.argsort(margin, kind="stable")[:count])
-
-    def judge(factor):
-        sized = shrunk(tolerances, allocated, factor)
-        outcome = map_subset(scene, design, sized, chosen, stages, tolerances.seed)
-        screened[factor] = int(((outcome.failure != "") | ~outcome.closed_form).sum())
-        return float(wilson(builds - screened[factor], builds)[0]) >= target
-
-    return judge
+    chosen = np.sort(np.argsort(margin, kind="stable")[
+        :int(risky.sum()) + math.ceil(SCREEN_SHARE * builds)])
+    base = drawn(scene, tolerances, chosen, stages, tolerances.seed)
+    rungs = (1.0, *LADDER)
+    for above, rung in zip(rungs, rungs[1:]):
+        grid = rung + (above - rung) * np.arange(2**STEPS) / 2**STEPS
+        stacked = {q: np.concatenate([d * f for f in grid]) if q in allocated
+                   else np.concatenate([d] * len(grid)) for q, d in base.items()}
+        out = run_builds(scene, design, stacked, stages)
+        failing = ((out.failure != "") | ~out.closed_form).reshape(len(grid), -1).sum(axis=1)
+        screened.update({float(f): int(n) for f, n in zip(grid, failing)})
+        passes = wilson(builds - failing, builds)[0] >= target
+        if passes[0]:
+            return float(grid[np.argmin(passes) - 1 if not passes.all() else -1]), True
+    return 0.0, False
 
 
 def _record(runs, best, target, stages, tolerances, linearised, first_linearised, met) -> dict:

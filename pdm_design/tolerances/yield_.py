@@ -144,9 +144,13 @@ def map_subset(scene, design, tolerances, indices, stages: int, seed: int) -> Bu
     each drawn alone as map_builds draws it: entry by entry that run's outcome of them."""
     from . import run_builds
 
+    return run_builds(scene, design, drawn(scene, tolerances, indices, stages, seed), stages)
+
+
+def drawn(scene, tolerances, indices, stages: int, seed: int) -> dict[str, np.ndarray]:
+    """The deviations of the builds `indices` (non-empty) of a yield run, each drawn alone."""
     parts = [draw(tolerances, 1, stages, seed, scene=scene, start=int(i)) for i in indices]
-    deviations = {q: np.concatenate([part[q] for part in parts]) for q in parts[0]}
-    return run_builds(scene, design, deviations, stages)
+    return {q: np.concatenate([part[q] for part in parts]) for q in parts[0]}
 
 
 def _mapped_chunk(task) -> BuildOutcome:
