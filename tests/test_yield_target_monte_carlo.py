@@ -25,7 +25,8 @@ from pdm_design.solve import yield_check
 from pdm_design.solve.yield_allocation import allocate_for_yield
 from pdm_design.solve.yield_check import LADDER, STEPS, _search
 from pdm_design.spec import load_spec
-from pdm_design.tolerances.yield_ import Z95, map_builds, map_subset, yield_of
+from pdm_design.tolerances import run_builds
+from pdm_design.tolerances.yield_ import Z95, drawn, map_builds, yield_of
 
 TARGET, BUILDS, STAGES = 0.95, 400, 10
 
@@ -242,12 +243,13 @@ def test_a_screen_that_finds_nothing_leaves_the_plain_ladder():
 
 
 def test_the_screens_builds_are_the_yield_runs_own(answer):
-    """map_subset draws each build alone: entry by entry the run's map of all builds."""
+    """The screen draws each build alone: mapped, entry by entry the run's map of them."""
     _, spec, design, out = answer
     tolerances = reported(spec, out)
     whole = map_builds(spec.scene, design, tolerances, 400, STAGES, 0)
     chosen = np.array([3, 17, 18, 250, 399])
-    part = map_subset(spec.scene, design, tolerances, chosen, STAGES, 0)
+    part = run_builds(spec.scene, design, drawn(spec.scene, tolerances, chosen, STAGES, 0),
+                      STAGES)
     for name in ("stages_passed", "failure", "min_margin", "closed_form"):
         assert np.array_equal(getattr(part, name), getattr(whole, name)[chosen]), name
 

@@ -139,14 +139,6 @@ def map_builds(scene, design, tolerances, builds: int, stages: int, seed: int,
                           ("stages_passed", "failure", "min_margin", "closed_form")))
 
 
-def map_subset(scene, design, tolerances, indices, stages: int, seed: int) -> BuildOutcome:
-    """The closed-form outcome of the builds `indices` (a non-empty sequence) of a yield run,
-    each drawn alone as map_builds draws it: entry by entry that run's outcome of them."""
-    from . import run_builds
-
-    return run_builds(scene, design, drawn(scene, tolerances, indices, stages, seed), stages)
-
-
 def drawn(scene, tolerances, indices, stages: int, seed: int) -> dict[str, np.ndarray]:
     """The deviations of the builds `indices` (non-empty) of a yield run, each drawn alone."""
     parts = [draw(tolerances, 1, stages, seed, scene=scene, start=int(i)) for i in indices]
