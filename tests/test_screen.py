@@ -125,3 +125,32 @@ def test_the_screened_yield_target_is_the_eight_starts_answer(monkeypatch):
     allocated = {t["quantity"]: t["value"] for t in plain.tolerances if t["allocated"]}
     assert allocated and {t["quantity"]: t["value"] for t in screened.tolerances
                           if t["allocated"]} == pytest.approx(allocated, rel=1e-7)
+
+
+def test_the_target_scales_split_among_forked_workers_are_the_same(monkeypatch):
+    """at_target_scales splits the designs among the cores (tolerances.parallel.forked_map:
+    each forked child inherits the NLP's Functions); each design's root is its own, so the
+    scales are the same to the bit as in one process."""
+    import os
+
+    from pdm_design.formulation import formulate
+    from pdm_design.solve.ipopt import start_designs
+    from pdm_design.tolerances import parallel
+
+    spec = _target_spec(20)
+    form = formulate(spec)
+    names = form.design_names
+    guess = {n: spec.design[n].guess for n in names}
+    designs = start_designs(names, [spec.design[n].min for n in names],
+                            [spec.design[n].max for n in names], guess, 8, 0)
+    starts = form.defined_starts(designs, guess, form.p_default)
+    alone = screen.at_target_scales(form, form.p_default, starts)
+    monkeypatch.setattr(parallel, "local_workers", lambda workers=None: 2)
+    split = screen.at_target_scales(form, form.p_default, starts)
+    assert all(np.array_equal(a, b) for a, b in zip(alone, split, strict=True))
+    # where this process can fork, the halves ran in children
+    pids = parallel.forked_map(lambda part: os.getpid(), [0, 1], 2)
+    if parallel._context().get_start_method() == "fork":
+        assert os.getpid() not in pids
+    else:
+        assert pids == [os.getpid()] * 2

@@ -81,11 +81,17 @@ def screened(form, p, sample: list[np.ndarray], always: int, starts: int) -> lis
 
 def at_target_scales(form, p, starts: list[np.ndarray]) -> list[np.ndarray]:
     """The start points `starts` (NLP start vectors), a yield target's scale s in each set to
-    that design's largest s meeting the target (target_scales); unchanged without a target."""
+    that design's largest s meeting the target (target_scales); unchanged without a target.
+    The designs are split among the local cores (forked processes: the same scales)."""
     if target_row(form) is None or not starts:
         return starts
+    from ..tolerances.parallel import forked_map, local_workers
+
     xs = np.column_stack(starts)
-    xs[form.x_names.index(AUX)] = np.log(target_scales(form, p, xs))  # the NLP's z = log s
+    workers = local_workers()  # each design's root is its own: split among the cores
+    parts = [c for c in np.array_split(np.arange(len(starts)), workers) if len(c)]
+    scales = forked_map(lambda cols: target_scales(form, p, xs[:, cols]), parts, workers)
+    xs[form.x_names.index(AUX)] = np.log(np.concatenate(scales))  # the NLP's z = log s
     return [xs[:, k].copy() for k in range(len(starts))]
 
 

@@ -85,6 +85,29 @@ def map_chunks(fn, tasks: list, workers: int) -> list:
         return list(pool.map(fn, tasks))
 
 
+_INHERITED: dict = {}  # forked_map's callables, by key: a forked child inherits them
+
+
+def forked_map(fn, parts: list, workers: int) -> list:
+    """[fn(part) for part in parts], on `workers` forked processes where this process can
+    fork (no other thread), else here. fn may be any callable, a closure over objects that do
+    not pickle (CasADi Functions with Python callbacks): each child inherits it; `parts` and
+    the results must pickle."""
+    if workers <= 1 or len(parts) < 2 or _context().get_start_method() != "fork":
+        return [fn(part) for part in parts]
+    key = id(fn)
+    _INHERITED[key] = fn
+    try:
+        return map_chunks(_inherited, [(key, part) for part in parts], workers)
+    finally:
+        _INHERITED.pop(key, None)
+
+
+def _inherited(task):
+    key, part = task
+    return _INHERITED[key](part)
+
+
 def _context():
     """A forked pool (fast start, the modules already imported) when this process runs no
     other thread, else one started from a fork server (or spawned)."""
