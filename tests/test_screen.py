@@ -146,6 +146,7 @@ def test_the_target_scales_split_among_forked_workers_are_the_same(monkeypatch):
     starts = form.defined_starts(designs, guess, form.p_default)
     alone = screen.at_target_scales(form, form.p_default, starts)
     monkeypatch.setattr(parallel, "local_workers", lambda workers=None: 2)
+    monkeypatch.setattr(screen, "SPLIT_SECONDS", 0.0)
     split = screen.at_target_scales(form, form.p_default, starts)
     assert all(np.array_equal(a, b) for a, b in zip(alone, split, strict=True))
     # where this process can fork, the halves ran in children

@@ -64,3 +64,25 @@ def test_far_inside_the_derivatives_are_finite_and_right():
 def test_a_row_that_is_not_a_number_stays_one():
     g, sd = ca.DM([2.0, np.nan]), ca.DM([1.0, 1.0])
     assert np.isnan(float(cm.union_nines(g, sd, ca.DM([1.0, 1.0]))))
+
+
+def test_the_nines_row_is_the_log_ratio_and_its_tangent_below_the_floor():
+    """formulation/yield_target.log_ratio: log r from LOG_FLOOR up; below, the tangent there
+    (the same value and slope at the floor), a number where the nines are none or negative,
+    and a NaN stays one."""
+    import math
+
+    from pdm_design.formulation.yield_target import LOG_FLOOR, log_ratio
+
+    r = ca.SX.sym("r")
+    fn = ca.Function("f", [r], [log_ratio(r), ca.gradient(log_ratio(r), r)])
+    for x in (LOG_FLOOR, 0.7, 1.0, 3.0, 1e6):
+        value, slope = (float(o) for o in fn(x))
+        assert value == pytest.approx(math.log(x), rel=1e-15, abs=1e-15)
+        assert slope == pytest.approx(1.0 / x, rel=1e-15)
+    below, slope = (float(o) for o in fn(LOG_FLOOR * (1.0 - 1e-9)))
+    assert below == pytest.approx(math.log(LOG_FLOOR), abs=1e-8)
+    assert slope == pytest.approx(1.0 / LOG_FLOOR, rel=1e-12)
+    for x in (0.0, -2.0):
+        assert float(fn(x)[0]) == pytest.approx(math.log(LOG_FLOOR) + (x - LOG_FLOOR) / LOG_FLOOR)
+    assert np.isnan(float(fn(np.nan)[0]))

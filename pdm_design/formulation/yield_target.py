@@ -84,12 +84,25 @@ def target_rows(spec, symbols: dict, bounds: dict, nines_of) -> TargetRows:
     target = spec.tolerances.yield_target
     nines = nines_of(ca.exp(z))
     need = needed_nines(target)
-    # log(nines / need) >= 0: nines falls about as s^-2 (a reliability index ~ 1 / s), so
-    # its logarithm is about linear in z, and IPOPT's Newton steps in z are about exact
-    row = Condition((CONDITION,), f"linearised yield >= {target:g}", ca.log(nines / need),
-                    kind=VALIDITY)
+    row = Condition((CONDITION,), f"linearised yield >= {target:g}",
+                    log_ratio(nines / need), kind=VALIDITY)
     bounds = tuple(math.log(b) for b in SCALE_BOUNDS)
     return TargetRows(z, bounds, bounds[0], row, z)
+
+
+LOG_FLOOR = 0.5  # of nines / need: below it log_ratio goes on along its tangent there
+
+
+def log_ratio(r):
+    """log r, the nines row (r = nines / need; >= 0 where the target is met): nines fall about
+    as s^-2 (a reliability index ~ 1 / s), so their logarithm is about linear in z and IPOPT's
+    Newton steps in z about exact. Below LOG_FLOOR it goes on along its tangent, a number for
+    any r (nines <= 0 at a scale far too large: a row that does not hold, not a NaN)."""
+    import casadi as ca
+
+    tangent = math.log(LOG_FLOOR) + (r - LOG_FLOOR) / LOG_FLOOR
+    above = r >= LOG_FLOOR
+    return ca.if_else(above, ca.log(ca.if_else(above, r, LOG_FLOOR)), tangent)
 
 
 def scale_of(z: float) -> float:

@@ -25,6 +25,7 @@ design does not carry: each is scored, and started, at its own largest s meeting
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -34,6 +35,8 @@ SAMPLE = 32  # designs sampled
 SIGMA = 4.0
 ROOT = 1e-9  # a sampled design's score: its nines row within this of its bound
 ITERATIONS = 100  # at most, of the root find
+EVALUATIONS = 20  # of the rows, about, in a root find (to judge its cost)
+SPLIT_SECONDS = 1.0  # root finds longer than this in one process are split among the cores
 
 
 def radius(n: int, sampled: int) -> float:
@@ -82,13 +85,17 @@ def screened(form, p, sample: list[np.ndarray], always: int, starts: int) -> lis
 def at_target_scales(form, p, starts: list[np.ndarray]) -> list[np.ndarray]:
     """The start points `starts` (NLP start vectors), a yield target's scale s in each set to
     that design's largest s meeting the target (target_scales); unchanged without a target.
-    The designs are split among the local cores (forked processes: the same scales)."""
+    The designs are split among the local cores (forked processes: the same scales) where
+    their root finds would take more than SPLIT_SECONDS in one."""
     if target_row(form) is None or not starts:
         return starts
     from ..tolerances.parallel import forked_map, local_workers
 
     xs = np.column_stack(starts)
-    workers = local_workers()  # each design's root is its own: split among the cores
+    tic = time.perf_counter()  # one design's row, to judge whether splitting pays
+    _rows(form)(xs[:, 0], p)
+    cost = EVALUATIONS * len(starts) * (time.perf_counter() - tic)
+    workers = local_workers() if cost > SPLIT_SECONDS else 1
     parts = [c for c in np.array_split(np.arange(len(starts)), workers) if len(c)]
     scales = forked_map(lambda cols: target_scales(form, p, xs[:, cols]), parts, workers)
     xs[form.x_names.index(AUX)] = np.log(np.concatenate(scales))  # the NLP's z = log s
@@ -125,7 +132,9 @@ def target_scales(form, p, xs: np.ndarray) -> np.ndarray:
             x[k] = logs[busy]  # the NLP's variable is log s
             rows = maps.setdefault(m, fn.map(m))
             with np.errstate(all="ignore"):  # a chain undefined at a large scale: NaN
-                out[busy] = np.asarray(rows(x, p), float)[row] - form.lbg[row]
+                # the row is log(nines / need): its exp - 1, nines / need - 1, has no
+                # logarithm's steep fall where the nines are few, which regula falsi likes
+                out[busy] = np.expm1(np.asarray(rows(x, p), float)[row] - form.lbg[row])
         return out
 
     ends = [np.full(xs.shape[1], math.log(b)) for b in SCALE_BOUNDS]
