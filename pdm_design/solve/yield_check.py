@@ -20,6 +20,11 @@ every c (common random numbers: build i's uniform numbers are fixed by the seed,
 allocated quantity's deviation is c times the one at c = 1), so the estimate moves with c only
 through the builds whose verdict c changes, and the bisection does not chase sampling noise.
 The answer is always a factor that was checked: its run is the one reported.
+
+On long runs (SCREEN_ENTRIES builds x stages and more) a run costs seconds of the event
+simulator, and the search runs on a screen instead (_screen): the builds at risk at c = 1,
+mapped at a rung and its bisection grid at once; one run judges the factor it finds, and the
+ladder goes on below that factor only where that run does not meet the target.
 """
 
 from __future__ import annotations
@@ -30,9 +35,7 @@ from dataclasses import dataclass, replace
 TINY = 1e-3  # the factor that stands for the design with its given tolerances alone
 LADDER = (0.875, 0.75, 0.5, 0.25, TINY)  # factors tried after 1, until one meets the target
 STEPS = 4  # bisections between that factor and the one above it: 1/128 of the size near 1
-# builds x stages from which the ladder and the bisections run on a screen of the builds at
-# risk (_screen) and one run judges the factor they end at; below, every step is a run
-SCREEN_ENTRIES = 1_000_000
+SCREEN_ENTRIES = 1_000_000  # builds x stages from which the search runs on the screen
 SCREEN_SHARE = 0.02  # of the builds passing in closed form at 1, those the screen maps too
 _CACHE: dict = {}  # the last few checks, by their inputs (optimize, then yield, of one spec)
 _CACHE_SIZE = 4
