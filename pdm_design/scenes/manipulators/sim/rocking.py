@@ -258,16 +258,18 @@ class RockingPhases:
                   f"the {'palm' if r.edge else 'base'}'s {'front' if side > 0 else 'rear'} edge")
         return lambda: self._rock(t, k, s, d, (theta, omega, 0.0, phid), False)
 
-    def _rock(self, t0, k, s, d, z0, held, way=None):
+    def _rock(self, t0, k, s, d, z0, held, way=None, side=None):
         """The object turning about its pin on palm k (offset s, pin d along its base), state
         z = (th, th', phi, phi'); held: palm k rests on a stop. Guards (positive while the phase
         holds): phi back to 0 (`settle`), phi at pi/2 on its side (`tipped_over`: its base
         stands vertical, it leaves its edge), the pin's normal force and friction cone (the
         rocking the model does not follow: `tip`), the palm's stops, a held palm dragged off
         its stop, beta on the last palm; a base corner entering a resting palm's slab through
-        its top is a `catch`, through another face `blocked`."""
+        its top is a `catch`, through another face `blocked`. side: the way the base is lifted
+        (+1: its part behind the pin, phi > 0), by default that of phi' (else phi)."""
         r = self._rocker(k, s, d)
-        side = 1.0 if z0[3] > 0.0 or (z0[3] == 0.0 and z0[2] > 0.0) else -1.0
+        if side is None:
+            side = 1.0 if z0[3] > 0.0 or (z0[3] == 0.0 and z0[2] > 0.0) else -1.0
         theta0, omega0 = z0[0], z0[1]
         if way is None:  # the sign of th' the pivots' Coulomb torque opposes
             way = 1.0 if omega0 >= 0.0 else -1.0
@@ -325,7 +327,7 @@ class RockingPhases:
                 self._rec(t, st["x"], st["y"], st["vx"], st["vy"], st["theta"], k + 1)
         state = self._rock_state(k, z, r)
         if kind is None and t_split is not None and te >= t_split:
-            return lambda: self._rock(te, k, s, d, z, held)
+            return lambda: self._rock(te, k, s, d, z, held, side=side)
         if kind == "turn":  # the palm stops: it moves on the way its acceleration takes it
             z[1] = 0.0
             ahead = accelerations(z[0], 0.0, z[2], z[3], r, direction=1.0)[0]
@@ -334,20 +336,23 @@ class RockingPhases:
                 return self._fail(te, "stall", k + 1, state,
                                   f"palm {k + 1} stops where its pivot friction holds it, the "
                                   "object rocking on it (not followed)")
-            return lambda: self._rock(te, k, s, d, z, held, 1.0 if ahead > 0.0 else -1.0)
+            return lambda: self._rock(te, k, s, d, z, held, 1.0 if ahead > 0.0 else -1.0,
+                                      side=side)
         if kind == "release":
             self.rest_since[k] = math.inf
             self._log(te, "release", k + 1, state, state,
                       f"the rocking object drags palm {k + 1} off its stop")
-            return lambda: self._rock(te, k, s, d, z, False)
+            return lambda: self._rock(te, k, s, d, z, False, side=side)
         if kind in ("back_stop", "front_stop"):
-            return self._rock_stop(te, k, s, d, z, r, kind, state)
+            return self._rock_stop(te, k, s, d, z, r, kind, state, side)
         if kind == "settle":
             return self._rock_settle(te, k, s, d, z, r, held, state)
         if isinstance(kind, tuple):
             return self._rock_catch(te, k, z, r, kind, state)
         if kind == "complete":
             return self._complete(te, k, z[0], z[1], s)
+        if kind == "lost":  # the object flies off its pin, tumbling (tumbling.py)
+            return self._leave_edge(te, k, z, r, state)
         return self._rock_fail(te, k, kind, z, r, state)
 
     def _rock_fail(self, t, k, kind, z, r, state):
@@ -368,7 +373,7 @@ class RockingPhases:
         name = "tipped_over" if kind == "tipped_over" else "tip"
         return self._fail(t, name, k + 1, state, words[kind])
 
-    def _rock_stop(self, t, k, s, d, z, r, kind, state):
+    def _rock_stop(self, t, k, s, d, z, r, kind, state, side=None):
         """Palm k reaches a stop while the object rocks on it: the stop takes a generalized
         impulse along th only, so p_phi = M12 th' + M22 phi' is kept and th'+ = 0."""
         _, m12, m22 = mass_matrix(z[0], z[2], r)
@@ -378,7 +383,7 @@ class RockingPhases:
         self.rest_angle[k], self.rest_since[k] = stop, t
         self._log(t, kind, k + 1, state, self._rock_state(k, after, r),
                   f"palm {k + 1} stopped with the object rocking on it")
-        return lambda: self._rock(t, k, s, d, after, True)
+        return lambda: self._rock(t, k, s, d, after, True, side=side)
 
     def _rock_settle(self, t, k, s, d, z, r, held, state):
         """The base comes back down onto palm k: a plastic impact at the other end of the

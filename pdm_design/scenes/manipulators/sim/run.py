@@ -21,6 +21,7 @@ from .liftoff import LiftOffPhases
 from .ode import OdePhases
 from .rocking import RockingPhases
 from .swinging import SwingingPhases
+from .tumbling import TumblingPhases
 
 FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object is given up
 ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact
@@ -28,7 +29,7 @@ PHASE_TIME = 200.0  # longest integrated phase, in units of sqrt(l / g)
 EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chattering)
 
 
-class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases):
+class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record, parts=None,

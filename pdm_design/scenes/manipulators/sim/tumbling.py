@@ -1,0 +1,239 @@
+"""The object tumbling in free flight after it leaves its edge, and its landing on a corner or
+on a palm's edge. Mixed into run.Run (TumblingPhases); docs/physics.md, section 2.2b.
+
+When the rocking object's pin force vanishes (rocking.py's `lost`), it leaves its palm as a
+free rigid body: its centre C moves on a parabola, C'' = -g y, and it turns at a constant rate,
+phi' = const (no moment acts on it in flight). The palm it left swings on alone (its swing
+integrated with the flight until it reaches a stop; `run.Run._release` gives that stop).
+
+The flight ends where the two convex outlines first meet: a corner of the object enters a
+palm's slab, or a corner of a palm's slab enters the object. A corner of the object entering a
+slab's top, or a top corner of a slab (the palm's edge) entering the object's base (or its top
+face: the rectangle turned over, the same body) is a landing: a plastic impact about that
+contact point (rocking.impact_onto_pin, the object's spin included), after which the object
+rocks about it (rocking.py). It is followed when the contact's impulse is inside the friction
+cone and the face that comes down about the contact is the base (or the top): the rest of the
+base lies on the contact's far side from the palm, so the object turns back flat onto the palm
+or over its edge. Any other contact is not followed: an object corner on a slab's side or
+underside (`blocked`), a palm's corner on the object's side face, a sliding landing (`tip`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import phases as ph
+from .geometry import Box, face_guards
+from .rocking import body_point, centre_velocity, impact_onto_pin, rotate
+
+# the object's corners from its base centre, in units of (width, height)
+CORNERS = ((-0.5, 0.0), (0.5, 0.0), (0.5, 1.0), (-0.5, 1.0))
+STEP_TURN = 0.05  # largest turn of the object per integration step (rad), so no corner skips a face
+
+
+def wrap(phi):
+    """phi in [-pi, pi)."""
+    return (phi + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def body_to_world(cx, cy, phi, bx, by, h):
+    """World point of the object's point (bx, by) (from its base centre) with centre (cx, cy)."""
+    dx, dy = rotate(phi, bx, by - 0.5 * h)
+    return cx + dx, cy + dy
+
+
+def world_to_body(cx, cy, phi, x, y, h):
+    """The object's own coordinates (from its base centre) of the world point (x, y)."""
+    bx, by = rotate(-phi, x - cx, y - cy)
+    return bx, by + 0.5 * h
+
+
+def base_frame(phi, bx, by, h):
+    """The contact at the object's point (bx, by) as one on its base: (phi, bx) of the base's
+    frame, the rectangle turned over (phi + pi, -bx) when the point is on its top face."""
+    if by > 0.5 * h:
+        return wrap(phi + math.pi), -bx
+    return wrap(phi), bx
+
+
+class TumblingPhases:
+    """The tumbling flight (expects the attributes and helpers of Run and RockingPhases)."""
+
+    def _leave_edge(self, t, k, z, r, state):
+        """The rocking object leaves its pin on palm k (state z = (th, th', phi, phi') of r):
+        palm k swings on alone, the object flies tumbling."""
+        theta, omega, phi, phid = z
+        vx, vy = centre_velocity(theta, omega, phi, phid, r)
+        cx, cy = body_point(theta, phi, 0.0, 0.5 * self.h, r)
+        self._log(t, "leave", k + 1, state, state,
+                  f"the pin force vanishes: the object leaves palm {k + 1} turning at "
+                  f"{phid:+.4g} rad/s")
+        planned = None
+        if self.rest_since[k] > t:  # (a palm held by its stop stays there)
+            events = len(self.palm_events)
+            self._release(k, t, theta, r.link_length * omega)
+            planned = self.palm_events[-1] if len(self.palm_events) > events else None
+        body = (cx, cy, vx, vy, phi, phid)
+        return lambda: self._tumble(t, k, body, (theta, omega), planned)
+
+    def _tumble_state(self, body):
+        """The event state: bottom centre, its velocity, the rotation and spin."""
+        cx, cy, vx, vy, phi, phid = (float(v) for v in body)
+        bx, by = rotate(phi, 0.0, -0.5 * self.h)  # bottom centre from the centre of mass
+        return {"x": cx + bx, "y": cy + by, "vx": vx + phid * by, "vy": vy - phid * bx,
+                "phi": phi, "spin": phid}
+
+    def _tumble_guards(self, t0, k, moving, body):
+        """Face guards of every contact the flight may meet: palms at rest near its path, and
+        palm k while it swings (its (th, th') at z[6], z[7] when `moving`)."""
+        w, h, W, T = self.row.body_width, self.h, self.row.palm_width, self.row.palm_thickness
+        cx, cy, vx, vy = body[:4]
+        fall = (vy + math.sqrt(vy * vy + 2.0 * self.g * max(cy - self.y_floor, 0.0))) / self.g
+        reach = 0.5 * (W + math.hypot(w, h)) + abs(vx) * fall + self.row.body_width
+        boxes = [(b.palm, b.cx, b.y_high) for b in self._obstacles(t0, k)
+                 if abs(b.cx - cx - 0.5 * vx * fall) < reach + 0.5 * abs(vx) * fall]
+
+        def top_of(p, z):
+            if moving and p == k:
+                return self.row.palm_top(k, z[6])
+            _, cxp, yh = next(b for b in boxes if b[0] == p)
+            return cxp, yh
+
+        palms = [b[0] for b in boxes] + ([k] if moving else [])
+        faces = []
+        for p in palms:
+            def slab(z, p=p):
+                px, py = top_of(p, z)
+                return Box(p, px, 0.5 * W, py - T, py)
+
+            def body_box(z, p=p):
+                return Box(p, 0.0, 0.5 * w, 0.0, h)
+            for bx, by in CORNERS:
+                def corner(z, bx=bx * w, by=by * h):
+                    return body_to_world(z[0], z[1], z[4], bx, by, h)
+                faces += [(f, d, v, ("corner", face, p, bx * w, by * h))
+                          for f, d, v, face in face_guards(slab, corner)]
+            for ex, ey in ((-0.5, 0.0), (0.5, 0.0), (0.5, -1.0), (-0.5, -1.0)):
+                def edge(z, p=p, ex=ex * W, ey=ey * T):
+                    px, py = top_of(p, z)
+                    return world_to_body(z[0], z[1], z[4], px + ex, py + ey, h)
+                # face_guards' order: the box's top (the object's top), bottom (its base), sides
+                names = ("over", "base", "side", "side")
+                faces += [(f, d, v, ("edge", name, p, ex * W, ey * T))
+                          for (f, d, v, _), name in zip(face_guards(body_box, edge), names)]
+        return faces
+
+    def _tumble(self, t0, k, body, palm, planned):
+        """Free flight of the tumbling object (centre, velocity, phi, phi' = body) from palm k,
+        with palm k's (th, th') = palm while it swings alone."""
+        g = self.g
+        moving = self.rest_since[k] > t0
+        sw = self.swings_alone[k]
+        z0 = list(body) + (list(palm) if moving else [])
+
+        def rhs(t, z):
+            out = [z[2], z[3], 0.0, -g, z[5], 0.0]
+            if moving:
+                out += [z[7], ph.swing_acceleration(z[6], z[7], sw)]
+            return out
+
+        faces = self._tumble_guards(t0, k, moving, body)
+        physics = [(lambda t, z: z[1] - self.y_floor, "fell_clear")]
+        step = min(0.05 * math.sqrt(self.h / g), STEP_TURN / max(abs(body[5]), 1e-9))
+        t_split = self._next_arrival(t0, None)
+        te, z, kind, sol = self._integrate(rhs, t0, z0, physics, faces, max_step=step,
+                                           t_end=t_split)
+        z = [float(v) for v in z]
+        state = self._tumble_state(z[:6])
+        if self.record and sol is not None:
+            for t in np.linspace(t0, te, 40):
+                st = self._tumble_state(sol.sol(t)[:6])
+                self._rec(t, st["x"], st["y"], st["vx"], st["vy"], np.nan, 0)
+        if kind is None and t_split is not None and te >= t_split:
+            return lambda: self._tumble(te, k, z[:6], z[6:8] if moving else (), planned)
+        if kind is None:
+            return self._fail(te, "timeout", self.passed + 1, state, "no event in flight")
+        if kind == "fell_clear":
+            return self._fail(te, "fell_clear", self.passed + 1, state,
+                              "the tumbling object fell past the row")
+        palm_state = (z[6], z[7]) if moving and kind[2] == k else None
+        return self._tumble_landing(te, k, z[:6], kind, palm_state, planned, state)
+
+    def _tumble_landing(self, t, k, body, kind, palm_state, planned, state):
+        """The tumbling object meets palm p (kind from _tumble_guards): a landing on a corner or
+        on the palm's edge, followed as a rocking phase about that contact, or not followed."""
+        what, face, p, ax, ay = kind
+        cx, cy, vx, vy, phi, phid = body
+        if what == "corner" and face != "top":
+            return self._fail(t, "blocked", self.passed + 1, state,
+                              f"the tumbling object hits the side of palm {p + 1}")
+        if what == "edge" and (face == "side" or ay < 0.0):
+            return self._fail(t, "tip", self.passed + 1, state,
+                              f"the tumbling object comes down on palm {p + 1}'s edge with its "
+                              "side face (not followed)")
+        theta, omega = palm_state if palm_state is not None else (self.rest_angle[p], 0.0)
+        top_x, top_y = self.row.palm_top(p, theta)
+        if what == "corner":  # the object's corner (ax, ay) on the palm's top
+            phi_b, d = base_frame(phi, ax, ay, self.h)
+            x_c, _ = body_to_world(cx, cy, phi, ax, ay, self.h)
+            e = x_c - top_x
+            side = math.copysign(1.0, d)
+        else:  # the palm's edge (ax along its top) on the object's base or top face
+            bx, by = world_to_body(cx, cy, phi, top_x + ax, top_y, self.h)
+            phi_b, d = base_frame(phi, bx, by, self.h)
+            e = ax
+            side = math.copysign(1.0, ax)
+        if side * phi_b <= 0.0 or abs(phi_b) >= 0.5 * math.pi:
+            return self._fail(t, "tip", self.passed + 1, state,
+                              f"the tumbling object comes down on palm {p + 1} turned so that "
+                              "its side face, not its base, would come down (not followed)")
+        r = self._rocker(p, e - d, d)
+        hold = None
+        if palm_state is None:
+            hold = "back" if theta <= -self.alphas[p] else "front" if theta >= self.fs else None
+        th1, phi1, held, (px, py) = impact_onto_pin(vx, vy, phid, theta, omega, phi_b, r, hold)
+        if r.edge:  # the impulse along the object's base and its normal
+            px, py = (px * math.cos(phi_b) - py * math.sin(phi_b),
+                      px * math.sin(phi_b) + py * math.cos(phi_b))
+        if py <= 0.0 or abs(px) > self.mu * py:
+            return self._fail(t, "tip", self.passed + 1, state,
+                              f"the tumbling object lands on palm {p + 1} sliding (the impulse "
+                              "outside the friction cone; not followed)")
+        return self._tumble_land(t, k, p, r, (theta, th1, phi_b, phi1), held, side, planned,
+                                 state)
+
+    def _tumble_land(self, t, k, p, r, z, held, side, planned, state):
+        """Bookkeeping of a followed landing of the tumbling object on palm p, then its rocking."""
+        swinging = self._swinging_from_rest(t, p)
+        if swinging is not None:
+            return self._fail(t, "swinging_palm", p + 1, state,
+                              f"the object reaches palm {p + 1} while palm {swinging}, released "
+                              "past the vertical, still swings from rest")
+        if p != self.at and self._comes_onto(p):
+            return self._fail(t, "skipped_palm", self.at + 2, state,
+                              f"the object flew over palm {self.at + 2} and came onto palm "
+                              f"{p + 1}")
+        after = self._rock_state(p, z, r)
+        if p == k and self.rest_since[k] > t and planned in self.palm_events:
+            self.palm_events.remove(planned)  # palm k is met before the stop planned for it
+        rec = self._stage(p)
+        if rec is None:
+            prev = self._stage(k)
+            if prev is not None:
+                prev.update(handover_time=t, handover_angle=self.rest_angle[k],
+                            handover_speed=math.hypot(state["vx"], state["vy"]),
+                            handover_vx=state["vx"], handover_vy=state["vy"])
+            imp = ph.Impact(after["vx"], after["vy"], r.link_length * z[1], 0.0, 0.0, True)
+            self._new_stage(p, t, r.e - r.d, state["vx"], state["vy"], imp)
+        else:
+            rec["bounces"] += 1
+        self._log(t, "landing", p + 1, state, dict(after, palm=p + 1),
+                  f"the tumbling object comes down on palm {p + 1} on "
+                  f"{'its base at the palm' if r.edge else 'its'} "
+                  f"{'front' if side > 0 else 'rear'} {'edge' if r.edge else 'corner'}")
+        self.rest_since[p] = t if held else math.inf
+        if held:
+            self.rest_angle[p] = z[0]
+        return lambda: self._rock(t, p, r.e - r.d, r.d, z, held, side=side)
