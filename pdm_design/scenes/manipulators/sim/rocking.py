@@ -353,6 +353,8 @@ class RockingPhases:
             return self._complete(te, k, z[0], z[1], s)
         if kind == "lost":  # the object flies off its pin, tumbling (tumbling.py)
             return self._leave_edge(te, k, z, r, state)
+        if kind == "slides":  # the pin slides (edgeslide.py)
+            return self._slide_onset(te, k, z, r, held, side, way, state)
         return self._rock_fail(te, k, kind, z, r, state)
 
     def _rock_fail(self, t, k, kind, z, r, state):

@@ -16,6 +16,7 @@ from ....sim.core import Event, Outcome, SimulationResult
 from ....sim.numerics import brentq
 from .. import physics as phys
 from . import phases as ph
+from .edgeslide import EdgeSlidingPhases
 from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
@@ -29,7 +30,8 @@ PHASE_TIME = 200.0  # longest integrated phase, in units of sqrt(l / g)
 EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chattering)
 
 
-class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhases):
+class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhases,
+          EdgeSlidingPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record, parts=None,

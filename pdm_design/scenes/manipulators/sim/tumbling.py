@@ -62,20 +62,23 @@ class TumblingPhases:
     """The tumbling flight (expects the attributes and helpers of Run and RockingPhases)."""
 
     def _leave_edge(self, t, k, z, r, state):
-        """The rocking object leaves its pin on palm k (state z = (th, th', phi, phi') of r):
-        palm k swings on alone, the object flies tumbling."""
+        """The rocking object leaves its pin on palm k (state z = (th, th', phi, phi') of r)."""
         theta, omega, phi, phid = z
         vx, vy = centre_velocity(theta, omega, phi, phid, r)
         cx, cy = body_point(theta, phi, 0.0, 0.5 * self.h, r)
+        return self._leave(t, k, theta, omega, (cx, cy, vx, vy, phi, phid), r.link_length,
+                           state, "the pin force vanishes")
+
+    def _leave(self, t, k, theta, omega, body, link_length, state, why):
+        """The object leaves palm k (at theta, omega) as a free body (centre, its velocity,
+        phi, phi'): palm k swings on alone, the object flies tumbling."""
         self._log(t, "leave", k + 1, state, state,
-                  f"the pin force vanishes: the object leaves palm {k + 1} turning at "
-                  f"{phid:+.4g} rad/s")
+                  f"{why}: the object leaves palm {k + 1} turning at {body[5]:+.4g} rad/s")
         planned = None
         if self.rest_since[k] > t:  # (a palm held by its stop stays there)
             events = len(self.palm_events)
-            self._release(k, t, theta, r.link_length * omega)
+            self._release(k, t, theta, link_length * omega)
             planned = self.palm_events[-1] if len(self.palm_events) > events else None
-        body = (cx, cy, vx, vy, phi, phid)
         return lambda: self._tumble(t, k, body, (theta, omega), planned)
 
     def _tumble_state(self, body):

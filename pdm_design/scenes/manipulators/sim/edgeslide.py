@@ -1,0 +1,254 @@
+"""The rocking object sliding on its pin: Coulomb friction at the one contact with its palm.
+Mixed into run.Run (EdgeSlidingPhases); the pure functions are the physics (docs/physics.md,
+section 2.2b).
+
+When the rocking object's pin force leaves the friction cone (rocking.py's `slides`), the pin
+slides. Two kinds of contact, as in rocking.py: the object's base corner on the palm's face
+(`corner`: the corner d along the base is fixed, its place e along the palm slides), or the
+palm's edge bearing on the object's base (the edge e along the palm is fixed, the base's point d
+on it slides). The state is (th, th', phi, phi', u, u'), u = e (corner) or d (edge), and
+
+    C = c(th) + (e, 0) + rho(phi, d),   rho = R(phi) (-d, h/2)
+
+with c(th) the palm's top centre. The palm's force on the object is N (n + mu_s tau), n the
+contact normal (y, or the base's normal R(phi) y), tau the tangent (x, or the base's direction
+R(phi) x) and mu_s = -mu sgn(slip), slip the object's velocity along tau relative to the palm at
+the contact (u' with a corner, -u' with an edge). Newton-Euler for the object and Lagrange's
+equation of the translating palm, with C'' = l th'' t - l th'^2 r + a phi'' - rho phi'^2 +
+(x e'' | -tau d'' + 2 n phi' d'), are four linear equations in (th'', phi'', u'', N).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from .geometry import Box, face_guards
+from .ode import SLIP_START_ATOLS
+from .rocking import BASE_CORNERS, Rocker, accelerations, lever, lever_rate, pin_force, rotate
+
+
+def slide_frame(phi, corner):
+    """(n, tau) of the contact: the palm's face (corner) or the object's base (edge)."""
+    if corner:
+        return (0.0, 1.0), (1.0, 0.0)
+    return (math.sin(phi), math.cos(phi)), (math.cos(phi), -math.sin(phi))
+
+
+def slide_accelerations(z, d, r: Rocker, mu, slip, *, corner, held=False, direction=1.0):
+    """(th'', phi'', u'', N) of the object sliding on its pin at state z = (th, th', phi, phi',
+    u, u'), pinned at d along its base (u = e with a corner, u = d with an edge); slip: the sign
+    of the object's slip along tau; held: the palm is held by a stop (th' = th'' = 0). N is the
+    normal force (N > 0 while the contact pushes)."""
+    theta, omega, phi, phid, _, rate = z
+    m, l, g = r.m, r.link_length, r.gravity
+    sn, cs = math.sin(theta), math.cos(theta)
+    rx, ry = lever(phi, d, r.h)
+    ax, ay = lever_rate(phi, d, r.h)
+    (nx, ny), (tx, ty) = slide_frame(phi, corner)
+    fx, fy = nx - mu * slip * tx, ny - mu * slip * ty
+    if corner:
+        ux, uy, cx, cy = 1.0, 0.0, 0.0, 0.0
+    else:
+        ux, uy = -tx, -ty
+        cx, cy = 2.0 * nx * phid * rate, 2.0 * ny * phid * rate
+    cx += -l * omega * omega * sn - rx * phid * phid
+    cy += -l * omega * omega * cs - ry * phid * phid
+    moment = -ry * fx + rx * fy  # the clockwise moment of (fx, fy) at the pin about the centre
+    a = np.array([[m * l * cs, m * ax, m * ux, -fx],
+                  [-m * l * sn, m * ay, m * uy, -fy],
+                  [0.0, r.inertia, 0.0, -moment],
+                  [r.felt * l * l, 0.0, 0.0, l * (cs * fx - sn * fy)]])
+    q_th = r.weight * g * l * sn - r.torque * direction - r.damping * omega
+    b = np.array([-m * cx, -m * cy - m * g, 0.0, q_th])
+    if held:
+        x = np.linalg.solve(a[:3, 1:], b[:3])
+        return 0.0, float(x[0]), float(x[1]), float(x[2])
+    x = np.linalg.solve(a, b)
+    return float(x[0]), float(x[1]), float(x[2]), float(x[3])
+
+
+def stop_pull(z, d, r: Rocker, mu, slip, normal, *, corner):
+    """The generalized force along th on a held palm besides its stop's (+ pulls it forward):
+    gravity's and the contact's, Q_th - l (t . f) N."""
+    theta, phi = z[0], z[2]
+    (nx, ny), (tx, ty) = slide_frame(phi, corner)
+    fx, fy = nx - mu * slip * tx, ny - mu * slip * ty
+    l = r.link_length
+    q_th = r.weight * r.gravity * l * math.sin(theta) - r.damping * z[1]
+    return q_th - l * (math.cos(theta) * fx - math.sin(theta) * fy) * normal
+
+
+def slide_centre_velocity(z, d, r: Rocker, *, corner):
+    """The object's centre velocity: l th' t + phi' a + (x e' | -tau d')."""
+    theta, omega, phi, phid, _, rate = z
+    ax, ay = lever_rate(phi, d, r.h)
+    l = r.link_length
+    vx, vy = l * omega * math.cos(theta) + phid * ax, -l * omega * math.sin(theta) + phid * ay
+    if corner:
+        return vx + rate, vy
+    _, (tx, ty) = slide_frame(phi, corner)
+    return vx - rate * tx, vy - rate * ty
+
+
+def slip_speed(z, corner):
+    """The object's slip along tau at the contact relative to the palm."""
+    return z[5] if corner else -z[5]
+
+
+class EdgeSlidingPhases:
+    """The rocking object sliding on its pin (expects the attributes and helpers of Run,
+    RockingPhases and TumblingPhases)."""
+
+    def _slide_onset(self, t, k, z, r, held, side, way, state):
+        """The rocking object's pin force leaves the friction cone: the pin slides, the way the
+        friction the pinned motion asks for cannot hold it (slip = -sgn of that force)."""
+        thdd, phidd = accelerations(z[0], z[1], z[2], z[3], r, direction=way, held=held)
+        tangential, _ = pin_force(z[0], z[1], z[2], z[3], thdd, phidd, r)
+        slip = -math.copysign(1.0, tangential)
+        corner = not r.edge
+        u = r.e if corner else r.d
+        start = slip * SLIP_START_ATOLS * self.acc.atol  # the slip speed from rest (ode.py's)
+        zs = list(z) + [u, start if corner else -start]
+        self._log(t, "slip", k + 1, state, state,
+                  f"the rocking object's {'corner' if corner else 'base'} slides on palm {k + 1}"
+                  f"{'' if corner else chr(39) + 's edge'}")
+        return lambda: self._edge_slide(t, k, r, zs, held, side, slip, way)
+
+    def _slide_point(self, k, z, d, r, bx, by, corner):
+        """Where the object's point (bx, by) (from its base centre) is at the slide's state z."""
+        e = z[4] if corner else r.e
+        dd = d if corner else z[4]
+        px, py = self.row.palm_top(k, z[0])
+        dx, dy = rotate(z[2], bx - dd, by)
+        return px + e + dx, py + dy
+
+    def _slide_guards(self, k, z0, d, r, held, side, slip, corner, acc, way):
+        """Physics guards of the slide (positive while it holds)."""
+        half = 0.5 * (self.row.palm_width if corner else self.row.body_width)
+        physics = [(lambda t, z: slip * slip_speed(z, corner), "slip_stop"),
+                   (lambda t, z: acc(z)[3], "lost"),
+                   (lambda t, z: side * z[2], "settle"),
+                   (lambda t, z: 0.5 * math.pi - side * z[2], "tipped_over"),
+                   (lambda t, z: half - z[4], "off_end"),
+                   (lambda t, z: z[4] + half, "off_end")]
+        if held:
+            drag = 1.0 if z0[0] <= -self.alphas[k] else -1.0  # the way it would leave its stop
+
+            def pull(z):
+                return stop_pull(z, z[4] if not corner else d, r, self.mu, slip, acc(z)[3],
+                                 corner=corner)
+            physics.append((lambda t, z: -drag * pull(z), "release"))
+        else:
+            physics += [(lambda t, z: z[0] + self.alphas[k], "stop"),
+                        (lambda t, z: self.fs - z[0], "stop")]
+            if not self.plain:
+                physics.append((lambda t, z: way * z[1], "stop"))
+            if k == self.n - 1 and z0[0] < self.beta:
+                physics.append((lambda t, z: self.beta - z[0], "complete"))
+        return physics
+
+    def _edge_slide(self, t0, k, r, z0, held, side, slip, way):
+        """The object turning and sliding on its one contact with palm k, state z0 = (th, th',
+        phi, phi', u, u'). Guards: the slip stops (it sticks, or reverses), the normal force
+        vanishes or the contact runs off the end of the base or the palm (the object tumbles
+        off: tumbling.py), phi back to 0 or at pi/2 about the contact, the palm's stops, a held
+        palm dragged off its stop, beta on the last palm, a base corner meeting another palm."""
+        corner = not r.edge
+        d0 = r.d
+
+        def dof(z):
+            return d0 if corner else z[4]
+
+        def acc(z):
+            return slide_accelerations(z, dof(z), r, self.mu, slip, corner=corner, held=held,
+                                       direction=way)
+
+        def rhs(t, z):
+            thdd, phidd, udd, _ = acc(z)
+            return [z[1], thdd, z[3], phidd, z[5], udd]
+
+        if slip * slip_speed(rhs(t0, z0), corner) <= 0.0:  # the slip would not grow
+            return self._fail(t0, "tip", k + 1, self._slide_state(k, z0, dof(z0), r, corner),
+                              f"the rocking object on palm {k + 1}: no consistent slide "
+                              "(not followed)")
+        physics = self._slide_guards(k, z0, d0, r, held, side, slip, corner, acc, way)
+        faces = []
+        for box in self._obstacles(t0, k):
+            slab = Box(box.palm, box.cx, 0.5 * self.row.palm_width,
+                       box.y_high - self.row.palm_thickness, box.y_high)
+            for frac in BASE_CORNERS:
+                def point(z, bx=frac * self.row.body_width):
+                    return self._slide_point(k, z, dof(z), r, bx, 0.0, corner)
+                faces += [(f, dr, v, (kind, box.palm))
+                          for f, dr, v, kind in face_guards(lambda z, b=slab: b, point)]
+        t_split = self._next_arrival(t0, k)
+        te, z, kind, sol = self._integrate(rhs, t0, list(z0), physics, faces,
+                                           max_step=0.05 * math.sqrt(self.h / self.g),
+                                           t_end=t_split)
+        z = [float(v) for v in z]
+        if self.record and sol is not None:
+            for t in np.linspace(t0, te, 40):
+                zz = sol.sol(t)
+                st = self._slide_state(k, zz, dof(zz), r, corner)
+                self._rec(t, st["x"], st["y"], st["vx"], st["vy"], st["theta"], k + 1)
+        if kind is None and t_split is not None and te >= t_split:
+            return lambda: self._edge_slide(te, k, r, z, held, side, slip, way)
+        return self._slide_end(te, k, z, dof(z), r, held, side, slip, way, kind)
+
+    def _slide_state(self, k, z, d, r, corner):
+        """The event state: the object's bottom centre and velocity, rotation and spin."""
+        z = [float(v) for v in z]
+        x, y = self._slide_point(k, z, d, r, 0.0, 0.0, corner)
+        cx, cy = slide_centre_velocity(z, d, r, corner=corner)
+        bx, by = rotate(z[2], 0.0, -0.5 * r.h)
+        e = z[4] if corner else r.e
+        return {"x": x, "y": y, "vx": cx + z[3] * by, "vy": cy - z[3] * bx, "theta": z[0],
+                "omega": z[1], "offset": e - d, "phi": z[2], "spin": z[3]}
+
+    def _slide_end(self, t, k, z, d, r, held, side, slip, way, kind):
+        """What follows the slide's end `kind` at state z (contact d along the base)."""
+        corner = not r.edge
+        state = self._slide_state(k, z, d, r, corner)
+        if kind in ("lost", "off_end"):  # the object flies off, tumbling (tumbling.py)
+            cx, cy = self._slide_point(k, z, d, r, 0.0, 0.5 * r.h, corner)
+            body = (cx, cy, *slide_centre_velocity(z, d, r, corner=corner), z[2], z[3])
+            why = "the contact force vanishes" if kind == "lost" else (
+                f"the contact slides off the end of the {'palm' if corner else 'base'}")
+            return self._leave(t, k, z[0], z[1], body, r.link_length, state, why)
+        if kind == "slip_stop":
+            pinned = replace(r, e=z[4]) if corner else replace(r, d=z[4])
+            thdd, phidd = accelerations(*z[:4], pinned, direction=way, held=held)
+            tangential, normal = pin_force(*z[:4], thdd, phidd, pinned)
+            if normal > 0.0 and abs(tangential) <= self.mu * normal:
+                self._log(t, "stick", k + 1, state, state, "the sliding pin sticks again")
+                return lambda: self._rock(t, k, pinned.e - pinned.d, pinned.d, z[:4], held,
+                                          way, side=side)
+            slip = -math.copysign(1.0, tangential)
+            start = slip * SLIP_START_ATOLS * self.acc.atol
+            z = z[:5] + [start if corner else -start]
+            self._log(t, "slip", k + 1, state, state, "the slip of the rocking object reverses")
+            return lambda: self._edge_slide(t, k, r, z, held, side, slip, way)
+        if kind == "release":
+            self.rest_since[k] = math.inf
+            self._log(t, "release", k + 1, state, state,
+                      f"the sliding object drags palm {k + 1} off its stop")
+            return lambda: self._edge_slide(t, k, r, z, False, side, slip, way)
+        if kind == "complete":
+            return self._complete(t, k, z[0], z[1], state["offset"])
+        if kind is None:
+            return self._fail(t, "timeout", k + 1, state, f"sliding on palm {k + 1}: no event")
+        if kind == "tipped_over":
+            return self._fail(t, "tipped_over", k + 1, state,
+                              f"the object turned to pi/2 sliding on palm {k + 1}: it tipped over")
+        if isinstance(kind, tuple) and kind[0] != "top":
+            return self._fail(t, "blocked", k + 1, state,
+                              f"the sliding rocking object hits the side of palm {kind[1] + 1}")
+        if isinstance(kind, tuple):
+            what = f"comes down on palm {kind[1] + 1}"
+        else:
+            what = {"settle": "comes down flat", "stop": "rides its palm onto a stop"}[kind]
+        return self._fail(t, "tip", k + 1, state,
+                          f"the object sliding on its edge on palm {k + 1} {what} (not followed)")
