@@ -70,6 +70,33 @@ def slide_accelerations(z, d, r: Rocker, mu, slip, *, corner, held=False, direct
     return float(x[0]), float(x[1]), float(x[2]), float(x[3])
 
 
+def slide_impact(v, spin, theta, omega, phi, d, r: Rocker, mu, slip, *, corner, held=False):
+    """Plastic impact that makes the pin of `r` the object's one contact while it slides there
+    (its impulse outside the friction cone): the impulse P (n + mu_s tau) at the pin, the
+    links' radial. The same four equations as slide_accelerations with the accelerations
+    replaced by the velocities after and N by P, the velocities before on the right:
+    m V+ - P f = m v, I_c phi'+ - P moment = I_c spin, M_f l^2 th'+ + l (t . f) P = M_f l^2 th'
+    with V+ = l th'+ t + phi'+ a + u'+ (x | -tau). Returns (th'+, phi'+, u'+, P); held: the
+    palm's stop takes the impulse (th'+ = 0)."""
+    m, l = r.m, r.link_length
+    sn, cs = math.sin(theta), math.cos(theta)
+    ax, ay = lever_rate(phi, d, r.h)
+    rx, ry = lever(phi, d, r.h)
+    (nx, ny), (tx, ty) = slide_frame(phi, corner)
+    fx, fy = nx - mu * slip * tx, ny - mu * slip * ty
+    ux, uy = (1.0, 0.0) if corner else (-tx, -ty)
+    a = np.array([[m * l * cs, m * ax, m * ux, -fx],
+                  [-m * l * sn, m * ay, m * uy, -fy],
+                  [0.0, r.inertia, 0.0, ry * fx - rx * fy],
+                  [r.felt * l * l, 0.0, 0.0, l * (cs * fx - sn * fy)]])
+    b = np.array([m * v[0], m * v[1], r.inertia * spin, r.felt * l * l * omega])
+    if held:
+        x = np.linalg.solve(a[:3, 1:], b[:3])
+        return 0.0, float(x[0]), float(x[1]), float(x[2])
+    x = np.linalg.solve(a, b)
+    return float(x[0]), float(x[1]), float(x[2]), float(x[3])
+
+
 def stop_pull(z, d, r: Rocker, mu, slip, normal, *, corner):
     """The generalized force along th on a held palm besides its stop's (+ pulls it forward):
     gravity's and the contact's, Q_th - l (t . f) N."""
@@ -170,7 +197,8 @@ class EdgeSlidingPhases:
             thdd, phidd, udd, _ = acc(z)
             return [z[1], thdd, z[3], phidd, z[5], udd]
 
-        if slip * slip_speed(rhs(t0, z0), corner) <= 0.0:  # the slip would not grow
+        from_rest = abs(slip_speed(z0, corner)) <= 2.0 * SLIP_START_ATOLS * self.acc.atol
+        if from_rest and slip * slip_speed(rhs(t0, z0), corner) <= 0.0:  # it would not grow
             return self._fail(t0, "tip", k + 1, self._slide_state(k, z0, dof(z0), r, corner),
                               f"the rocking object on palm {k + 1}: no consistent slide "
                               "(not followed)")
@@ -252,3 +280,39 @@ class EdgeSlidingPhases:
             what = {"settle": "comes down flat", "stop": "rides its palm onto a stop"}[kind]
         return self._fail(t, "tip", k + 1, state,
                           f"the object sliding on its edge on palm {k + 1} {what} (not followed)")
+
+    def _slide_landing(self, t, j, theta, w, v, r, hold, side, before, rec):
+        """A landing whose impulse about the support's end (the pin of r) lies outside the
+        friction cone: the sliding impact (slide_impact, the slip's sign that of the object's
+        velocity along the palm relative to it before), then the object turns and slides on
+        that pin. None where that is not consistent (the impulse does not push, the slip
+        reverses, or the base is not lifted)."""
+        corner = not r.edge
+        rel = v[0] - w * math.cos(theta)
+        if rel == 0.0:
+            return None
+        slip = math.copysign(1.0, rel)
+        omega = w / r.link_length
+        out = slide_impact(v, 0.0, theta, omega, 0.0, r.d, r, self.mu, slip, corner=corner)
+        held = (hold == "back" and out[0] < 0.0) or (hold == "front" and out[0] > 0.0)
+        if held:
+            out = slide_impact(v, 0.0, theta, 0.0, 0.0, r.d, r, self.mu, slip, corner=corner,
+                               held=True)
+        th1, phi1, u1, impulse = out
+        z = [theta, th1, 0.0, phi1, r.e if corner else r.d, u1]
+        if impulse <= 0.0 or side * phi1 <= 0.0 or slip * slip_speed(z, corner) < 0.0:
+            return None
+        state = self._slide_state(j, z, r.d, r, corner)
+        if rec is not None:
+            rec["landing_speed"] = r.link_length * th1
+            rec["slipped"] = True
+        self._log(t, "rock", j + 1, before, state,
+                  f"the impulse outside the friction cone: the object turns about the "
+                  f"{'palm' if r.edge else 'base'}'s {'front' if side > 0 else 'rear'} edge at "
+                  f"{phi1:+.4g} rad/s, sliding on it at {slip_speed(z, corner):+.4g} m/s")
+        if held:
+            self.rest_angle[j], self.rest_since[j] = theta, t
+        else:
+            self.rest_since[j] = math.inf
+        way = 1.0 if th1 >= 0.0 else -1.0
+        return lambda: self._edge_slide(t, j, r, z, held, side, slip, way)

@@ -230,8 +230,10 @@ class RockingPhases:
         th1, phi1, held, (px, py) = impact_onto_pin(vx, vy, 0.0, theta, w / r.link_length, 0.0,
                                                     r, held_at)
         side = 1.0 if point > hi else -1.0
-        if side * phi1 <= 0.0 or py <= 0.0 or abs(px) > self.mu * py:
-            return None  # (no rocking landing: the impulse slides, or does not lift the base)
+        if side * phi1 > 0.0 and py > 0.0 and abs(px) > self.mu * py:  # (edgeslide.py)
+            return self._slide_landing(t, j, theta, w, (vx, vy), r, held_at, side, before, rec)
+        if side * phi1 <= 0.0 or py <= 0.0:
+            return None  # (no rocking landing: the impulse does not lift the base)
         state = self._rock_state(j, (theta, th1, 0.0, phi1), r)
         if rec is not None:
             rec["landing_speed"] = r.link_length * th1

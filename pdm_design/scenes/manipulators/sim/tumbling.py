@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from . import phases as ph
+from .edgeslide import slide_frame, slide_impact, slip_speed
 from .geometry import Box, face_guards
 from .rocking import body_point, centre_velocity, impact_onto_pin, rotate
 
@@ -200,15 +201,48 @@ class TumblingPhases:
         if r.edge:  # the impulse along the object's base and its normal
             px, py = (px * math.cos(phi_b) - py * math.sin(phi_b),
                       px * math.sin(phi_b) + py * math.cos(phi_b))
-        if py <= 0.0 or abs(px) > self.mu * py:
+        if py > 0.0 and abs(px) <= self.mu * py:
+            return self._tumble_land(t, k, p, r, (theta, th1, phi_b, phi1), held, side,
+                                     planned, state)
+        slid = self._tumble_slide_impact(body, p, theta, omega, phi_b, r, hold)
+        if slid is None:
             return self._fail(t, "tip", self.passed + 1, state,
-                              f"the tumbling object lands on palm {p + 1} sliding (the impulse "
-                              "outside the friction cone; not followed)")
-        return self._tumble_land(t, k, p, r, (theta, th1, phi_b, phi1), held, side, planned,
-                                 state)
+                              f"the tumbling object lands on palm {p + 1}: no consistent "
+                              "sliding impact (not followed)")
+        z, held, slip = slid
+        return self._tumble_land(t, k, p, r, z, held, side, planned, state, slip)
 
-    def _tumble_land(self, t, k, p, r, z, held, side, planned, state):
-        """Bookkeeping of a followed landing of the tumbling object on palm p, then its rocking."""
+    def _tumble_slide_impact(self, body, p, theta, omega, phi, r, hold):
+        """The landing's sticking impulse lies outside the friction cone: the sliding impact
+        (edgeslide.slide_impact), the slip's sign that of the contact point's velocity along
+        the contact's tangent relative to the palm before. (z, held, slip), or None where the
+        impulse does not push or the slip reverses."""
+        cx, cy, vx, vy, _, phid = body
+        corner = not r.edge
+        px, py = body_point(theta, phi, r.d, 0.0, r)  # the contact point
+        l = r.link_length
+        rel_x = vx + phid * (py - cy) - l * omega * math.cos(theta)
+        rel_y = vy - phid * (px - cx) + l * omega * math.sin(theta)
+        _, (tx, ty) = slide_frame(phi, corner)
+        rel = rel_x * tx + rel_y * ty
+        if rel == 0.0:
+            return None
+        slip = math.copysign(1.0, rel)
+        out = slide_impact((vx, vy), phid, theta, omega, phi, r.d, r, self.mu, slip,
+                           corner=corner)
+        held = (hold == "back" and out[0] < 0.0) or (hold == "front" and out[0] > 0.0)
+        if held:
+            out = slide_impact((vx, vy), phid, theta, 0.0, phi, r.d, r, self.mu, slip,
+                               corner=corner, held=True)
+        th1, phi1, u1, impulse = out
+        z = [theta, th1, phi, phi1, r.e if corner else r.d, u1]
+        if impulse <= 0.0 or slip * slip_speed(z, corner) < 0.0:
+            return None
+        return z, held, slip
+
+    def _tumble_land(self, t, k, p, r, z, held, side, planned, state, slip=None):
+        """Bookkeeping of a followed landing of the tumbling object on palm p, then its rocking
+        (sliding on its contact if `slip`: z then has the slide's u, u')."""
         swinging = self._swinging_from_rest(t, p)
         if swinging is not None:
             return self._fail(t, "swinging_palm", p + 1, state,
@@ -218,7 +252,8 @@ class TumblingPhases:
             return self._fail(t, "skipped_palm", self.at + 2, state,
                               f"the object flew over palm {self.at + 2} and came onto palm "
                               f"{p + 1}")
-        after = self._rock_state(p, z, r)
+        after = (self._rock_state(p, z, r) if slip is None
+                 else self._slide_state(p, z, r.d, r, not r.edge))
         if p == k and self.rest_since[k] > t and planned in self.palm_events:
             self.palm_events.remove(planned)  # palm k is met before the stop planned for it
         rec = self._stage(p)
@@ -239,4 +274,7 @@ class TumblingPhases:
         self.rest_since[p] = t if held else math.inf
         if held:
             self.rest_angle[p] = z[0]
+        if slip is not None:
+            way = 1.0 if z[1] >= 0.0 else -1.0
+            return lambda: self._edge_slide(t, p, r, z, held, side, slip, way)
         return lambda: self._rock(t, p, r.e - r.d, r.d, z, held, side=side)
