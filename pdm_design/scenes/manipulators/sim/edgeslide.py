@@ -25,9 +25,18 @@ from dataclasses import replace
 
 import numpy as np
 
-from .geometry import Box, face_guards
+from .geometry import Box, face_guards, support_words
 from .ode import SLIP_START_ATOLS
-from .rocking import BASE_CORNERS, Rocker, accelerations, lever, lever_rate, pin_force, rotate
+from .rocking import (
+    BASE_CORNERS,
+    Rocker,
+    accelerations,
+    impact_onto_pin,
+    lever,
+    lever_rate,
+    pin_force,
+    rotate,
+)
 
 
 def slide_frame(phi, corner):
@@ -266,6 +275,8 @@ class EdgeSlidingPhases:
             return lambda: self._edge_slide(t, k, r, z, False, side, slip, way)
         if kind == "complete":
             return self._complete(t, k, z[0], z[1], state["offset"])
+        if kind == "settle":
+            return self._slide_settle(t, k, z, d, r, held, side, state)
         if kind is None:
             return self._fail(t, "timeout", k + 1, state, f"sliding on palm {k + 1}: no event")
         if kind == "tipped_over":
@@ -316,3 +327,68 @@ class EdgeSlidingPhases:
             self.rest_since[j] = math.inf
         way = 1.0 if th1 >= 0.0 else -1.0
         return lambda: self._edge_slide(t, j, r, z, held, side, slip, way)
+
+    def _slide_settle(self, t, k, z, d, r, held, side, state):
+        """The sliding object's base comes back down on palm k (phi = 0). As in
+        rocking._rock_settle, a plastic impact about the support's other end first: if turning
+        about it lifts the first one the object rocks (sliding, if the impulse leaves the
+        friction cone) about it. Else it lies flat: the whole base stops turning and the
+        object's translation meets the palm as a landing does (phases.impact: sticking, or
+        sliding, plastic), the impulse's moment taking the spin, I_c phi' = (h/2) P_x + x_b P_y,
+        which puts its point x_b on the base: it must lie on the supported part."""
+        corner = not r.edge
+        theta, omega, _, phid = z[:4]
+        v = slide_centre_velocity(z, d, r, corner=corner)
+        s = state["offset"]
+        lo, hi = self.row.support(s)
+        other = lo if side > 0.0 else hi
+        hold = ("back" if theta <= -self.alphas[k] else "front") if held else None
+        r2 = self._rocker(k, s, other)
+        th1, phi1, held2, (px, py) = impact_onto_pin(*v, phid, theta, omega, 0.0, r2, hold)
+        if -side * phi1 * max(self.h, self.row.body_width) > self.zeno_speed:
+            if py > 0.0 and abs(px) <= self.mu * py:
+                self._log(t, "rock", k + 1, state, self._rock_state(k, (theta, th1, 0.0, phi1), r2),
+                          f"comes down on the other end of its base: rocks about it at "
+                          f"{phi1:+.4g} rad/s")
+                return lambda: self._rock(t, k, s, other, (theta, th1, 0.0, phi1), held2)
+            cx, cy = self._slide_point(k, z, d, r, 0.0, 0.5 * r.h, corner)
+            slid = self._tumble_slide_impact((cx, cy, *v, 0.0, phid), k, theta, omega, 0.0, r2,
+                                             hold)
+            if slid is None:
+                return self._fail(t, "tip", k + 1, state,
+                                  f"the object comes down on the other end of its base on palm "
+                                  f"{k + 1}: no consistent sliding impact (not followed)")
+            z2, held2, slip2 = slid
+            self._log(t, "rock", k + 1, state, self._slide_state(k, z2, other, r2, not r2.edge),
+                      "comes down on the other end of its base: rocks about it, sliding")
+            way = 1.0 if z2[1] >= 0.0 else -1.0
+            return lambda: self._edge_slide(t, k, r2, z2, held2, -side, slip2, way)
+        return self._slide_flat(t, k, theta, omega, v, phid, s, held, state)
+
+    def _slide_flat(self, t, k, theta, omega, v, phid, s, held, state):
+        """The object lies flat on palm k after it came down: _slide_settle's flat impact."""
+        l = self.ls[k]
+        imp, held_f = self._resolve(k, v[0], v[1], l * omega, theta, 0.0, held)
+        lo, hi = self.row.support(s)
+        spin_moment = self.m * (self.row.body_width ** 2 + self.h ** 2) / 12.0 * phid
+        xb = (spin_moment - 0.5 * self.h * imp.pt) / imp.pn if imp.pn > 0.0 else math.nan
+        if imp.jam or not lo <= xb <= hi:
+            return self._fail(t, "tip", k + 1, state,
+                              f"the object comes down flat on palm {k + 1}: the impulse "
+                              f"{'is not consistent' if imp.jam else support_words(xb, (lo, hi))}"
+                              " (not followed)")
+        after = {"x": state["x"], "y": state["y"], "vx": imp.vx, "vy": imp.vy, "theta": theta,
+                 "omega": imp.w / l, "offset": s}
+        self._log(t, "settle", k + 1, state, after,
+                  f"the object settles flat on its palm, {'sticking' if imp.stick else 'sliding'}")
+        if held_f:
+            self.rest_angle[k], self.rest_since[k] = theta, t
+            return self._held_slide(t, k, theta, s, 0.0 if imp.stick else imp.vx, after)
+        if imp.w < 0.0:
+            return self._fail(t, "stall", k + 1, after,
+                              f"the object settles on palm {k + 1} driving it backwards")
+        self.rest_since[k] = math.inf
+        if imp.stick:
+            return lambda: self._stuck(t, k, theta, imp.w, s)
+        sd = imp.vx - imp.w * math.cos(theta)
+        return lambda: self._sliding(t, k, theta, imp.w / l, s, sd)

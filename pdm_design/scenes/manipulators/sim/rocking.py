@@ -426,34 +426,62 @@ class RockingPhases:
         return lambda: self._stuck_integrated(t, k, theta, speed / r.link_length, s)
 
     def _rock_catch(self, t, k, z, r, kind, state):
-        """A corner of the rocking object comes down on palm j's top: a plastic impact about
-        that corner (palm j at rest on its stop), palm k released; the object rocks about the
-        corner on palm j."""
+        """A corner of the rocking object comes down on palm j's top (_catch); any other face
+        of palm j met is not followed (`blocked`)."""
         face, j, bx = kind
         if face != "top":
             return self._fail(t, "blocked", k + 1, state,
                               f"the rocking object hits the side of palm {j + 1}")
         theta, omega, phi, phid = z
-        vx, vy = centre_velocity(theta, omega, phi, phid, r)
-        cx, _ = body_point(theta, phi, bx, 0.0, r)
+        v = centre_velocity(theta, omega, phi, phid, r)
+        corner_x, _ = body_point(theta, phi, bx, 0.0, r)
+        ox, oy = body_point(theta, phi, r.d, 0.0, r)
+        normal = (math.sin(phi), math.cos(phi)) if r.edge else (0.0, 1.0)
+        centre = body_point(theta, phi, 0.0, 0.5 * r.h, r)
+        return self._catch(t, k, j, bx, (corner_x, phi, v, phid, centre),
+                           ((ox, oy), normal, (theta, omega)), state)
+
+    def _catch(self, t, k, j, bx, body, old, state):
+        """The object's base corner bx comes down on palm j's top (palm j at rest on its stop):
+        a plastic impact about that corner (sticking, or sliding where the sticking impulse
+        leaves the friction cone: edgeslide.slide_impact), palm k released; the object rocks
+        (or rocks and slides) about the corner on palm j. body: the corner's x, phi, the
+        centre's velocity, the spin and the centre; old: the contact on palm k (point, its
+        normal, palm k's (th, th')), which must let go (its normal speed relative to palm k
+        outward after the impact), else the object would rest on two palms (not followed)."""
+        corner_x, phi, v, phid, centre = body
         theta_j = self.rest_angle[j]
         top_x, _ = self.row.palm_top(j, theta_j)
-        s_j = cx - top_x - bx
+        s_j = corner_x - top_x - bx
         r2 = self._rocker(j, s_j, bx)
         hold = "back" if theta_j <= -self.alphas[j] else "front" if theta_j >= self.fs else None
-        th1, phi1, held, (px, py) = impact_onto_pin(vx, vy, phid, theta_j, 0.0, phi, r2, hold)
-        after = self._rock_state(j, (theta_j, th1, phi, phi1), r2)
-        # the old pin leaves palm k: its normal speed relative to palm k's surface is outward
-        ox, oy = body_point(theta, phi, r.d, 0.0, r)
-        ux, uy = self._point_speed(after, phi1, r2, theta_j, phi, ox, oy)
-        l = r.link_length
-        nx, ny = (math.sin(phi), math.cos(phi)) if r.edge else (0.0, 1.0)
-        away = ((ux - l * omega * math.cos(theta)) * nx
-                + (uy + l * omega * math.sin(theta)) * ny)
-        if away < 0.0 or py <= 0.0 or abs(px) > self.mu * py:
+        th1, phi1, held, (px, py) = impact_onto_pin(*v, phid, theta_j, 0.0, phi, r2, hold)
+        z, slip = (theta_j, th1, phi, phi1), None
+        if py <= 0.0 or abs(px) > self.mu * py:
+            slid = self._tumble_slide_impact((*centre, *v, phi, phid), j, theta_j, 0.0, phi, r2,
+                                             hold)
+            if slid is None:
+                return self._fail(t, "tip", k + 1, state,
+                                  f"the rocking object comes down on palm {j + 1}: no "
+                                  "consistent sliding impact (not followed)")
+            z, held, slip = slid
+            from .edgeslide import slide_centre_velocity  # (edgeslide imports this module)
+
+            u = slide_centre_velocity(z, r2.d, r2, corner=True)
+        else:
+            u = centre_velocity(theta_j, th1, phi, phi1, r2)
+        (ox, oy), (nx, ny), (theta, omega) = old
+        l = self.ls[k]
+        away = ((u[0] + z[3] * (oy - centre[1]) - l * omega * math.cos(theta)) * nx
+                + (u[1] - z[3] * (ox - centre[0]) + l * omega * math.sin(theta)) * ny)
+        if away < 0.0:
             return self._fail(t, "tip", k + 1, state,
                               f"the rocking object comes down on palm {j + 1} still bearing on "
-                              f"palm {k + 1}, or sliding (not followed)")
+                              f"palm {k + 1} (two contacts, not followed)")
+        return self._caught(t, k, j, r2, z, held, slip, state)
+
+    def _caught(self, t, k, j, r2, z, held, slip, state):
+        """Bookkeeping of the catch of _catch: palm k hands the object over to palm j."""
         swinging = self._swinging_from_rest(t, j)
         if swinging is not None:
             return self._fail(t, "swinging_palm", j + 1, state,
@@ -463,22 +491,28 @@ class RockingPhases:
             return self._fail(t, "skipped_palm", self.at + 2, state,
                               f"the object flew over palm {self.at + 2} and came onto palm "
                               f"{j + 1}")
+        theta, omega = state["theta"], state["omega"]
+        l = self.ls[k]
         rec = self._stage(k)
         if rec is not None:
             rec.update(handover_time=t, handover_speed=math.hypot(state["vx"], state["vy"]),
                        handover_angle=theta, handover_vx=state["vx"], handover_vy=state["vy"],
                        release_speed=l * omega)
         self._release(k, t, theta, l * omega)
-        imp = ph.Impact(after["vx"], after["vy"], r2.link_length * th1, px, py, True)
-        self._new_stage(j, t, s_j, state["vx"], state["vy"], imp)
+        after = (self._rock_state(j, z, r2) if slip is None
+                 else self._slide_state(j, z, r2.d, r2, True))
+        imp = ph.Impact(after["vx"], after["vy"], r2.link_length * z[1], 0.0, 0.0, True)
+        self._new_stage(j, t, r2.e - r2.d, state["vx"], state["vy"], imp)
         self._log(t, "catch", k + 1, state, dict(after, palm=j + 1),
                   f"palm {k + 1} -> palm {j + 1}: the rocking object's "
-                  f"{'front' if bx > 0 else 'rear'} corner comes down on palm {j + 1}")
-        if held:
-            self.rest_since[j] = t
-        else:
-            self.rest_since[j] = math.inf
-        return lambda: self._rock(t, j, s_j, bx, (theta_j, th1, phi, phi1), held)
+                  f"{'front' if r2.d > 0 else 'rear'} corner comes down on palm {j + 1}"
+                  f"{'' if slip is None else ', sliding'}")
+        self.rest_since[j] = t if held else math.inf
+        side = math.copysign(1.0, r2.d)
+        if slip is not None:
+            way = 1.0 if z[1] >= 0.0 else -1.0
+            return lambda: self._edge_slide(t, j, r2, list(z), held, side, slip, way)
+        return lambda: self._rock(t, j, r2.e - r2.d, r2.d, z, held, side=side)
 
     @staticmethod
     def _point_speed(after, phid, r, theta, phi, px, py):
