@@ -219,7 +219,7 @@ class EdgeSlidingPhases:
             for frac in BASE_CORNERS:
                 def point(z, bx=frac * self.row.body_width):
                     return self._slide_point(k, z, dof(z), r, bx, 0.0, corner)
-                faces += [(f, dr, v, (kind, box.palm))
+                faces += [(f, dr, v, (kind, box.palm, frac * self.row.body_width))
                           for f, dr, v, kind in face_guards(lambda z, b=slab: b, point)]
         t_split = self._next_arrival(t0, k)
         te, z, kind, sol = self._integrate(rhs, t0, list(z0), physics, faces,
@@ -285,6 +285,15 @@ class EdgeSlidingPhases:
         if isinstance(kind, tuple) and kind[0] != "top":
             return self._fail(t, "blocked", k + 1, state,
                               f"the sliding rocking object hits the side of palm {kind[1] + 1}")
+        if isinstance(kind, tuple):  # a base corner comes down on palm j (rocking._catch)
+            _, j, bx = kind
+            corner_x, _ = self._slide_point(k, z, d, r, bx, 0.0, corner)
+            centre = self._slide_point(k, z, d, r, 0.0, 0.5 * r.h, corner)
+            v = slide_centre_velocity(z, d, r, corner=corner)
+            contact = self._slide_point(k, z, d, r, d, 0.0, corner)
+            normal, _ = slide_frame(z[2], corner)
+            return self._catch(t, k, j, bx, (corner_x, z[2], v, z[3], centre),
+                               (contact, normal, (z[0], z[1])), state)
         if isinstance(kind, tuple):
             what = f"comes down on palm {kind[1] + 1}"
         else:
