@@ -31,8 +31,10 @@ from .run import Run
 EVENT_KINDS = {
     "landing": "the object lands on a palm from a flight (at rest, or swinging after a lift-off)",
     "handover": "the object, carried by palm k, meets the next palm and lands on it",
-    "slip": "the carried object starts to slide on its palm (or reverses its sliding)",
-    "stick": "the sliding object comes to rest on its palm and is carried stuck",
+    "slip": "the carried object starts to slide on its palm (or reverses its sliding); the "
+            "rocking object's contact starts to slide (or reverses its sliding)",
+    "stick": "the sliding object comes to rest on its palm and is carried stuck; the rocking "
+             "object's sliding contact sticks again",
     "jam": "a sliding contact jams (Painleve-type tangential impact) and sticks",
     "bounce": "the object bounces off a palm (restitution > 0)",
     "front_stop": "an empty palm reaches its front stop and is stopped",
@@ -44,6 +46,8 @@ EVENT_KINDS = {
     "settle": "the rocking object comes back down flat on its palm and is carried on",
     "catch": "a corner of the rocking object comes down on another palm, which carries it on",
     "release": "the rocking object drags its palm off the stop it rested on",
+    "leave": "the rocking object leaves its palm (its contact force vanishes, or its sliding "
+             "contact runs off the end of its base or of the palm) and flies on, tumbling",
     "lift_off": "the palm's normal force vanished (v^2 >= g l cos th): the object flies on and "
                 "the empty palm swings alone",
 }

@@ -38,6 +38,8 @@ from .rocking import (
     rotate,
 )
 
+ROUNDING = 1e-9  # an acceleration rounding may give for 0, relative to g
+
 
 def slide_frame(phi, corner):
     """(n, tau) of the contact: the palm's face (corner) or the object's base (edge)."""
@@ -206,8 +208,10 @@ class EdgeSlidingPhases:
             thdd, phidd, udd, _ = acc(z)
             return [z[1], thdd, z[3], phidd, z[5], udd]
 
+        # a slip from rest starts where the pinned force reaches the cone's side, with no slip
+        # acceleration yet: one that is against the slip beyond rounding is not consistent
         from_rest = abs(slip_speed(z0, corner)) <= 2.0 * SLIP_START_ATOLS * self.acc.atol
-        if from_rest and slip * slip_speed(rhs(t0, z0), corner) <= 0.0:  # it would not grow
+        if from_rest and slip * slip_speed(rhs(t0, z0), corner) < -ROUNDING * self.g:
             return self._fail(t0, "tip", k + 1, self._slide_state(k, z0, dof(z0), r, corner),
                               f"the rocking object on palm {k + 1}: no consistent slide "
                               "(not followed)")
