@@ -1,0 +1,201 @@
+"""The rocking object sliding on its edge (sim/edgeslide.py) and tumbling in flight onto a
+corner (sim/tumbling.py), docs/physics.md section 2.2b: against the pinned equations at the
+friction cone's side, closed forms of a frictionless slide (the horizontal momentum, the energy),
+and a flight and corner impact computed here from scratch."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+from test_sim_manipulators import ALPHA, G, L, make
+
+from pdm_design.accuracy import accuracy
+from pdm_design.scenes.manipulators.sim import edgeslide as es
+from pdm_design.scenes.manipulators.sim import rocking as rk
+from pdm_design.scenes.manipulators.sim.run import Run
+
+W_BODY, H_BODY, M_BODY = 0.4, 0.2, 1.0
+I_C = M_BODY * (W_BODY**2 + H_BODY**2) / 12
+
+
+def rotate(phi, x, y):
+    """The clockwise rotation by phi, written here."""
+    return x * math.cos(phi) + y * math.sin(phi), -x * math.sin(phi) + y * math.cos(phi)
+
+
+def new_run(**kw):
+    scene, design = make(**kw)
+    run = Run(scene, design, 3, (), accuracy("precise"), False)
+    run.at = 0
+    run.stages.append({"manipulator": 1, "bounces": 0})
+    return run
+
+
+def finish(step):
+    while step is not None:
+        step = step()
+
+
+def energy(state, palm_mass):
+    """The object's and its palm's energy (the palm's pivot at height 0) from an event state."""
+    phi, spin = state["phi"], state["spin"]
+    rx, ry = rotate(phi, 0.0, H_BODY / 2)  # the centre from the bottom centre
+    vx, vy = state["vx"] + spin * ry, state["vy"] - spin * rx
+    obj = (0.5 * M_BODY * (vx * vx + vy * vy) + 0.5 * I_C * spin * spin
+           + M_BODY * G * (state["y"] + ry))
+    palm = (0.5 * palm_mass * (L * state["omega"]) ** 2
+            + palm_mass * G * L * math.cos(state["theta"]))
+    return obj + palm
+
+
+def test_the_sliding_equations_meet_the_pinned_ones_at_the_friction_cone():
+    # where mu is exactly |T| / N of the pinned motion, the slide that friction opposes with
+    # mu N has no slip acceleration, and the same th'', phi'' and normal force (a second
+    # method: Newton-Euler with the contact's force, against rocking.py's Lagrange equations)
+    rng = np.random.default_rng(3)
+    for _ in range(40):
+        edge = bool(rng.integers(2))
+        d = rng.uniform(-0.15, 0.15) if edge else W_BODY / 2 * rng.choice([-1.0, 1.0])
+        felt, weight = rng.uniform(0.05, 3.0, 2)
+        r = rk.Rocker(M_BODY, I_C, d, H_BODY, rng.uniform(-0.7, 0.7), felt, weight, 0.0, 0.0,
+                      G, L, (0.0, 0.0), edge)
+        th, om, phi, phid = rng.uniform(-0.6, 0.6, 4)
+        held = bool(rng.integers(2))
+        if held:
+            om = 0.0
+        a = rk.accelerations(th, om, phi, phid, r, held=held)
+        tangential, normal = rk.pin_force(th, om, phi, phid, *a, r)
+        if normal <= 0.0:
+            continue
+        mu, slip = abs(tangential) / normal, -math.copysign(1.0, tangential)
+        z = (th, om, phi, phid, d if edge else r.e, 0.0)
+        got = es.slide_accelerations(z, d, r, mu, slip, corner=not edge, held=held)
+        assert got[:2] == pytest.approx(a, rel=1e-9, abs=1e-9)
+        assert got[2] == pytest.approx(0.0, abs=1e-9)
+        assert got[3] == pytest.approx(normal, rel=1e-9)
+        # and friction short of that lets the contact slide the way slip names
+        less = es.slide_accelerations(z, d, r, 0.5 * mu, slip, corner=not edge, held=held)
+        assert slip * es.slip_speed((0, 0, 0, 0, 0, less[2]), not edge) > 0.0
+
+
+def test_a_corner_sliding_on_a_frictionless_held_palm_falls_flat_as_in_closed_form():
+    # released at phi0 on its front corner, mu = 0: no horizontal force, so the centre falls
+    # straight down; the energy m g (rho_y(phi0) - h/2) = (m d^2 + I_c) phi'^2 / 2 at phi = 0
+    # (the centre's speed there is d phi', straight down)
+    run = new_run(mu=0.0, mass_ratio=0.1)  # a 10 kg palm: its weight holds it on its stop
+    d, phi0 = W_BODY / 2, 0.3
+    r = run._rocker(0, 0.0, d)
+    assert not r.edge
+    z0 = [-ALPHA, 0.0, phi0, 0.0, r.e, 100 * run.acc.atol]
+    finish(run._edge_slide(0.0, 0, r, z0, True, 1.0, 1.0, 1.0))
+    down = run.events[0]
+    assert down.kind in ("settle", "rock") and down.before["phi"] == pytest.approx(0.0, abs=1e-9)
+    top_x, top_y = run.row.palm_top(0, -ALPHA)
+    centre_x0 = top_x + r.e + rotate(phi0, -d, H_BODY / 2)[0]
+    assert down.before["x"] == pytest.approx(centre_x0, abs=1e-8)
+    rho_y0 = d * math.sin(phi0) + H_BODY / 2 * math.cos(phi0)
+    spin = -math.sqrt(2 * M_BODY * G * (rho_y0 - H_BODY / 2) / (M_BODY * d * d + I_C))
+    assert down.before["spin"] == pytest.approx(spin, rel=1e-8)
+    assert down.before["y"] == pytest.approx(top_y, abs=1e-9)
+
+
+def test_a_frictionless_slide_on_a_swinging_palm_keeps_the_energy():
+    # the palm's edge under the base, palm 1 swinging (0.1 kg): with mu = 0 the contact does
+    # no work, so the energy of palm and object is kept through the slide
+    run = new_run(mu=0.0)
+    r = run._rocker(0, 0.75, 0.05)
+    assert r.edge
+    z0 = [0.1, 1.0, 0.2, 1.5, 0.05, -0.3]
+    start = run._slide_state(0, z0, 0.05, r, False)
+    finish(run._edge_slide(0.0, 0, r, z0, False, 1.0, 1.0, 1.0))
+    end = run.events[0]
+    assert end.time > 0.05 and end.stage == 1
+    assert energy(end.before, 0.1) == pytest.approx(energy(start, 0.1), rel=1e-8)
+    # with friction the slide takes energy (here until the slip stops and the edge holds)
+    run = new_run(mu=0.4)
+    finish(run._edge_slide(0.0, 0, r, z0, False, 1.0, 1.0, 1.0))
+    end = run.events[0]
+    assert end.kind == "stick" and energy(end.before, 0.1) < energy(start, 0.1) - 1e-3
+
+
+def newton_euler_corner_impact(v, spin, r, t_hat, M, held):
+    """The plastic sticking impact at a corner r (from the centre) on a palm of mass M moving
+    along t_hat, at rest before: unknowns Px, Py, vx, vy, spin, w (the palm's speed after)."""
+    m, (dx, dy) = M_BODY, r
+    A = np.array([[1, 0, -m, 0, 0, 0], [0, 1, 0, -m, 0, 0],
+                  [dy, -dx, 0, 0, -I_C, 0],
+                  [-t_hat[0], -t_hat[1], 0, 0, 0, -M],
+                  [0, 0, 1, 0, dy, -t_hat[0]], [0, 0, 0, 1, -dx, -t_hat[1]]], float)
+    b = np.array([-m * v[0], -m * v[1], -I_C * spin, 0.0, 0.0, 0.0])
+    if held:  # the stop takes the palm's impulse: w = 0
+        A[3] = [0, 0, 0, 0, 0, 1]
+    return np.linalg.solve(A, b)
+
+
+def test_a_tumbling_object_lands_on_its_corner_where_its_flight_meets_the_palm():
+    run = new_run(mass_ratio=0.1)
+    top_x, top_y = run.row.palm_top(1, -ALPHA)
+    c0, v0 = (top_x - 0.1, top_y + 0.35), (1.2, -0.4)
+    phi0, spin0 = 0.25, 2.0
+    finish(run._tumble(0.0, 0, (*c0, *v0, phi0, spin0), (), None))
+    landing = next(e for e in run.events if e.kind == "landing")
+
+    def corner(t, bx=W_BODY / 2):  # the front base corner, from the flight written here
+        dx, dy = rotate(phi0 + spin0 * t, bx, -H_BODY / 2)
+        return c0[0] + v0[0] * t + dx, c0[1] + v0[1] * t - G * t * t / 2 + dy
+
+    ts = np.linspace(0.0, 1.0, 20001)
+    first = next(t for t in ts if corner(t)[1] < top_y)  # the rear corner stays higher
+    assert all(corner(t, -W_BODY / 2)[1] > top_y for t in ts[ts <= first])
+    t_land = brentq(lambda t: corner(t)[1] - top_y, first - 1e-4, first, xtol=1e-15)
+    assert landing.time == pytest.approx(t_land, abs=1e-9)
+    phi = phi0 + spin0 * t_land
+    assert landing.before["phi"] == pytest.approx(phi, abs=1e-9)
+    assert landing.stage == 2 and abs(corner(t_land)[0] - top_x) < 0.8
+    # the impact: Newton-Euler at the corner, palm 2 (10 kg) off its stop or held by it
+    r = rotate(phi, W_BODY / 2, -H_BODY / 2)
+    v = (v0[0], v0[1] - G * t_land)
+    t_hat = (math.cos(-ALPHA), -math.sin(-ALPHA))
+    px, py, vx, vy, spin, w = newton_euler_corner_impact(v, spin0, r, t_hat, 10.0, False)
+    if w < 0.0:
+        px, py, vx, vy, spin, w = newton_euler_corner_impact(v, spin0, r, t_hat, 10.0, True)
+    assert py > 0.0 and abs(px) < 0.8 * py
+    assert landing.after["spin"] == pytest.approx(spin, rel=1e-8)
+    assert landing.after["omega"] * L == pytest.approx(w, abs=1e-10)
+    assert landing.after["palm"] == 2
+
+
+def test_the_sliding_impact_against_newton_euler():
+    # slide_impact against the impulse P (n + mu_s tau) at the contact written here: the
+    # object's momentum and spin, the palm's momentum along t (the velocities after from the
+    # coordinates' rates, which keep the contact: no normal approach after)
+    rng = np.random.default_rng(11)
+    for _ in range(30):
+        edge = bool(rng.integers(2))
+        d = rng.uniform(-0.15, 0.15) if edge else W_BODY / 2 * rng.choice([-1.0, 1.0])
+        felt = rng.uniform(0.1, 2.0)
+        r = rk.Rocker(M_BODY, I_C, d, H_BODY, 0.3, felt, felt, 0.0, 0.0, G, L, (0.0, 0.0), edge)
+        th, om, phi = rng.uniform(-0.5, 0.5, 3)
+        v, spin = rng.uniform(-2, 2, 2), rng.uniform(-3, 3)
+        mu, slip = rng.uniform(0.1, 1.0), rng.choice([-1.0, 1.0])
+        th1, phi1, u1, p = es.slide_impact(tuple(v), spin, th, om, phi, d, r, mu, slip,
+                                           corner=not edge)
+        n = (math.sin(phi), math.cos(phi)) if edge else (0.0, 1.0)
+        tau = (math.cos(phi), -math.sin(phi)) if edge else (1.0, 0.0)
+        f = (n[0] - mu * slip * tau[0], n[1] - mu * slip * tau[1])
+        lever = rotate(phi, -d, H_BODY / 2)  # the centre from the contact
+        t_hat = (math.cos(th), -math.sin(th))
+        vx, vy = rk.centre_velocity(th, th1, phi, phi1, r)
+        if edge:  # the base's point on the edge moves along the base at u'
+            vx, vy = vx - u1 * tau[0], vy - u1 * tau[1]
+        else:
+            vx += u1
+        assert M_BODY * (vx - v[0]) == pytest.approx(p * f[0], abs=1e-10)
+        assert M_BODY * (vy - v[1]) == pytest.approx(p * f[1], abs=1e-10)
+        moment = -lever[1] * f[0] + lever[0] * f[1]  # clockwise, about the centre
+        assert I_C * (phi1 - spin) == pytest.approx(p * moment, abs=1e-10)
+        assert felt * L * (th1 - om) == pytest.approx(-p * (f[0] * t_hat[0] + f[1] * t_hat[1]),
+                                                      abs=1e-10)
