@@ -46,6 +46,8 @@ EVENT_KINDS = {
     "settle": "the rocking object comes back down flat on its palm and is carried on",
     "catch": "a corner of the rocking object comes down on another palm, which carries it on",
     "release": "the rocking object drags its palm off the stop it rested on",
+    "roll": "the object turned to pi/2 about its base corner: the side face it turned onto "
+            "comes down on the palm and is its base from then on",
     "leave": "the rocking object leaves its palm (its contact force vanishes, or its sliding "
              "contact runs off the end of its base or of the palm) and flies on, tumbling",
     "lift_off": "the palm's normal force vanished (v^2 >= g l cos th): the object flies on and "

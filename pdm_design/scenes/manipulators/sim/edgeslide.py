@@ -283,6 +283,10 @@ class EdgeSlidingPhases:
             return self._slide_settle(t, k, z, d, r, held, side, state)
         if kind is None:
             return self._fail(t, "timeout", k + 1, state, f"sliding on palm {k + 1}: no event")
+        if kind == "tipped_over" and corner:  # its side face comes down
+            body = (slide_centre_velocity(z, d, r, corner=corner),
+                    self._slide_point(k, z, d, r, 0.0, 0.5 * r.h, corner), z[3])
+            return self._roll_over(t, k, z[0], z[1], body, z[4], side, held, state)
         if kind == "tipped_over":
             return self._fail(t, "tipped_over", k + 1, state,
                               f"the object turned to pi/2 sliding on palm {k + 1}: it tipped over")
@@ -342,41 +346,57 @@ class EdgeSlidingPhases:
         return lambda: self._edge_slide(t, j, r, z, held, side, slip, way)
 
     def _slide_settle(self, t, k, z, d, r, held, side, state):
-        """The sliding object's base comes back down on palm k (phi = 0). As in
+        """The sliding object's base comes back down on palm k (phi = 0): _come_down."""
+        corner = not r.edge
+        v = slide_centre_velocity(z, d, r, corner=corner)
+        centre = self._slide_point(k, z, d, r, 0.0, 0.5 * r.h, corner)
+        return self._come_down(t, k, z[0], z[1], (v, centre, z[3]), state["offset"], side,
+                               held, state)
+
+    def _come_down(self, t, k, theta, omega, body, s, side, held, state):
+        """The object's base (at offset s) comes down on palm k at phi = 0, turning about its
+        `side` end (+1 the front) with body = (centre velocity, centre, phi'). As in
         rocking._rock_settle, a plastic impact about the support's other end first: if turning
         about it lifts the first one the object rocks (sliding, if the impulse leaves the
         friction cone) about it. Else it lies flat: the whole base stops turning and the
         object's translation meets the palm as a landing does (phases.impact: sticking, or
         sliding, plastic), the impulse's moment taking the spin, I_c phi' = (h/2) P_x + x_b P_y,
         which puts its point x_b on the base: it must lie on the supported part."""
-        corner = not r.edge
-        theta, omega, _, phid = z[:4]
-        v = slide_centre_velocity(z, d, r, corner=corner)
-        s = state["offset"]
+        v, centre, phid = body
         lo, hi = self.row.support(s)
         other = lo if side > 0.0 else hi
         hold = ("back" if theta <= -self.alphas[k] else "front") if held else None
         r2 = self._rocker(k, s, other)
         th1, phi1, held2, (px, py) = impact_onto_pin(*v, phid, theta, omega, 0.0, r2, hold)
-        if -side * phi1 * max(self.h, self.row.body_width) > self.zeno_speed:
-            if py > 0.0 and abs(px) <= self.mu * py:
-                self._log(t, "rock", k + 1, state, self._rock_state(k, (theta, th1, 0.0, phi1), r2),
-                          f"comes down on the other end of its base: rocks about it at "
-                          f"{phi1:+.4g} rad/s")
-                return lambda: self._rock(t, k, s, other, (theta, th1, 0.0, phi1), held2)
-            cx, cy = self._slide_point(k, z, d, r, 0.0, 0.5 * r.h, corner)
-            slid = self._tumble_slide_impact((cx, cy, *v, 0.0, phid), k, theta, omega, 0.0, r2,
-                                             hold)
-            if slid is None:
-                return self._fail(t, "tip", k + 1, state,
-                                  f"the object comes down on the other end of its base on palm "
-                                  f"{k + 1}: no consistent sliding impact (not followed)")
-            z2, held2, slip2 = slid
-            self._log(t, "rock", k + 1, state, self._slide_state(k, z2, other, r2, not r2.edge),
-                      "comes down on the other end of its base: rocks about it, sliding")
-            way = 1.0 if z2[1] >= 0.0 else -1.0
-            return lambda: self._edge_slide(t, k, r2, z2, held2, -side, slip2, way)
-        return self._slide_flat(t, k, theta, omega, v, phid, s, held, state)
+        if -side * phi1 * max(self.h, self.row.body_width) <= self.zeno_speed:
+            return self._slide_flat(t, k, theta, omega, v, phid, s, held, state)
+        if py > 0.0 and abs(px) <= self.mu * py:
+            self._log(t, "rock", k + 1, state, self._rock_state(k, (theta, th1, 0.0, phi1), r2),
+                      f"comes down on the other end of its base: rocks about it at "
+                      f"{phi1:+.4g} rad/s")
+            return lambda: self._rock(t, k, s, other, (theta, th1, 0.0, phi1), held2)
+        slid = self._tumble_slide_impact((*centre, *v, 0.0, phid), k, theta, omega, 0.0, r2,
+                                         hold)
+        if slid is None:
+            return self._fail(t, "tip", k + 1, state,
+                              f"the object comes down on the other end of its base on palm "
+                              f"{k + 1}: no consistent sliding impact (not followed)")
+        z2, held2, slip2 = slid
+        self._log(t, "rock", k + 1, state, self._slide_state(k, z2, other, r2, not r2.edge),
+                  "comes down on the other end of its base: rocks about it, sliding")
+        way = 1.0 if z2[1] >= 0.0 else -1.0
+        return lambda: self._edge_slide(t, k, r2, z2, held2, -side, slip2, way)
+
+    def _roll_over(self, t, k, theta, omega, body, e, side, held, state):
+        """The object turned to pi/2 about its base corner at e along palm k (side +1: the
+        front one): its side face comes down on the palm and is its base from then on
+        (tumbling._turn_body); the corner is that face's rear (front) end: _come_down."""
+        self._turn_body(1 if side > 0.0 else 3)
+        d = -side * 0.5 * self.row.body_width
+        self._log(t, "roll", k + 1, state, state,
+                  f"the object turned onto its {'front' if side > 0 else 'rear'} face on palm "
+                  f"{k + 1}")
+        return self._come_down(t, k, theta, omega, body, e - d, -side, held, state)
 
     def _slide_flat(self, t, k, theta, omega, v, phid, s, held, state):
         """The object lies flat on palm k after it came down: _slide_settle's flat impact."""

@@ -357,6 +357,9 @@ class RockingPhases:
             return self._leave_edge(te, k, z, r, state)
         if kind == "slides":  # the pin slides (edgeslide.py)
             return self._slide_onset(te, k, z, r, held, side, way, state)
+        if kind == "tipped_over" and not r.edge:  # its side face comes down (edgeslide.py)
+            body = (centre_velocity(*z, r), body_point(z[0], z[2], 0.0, 0.5 * r.h, r), z[3])
+            return self._roll_over(te, k, z[0], z[1], body, r.e, side, held, state)
         return self._rock_fail(te, k, kind, z, r, state)
 
     def _rock_fail(self, t, k, kind, z, r, state):

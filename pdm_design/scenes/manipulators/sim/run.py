@@ -67,7 +67,10 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         self._pivot_order = sorted(range(stages), key=lambda j: self.row.pivots[j][0])
         self._pivot_x = [self.row.pivots[j][0] for j in self._pivot_order]
         self._boxes: dict = {}
-        self._reach = 2.0 * max(self.ls) + 1.5 * self.row.palm_width + self.row.body_width
+        # (the object's larger side: it may come to lie on either, tumbling.TumblingPhases)
+        self._reach = (2.0 * max(self.ls) + 1.5 * self.row.palm_width
+                       + max(self.row.body_width, self.h))
+        self.face = 0  # quarter turns clockwise from its base to the face it lies on
         self.events: list[Event] = []
         self.palm_events: list[Event] = []
         self.stages: list[dict] = []
@@ -169,6 +172,8 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         return SimulationResult("manipulators", outcome, stages, log, self.acc, traj)
 
     def _log(self, time, kind, stage, before, after, detail="", failure=False):
+        if self.face and "x" in before:  # the object lies on another face than its base
+            before = dict(before, face=self.face)
         ev = Event(float(time), kind, int(stage), _floats(before), _floats(after), detail, failure)
         self.events.append(ev)
         if failure:

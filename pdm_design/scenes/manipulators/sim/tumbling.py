@@ -21,6 +21,7 @@ underside (`blocked`), a palm's corner on the object's side face, a sliding land
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -51,12 +52,33 @@ def world_to_body(cx, cy, phi, x, y, h):
     return bx, by + 0.5 * h
 
 
-def base_frame(phi, bx, by, h):
-    """The contact at the object's point (bx, by) as one on its base: (phi, bx) of the base's
-    frame, the rectangle turned over (phi + pi, -bx) when the point is on its top face."""
-    if by > 0.5 * h:
-        return wrap(phi + math.pi), -bx
-    return wrap(phi), bx
+def turned(turn, bx, by, w, h):
+    """The object's point (bx, by) (from the base centre of its w x h outline) in the frame of
+    its face `turn` quarter turns clockwise on: (bx', by', w', h'). Its centre-relative
+    coordinates turn by R(turn pi / 2): R(pi/2) (x, y) = (y, -x)."""
+    x, y = bx, by - 0.5 * h
+    for _ in range(turn % 4):
+        x, y, w, h = y, -x, h, w
+    return x, y + 0.5 * h, w, h
+
+
+def landing_frame(phi, bx, by, w, h, side=None):
+    """The face the object comes down on about its contact point (bx, by): of the faces that
+    hold the point, one turned (phi' = phi - turn pi/2) within pi/2 of lying flat the way that
+    the rest of it is above the palm (side phi' > 0, side the way the contact is from the
+    face's centre, or the given side: +1 the palm's front edge), the nearest to flat. Returns
+    (turn, phi', d' along that face, side) or None."""
+    best = None
+    for turn in range(4):
+        x, y, w2, _ = turned(turn, bx, by, w, h)
+        if abs(y) > 1e-9 * max(w, h) or abs(x) > 0.5 * w2 * (1.0 + 1e-12):
+            continue
+        phi2 = wrap(phi - 0.5 * math.pi * turn)
+        way = math.copysign(1.0, x) if side is None else side
+        if way * phi2 > 0.0 and abs(phi2) < 0.5 * math.pi:
+            if best is None or abs(phi2) < abs(best[1]):
+                best = (turn, phi2, x, way)
+    return best
 
 
 class TumblingPhases:
@@ -167,32 +189,28 @@ class TumblingPhases:
 
     def _tumble_landing(self, t, k, body, kind, palm_state, planned, state):
         """The tumbling object meets palm p (kind from _tumble_guards): a landing on a corner or
-        on the palm's edge, followed as a rocking phase about that contact, or not followed."""
+        on the palm's edge, followed as a rocking phase about that contact (the face that comes
+        down about it its base from then on: _turn_body), or not followed."""
         what, face, p, ax, ay = kind
         cx, cy, vx, vy, phi, phid = body
-        if what == "corner" and face != "top":
+        if (what == "corner" and face != "top") or (what == "edge" and ay < 0.0):
             return self._fail(t, "blocked", self.passed + 1, state,
                               f"the tumbling object hits the side of palm {p + 1}")
-        if what == "edge" and (face == "side" or ay < 0.0):
-            return self._fail(t, "tip", self.passed + 1, state,
-                              f"the tumbling object comes down on palm {p + 1}'s edge with its "
-                              "side face (not followed)")
         theta, omega = palm_state if palm_state is not None else (self.rest_angle[p], 0.0)
         top_x, top_y = self.row.palm_top(p, theta)
         if what == "corner":  # the object's corner (ax, ay) on the palm's top
-            phi_b, d = base_frame(phi, ax, ay, self.h)
             x_c, _ = body_to_world(cx, cy, phi, ax, ay, self.h)
-            e = x_c - top_x
-            side = math.copysign(1.0, d)
-        else:  # the palm's edge (ax along its top) on the object's base or top face
+            e, bx, by, side = x_c - top_x, ax, ay, None
+        else:  # the palm's edge (ax along its top) on a face of the object
             bx, by = world_to_body(cx, cy, phi, top_x + ax, top_y, self.h)
-            phi_b, d = base_frame(phi, bx, by, self.h)
-            e = ax
-            side = math.copysign(1.0, ax)
-        if side * phi_b <= 0.0 or abs(phi_b) >= 0.5 * math.pi:
+            e, side = ax, math.copysign(1.0, ax)
+        frame = landing_frame(phi, bx, by, self.row.body_width, self.h, side)
+        if frame is None:
             return self._fail(t, "tip", self.passed + 1, state,
-                              f"the tumbling object comes down on palm {p + 1} turned so that "
-                              "its side face, not its base, would come down (not followed)")
+                              f"the tumbling object comes down on palm {p + 1} with no face "
+                              "turned to come down about the contact (not followed)")
+        turn, phi_b, d, side = frame
+        self._turn_body(turn)
         r = self._rocker(p, e - d, d)
         hold = None
         if palm_state is None:
@@ -211,6 +229,17 @@ class TumblingPhases:
                               "sliding impact (not followed)")
         z, held, slip = slid
         return self._tumble_land(t, k, p, r, z, held, side, planned, state, slip)
+
+    def _turn_body(self, turn):
+        """The object's face `turn` quarter turns clockwise on from its base is its base from
+        now on (the object lies on it): with an odd turn its width and height change places
+        in every phase (they read them from the run)."""
+        self.face = (self.face + turn) % 4
+        if turn % 2:
+            w, h = self.row.body_width, self.h
+            self.row = replace(self.row, body_width=h, body_height=w)
+            self.h = w
+            self._boxes = {}
 
     def _tumble_slide_impact(self, body, p, theta, omega, phi, r, hold):
         """The landing's sticking impulse lies outside the friction cone: the sliding impact
