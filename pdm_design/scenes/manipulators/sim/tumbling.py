@@ -33,6 +33,8 @@ from .rocking import body_point, centre_velocity, impact_onto_pin, rotate
 # the object's corners from its base centre, in units of (width, height)
 CORNERS = ((-0.5, 0.0), (0.5, 0.0), (0.5, 1.0), (-0.5, 1.0))
 STEP_TURN = 0.05  # largest turn of the object per integration step (rad), so no corner skips a face
+SEGMENT = 0.25  # the flight is followed in segments of this many sqrt(l / g), each with the
+# contact guards of the palms within reach in it
 
 
 def wrap(phi):
@@ -111,44 +113,49 @@ class TumblingPhases:
         return {"x": cx + bx, "y": cy + by, "vx": vx + phid * by, "vy": vy - phid * bx,
                 "phi": phi, "spin": phid}
 
-    def _tumble_guards(self, t0, k, moving, body):
-        """Face guards of every contact the flight may meet: palms at rest near its path, and
-        palm k while it swings (its (th, th') at z[6], z[7] when `moving`)."""
+    def _tumble_guards(self, t0, k, moving, body, horizon):
+        """Face guards of every contact the flight may meet by t0 + horizon: palms at rest
+        within reach of its path then, and palm k while it swings (its (th, th') at z[6], z[7]
+        when `moving`)."""
         w, h, W, T = self.row.body_width, self.h, self.row.palm_width, self.row.palm_thickness
         cx, cy, vx, vy = body[:4]
-        fall = (vy + math.sqrt(vy * vy + 2.0 * self.g * max(cy - self.y_floor, 0.0))) / self.g
-        reach = 0.5 * (W + math.hypot(w, h)) + abs(vx) * fall + self.row.body_width
-        boxes = [(b.palm, b.cx, b.y_high) for b in self._obstacles(t0, k)
-                 if abs(b.cx - cx - 0.5 * vx * fall) < reach + 0.5 * abs(vx) * fall]
-
-        def top_of(p, z):
-            if moving and p == k:
-                return self.row.palm_top(k, z[6])
-            _, cxp, yh = next(b for b in boxes if b[0] == p)
-            return cxp, yh
-
-        palms = [b[0] for b in boxes] + ([k] if moving else [])
+        half = 0.5 * math.hypot(w, h)  # the object's corners are within this of its centre
+        rise = min(max(vy / self.g, 0.0), horizon)
+        x_lo, x_hi = cx + min(0.0, vx * horizon) - half, cx + max(0.0, vx * horizon) + half
+        y_hi = cy + vy * rise - 0.5 * self.g * rise * rise + half
+        y_lo = min(cy, cy + vy * horizon - 0.5 * self.g * horizon * horizon) - half
+        slabs = [Box(b.palm, b.cx, 0.5 * W, b.y_high - T, b.y_high)
+                 for b in self._obstacles(t0, k) if abs(b.cx - 0.5 * (x_lo + x_hi))
+                 < 0.5 * (W + x_hi - x_lo) and b.y_high - T < y_hi and b.y_high > y_lo]
         faces = []
-        for p in palms:
-            def slab(z, p=p):
-                px, py = top_of(p, z)
-                return Box(p, px, 0.5 * W, py - T, py)
+        for slab in slabs:
+            faces += self._contact_guards(slab.palm, lambda z, b=slab: b)
+        if moving:
+            def swinging(z):
+                px, py = self.row.palm_top(k, z[6])
+                return Box(k, px, 0.5 * W, py - T, py)
+            faces += self._contact_guards(k, swinging)
+        return faces
 
-            def body_box(z, p=p):
-                return Box(p, 0.0, 0.5 * w, 0.0, h)
-            for bx, by in CORNERS:
-                def corner(z, bx=bx * w, by=by * h):
-                    return body_to_world(z[0], z[1], z[4], bx, by, h)
-                faces += [(f, d, v, ("corner", face, p, bx * w, by * h))
-                          for f, d, v, face in face_guards(slab, corner)]
-            for ex, ey in ((-0.5, 0.0), (0.5, 0.0), (0.5, -1.0), (-0.5, -1.0)):
-                def edge(z, p=p, ex=ex * W, ey=ey * T):
-                    px, py = top_of(p, z)
-                    return world_to_body(z[0], z[1], z[4], px + ex, py + ey, h)
-                # face_guards' order: the box's top (the object's top), bottom (its base), sides
-                names = ("over", "base", "side", "side")
-                faces += [(f, d, v, ("edge", name, p, ex * W, ey * T))
-                          for (f, d, v, _), name in zip(face_guards(body_box, edge), names)]
+    def _contact_guards(self, p, slab):
+        """Face guards of the object's corners entering palm p's slab (slab(z): its Box), and
+        of the slab's corners entering the object (in the object's own frame)."""
+        w, h = self.row.body_width, self.h
+        body_box = Box(p, 0.0, 0.5 * w, 0.0, h)
+        faces = []
+        for bx, by in CORNERS:
+            def corner(z, bx=bx * w, by=by * h):
+                return body_to_world(z[0], z[1], z[4], bx, by, h)
+            faces += [(f, d, v, ("corner", face, p, bx * w, by * h))
+                      for f, d, v, face in face_guards(slab, corner)]
+        for ex, top in ((-1.0, True), (1.0, True), (1.0, False), (-1.0, False)):
+            def edge(z, ex=ex, top=top):
+                b = slab(z)
+                return world_to_body(z[0], z[1], z[4], b.cx + ex * b.half_width,
+                                     b.y_high if top else b.y_low, h)
+            faces += [(f, d, v, ("edge", face, p, ex * 0.5 * self.row.palm_width,
+                                 0.0 if top else -self.row.palm_thickness))
+                      for f, d, v, face in face_guards(lambda z: body_box, edge)]
         return faces
 
     def _tumble(self, t0, k, body, palm, planned):
@@ -165,10 +172,12 @@ class TumblingPhases:
                 out += [z[7], ph.swing_acceleration(z[6], z[7], sw)]
             return out
 
-        faces = self._tumble_guards(t0, k, moving, body)
+        horizon = SEGMENT * math.sqrt(self.l / g)
+        faces = self._tumble_guards(t0, k, moving, body, horizon)
         physics = [(lambda t, z: z[1] - self.y_floor, "fell_clear")]
         step = min(0.05 * math.sqrt(self.h / g), STEP_TURN / max(abs(body[5]), 1e-9))
         t_split = self._next_arrival(t0, None)
+        t_split = t0 + horizon if t_split is None else min(t_split, t0 + horizon)
         te, z, kind, sol = self._integrate(rhs, t0, z0, physics, faces, max_step=step,
                                            t_end=t_split)
         z = [float(v) for v in z]
@@ -177,7 +186,7 @@ class TumblingPhases:
             for t in np.linspace(t0, te, 40):
                 st = self._tumble_state(sol.sol(t)[:6])
                 self._rec(t, st["x"], st["y"], st["vx"], st["vy"], np.nan, 0)
-        if kind is None and t_split is not None and te >= t_split:
+        if kind is None and te >= t_split:  # (a palm at rest from then on, or the segment's end)
             return lambda: self._tumble(te, k, z[:6], z[6:8] if moving else (), planned)
         if kind is None:
             return self._fail(te, "timeout", self.passed + 1, state, "no event in flight")
