@@ -33,6 +33,7 @@ from .rocking import body_point, centre_velocity, impact_onto_pin, rotate
 # the object's corners from its base centre, in units of (width, height)
 CORNERS = ((-0.5, 0.0), (0.5, 0.0), (0.5, 1.0), (-0.5, 1.0))
 STEP_TURN = 0.05  # largest turn of the object per integration step (rad), so no corner skips a face
+END_TOL = 1e-9  # link lengths: a corner this near a palm's end meets the palm's corner
 SEGMENT = 0.25  # the flight is followed in segments of this many sqrt(l / g), each with the
 # contact guards of the palms within reach in it
 
@@ -158,7 +159,7 @@ class TumblingPhases:
                       for f, d, v, face in face_guards(lambda z: body_box, edge)]
         return faces
 
-    def _tumble(self, t0, k, body, palm, planned):
+    def _tumble(self, t0, k, body, palm, planned, passed=None):
         """Free flight of the tumbling object (centre, velocity, phi, phi' = body) from palm k,
         with palm k's (th, th') = palm while it swings alone."""
         g = self.g
@@ -173,7 +174,8 @@ class TumblingPhases:
             return out
 
         horizon = SEGMENT * math.sqrt(self.l / g)
-        faces = self._tumble_guards(t0, k, moving, body, horizon)
+        faces = [f for f in self._tumble_guards(t0, k, moving, body, horizon)
+                 if passed is None or f[3] != ("corner", "top", *passed)]
         physics = [(lambda t, z: z[1] - self.y_floor, "fell_clear")]
         step = min(0.05 * math.sqrt(self.h / g), STEP_TURN / max(abs(body[5]), 1e-9))
         t_split = self._next_arrival(t0, None)
@@ -194,9 +196,10 @@ class TumblingPhases:
             return self._fail(te, "fell_clear", self.passed + 1, state,
                               "the tumbling object fell past the row")
         palm_state = (z[6], z[7]) if moving and kind[2] == k else None
-        return self._tumble_landing(te, k, z[:6], kind, palm_state, planned, state)
+        return self._tumble_landing(te, k, z[:6], kind, palm_state, planned, state,
+                                    tuple(z[6:8]) if moving else ())
 
-    def _tumble_landing(self, t, k, body, kind, palm_state, planned, state):
+    def _tumble_landing(self, t, k, body, kind, palm_state, planned, state, swing=()):
         """The tumbling object meets palm p (kind from _tumble_guards): a landing on a corner or
         on the palm's edge, followed as a rocking phase about that contact (the face that comes
         down about it its base from then on: _turn_body), or not followed."""
@@ -210,6 +213,14 @@ class TumblingPhases:
         if what == "corner":  # the object's corner (ax, ay) on the palm's top
             x_c, _ = body_to_world(cx, cy, phi, ax, ay, self.h)
             e, bx, by, side = x_c - top_x, ax, ay, None
+            end = math.copysign(0.5 * self.row.palm_width, e)
+            if abs(e - end) <= END_TOL * self.l:  # at the palm's end: a corner on its corner
+                out = vx + phid * (body_to_world(0.0, 0.0, phi, ax, ay, self.h)[1]) - (
+                    self.ls[p] * omega * math.cos(theta))
+                if out * end > 0.0:  # it passes by the palm's end, going off it (that
+                    # corner's crossing of the top's line is no contact for a segment)
+                    return lambda: self._tumble(t, k, body, swing, planned, (p, ax, ay))
+                e, side = end, math.copysign(1.0, end)  # as the palm's edge on that corner
         else:  # the palm's edge (ax along its top) on a face of the object
             bx, by = world_to_body(cx, cy, phi, top_x + ax, top_y, self.h)
             e, side = ax, math.copysign(1.0, ax)
@@ -221,6 +232,9 @@ class TumblingPhases:
         turn, phi_b, d, side = frame
         self._turn_body(turn)
         r = self._rocker(p, e - d, d)
+        if what == "corner" and side is not None and e == math.copysign(
+                0.5 * self.row.palm_width, e):  # (the palm's corner under the object's base)
+            r = replace(r, edge=True)
         hold = None
         if palm_state is None:
             hold = "back" if theta <= -self.alphas[p] else "front" if theta >= self.fs else None
