@@ -199,3 +199,43 @@ def test_the_sliding_impact_against_newton_euler():
         assert I_C * (phi1 - spin) == pytest.approx(p * moment, abs=1e-10)
         assert felt * L * (th1 - om) == pytest.approx(-p * (f[0] * t_hat[0] + f[1] * t_hat[1]),
                                                       abs=1e-10)
+
+
+def test_an_object_rolling_over_its_front_corner_comes_down_on_its_front_face():
+    # a tall object (0.2 x 0.4 m) on a held palm (10 kg; mu = 40: its corner holds, the
+    # pinned force needs |T| / N up to 32 on the way) turns about its front base corner from
+    # phi = 0 at 1.1 times the speed that brings its centre over the corner, its normal force
+    # positive all the way (0.14 N least, at pi/2); at pi/2 (energy: I_P phi'^2 / 2 + m g rho_y
+    # const) its front face comes down: a plastic impact about that face's far end, the old
+    # front top corner, keeping the angular momentum about it
+    w, h = 0.2, 0.4
+    run = new_run(mu=40.0, mass_ratio=0.1, width=w, height=h)
+    d, i_c = w / 2, M_BODY * (w * w + h * h) / 12
+    i_p = i_c + M_BODY * (d * d + h * h / 4)
+    barrier = math.sqrt(2 * M_BODY * G * (math.hypot(d, h / 2) - h / 2) / i_p)
+    phid0 = 1.1 * barrier
+    finish(run._rock(0.0, 0, 0.0, d, (-ALPHA, 0.0, 0.0, phid0), True))
+    roll = run.events[0]
+    assert roll.kind == "roll" and roll.before["phi"] == pytest.approx(math.pi / 2, abs=1e-9)
+    spin = math.sqrt(phid0**2 + 2 * M_BODY * G * (h / 2 - d) / i_p)  # rho_y: h/2 -> d
+    assert roll.before["spin"] == pytest.approx(spin, rel=1e-8)
+    # about the far end Q of the front face (h ahead of the corner) the centre is at
+    # r = (h/2 - h, d) and moves at spin (d, -h/2) (turning about the corner)
+    r, v = (h / 2 - h, d), (spin * d, -spin * h / 2)
+    moment = i_c * spin + M_BODY * (r[1] * v[0] - r[0] * v[1])
+    after = moment / (i_c + M_BODY * (r[0] ** 2 + r[1] ** 2))
+    down = run.events[1]
+    assert down.before["face"] == 1  # its front face is its base now (0.4 wide, 0.2 high)
+    assert after < 0.0  # (-0.0133 spin / I_Q) that would press the corner down: it lies flat
+    assert down.kind == "settle"
+    # flat: a plastic sticking landing on palm 1 (10 kg, along t at -alpha; section 2.2a's
+    # kept momentum along t, the palm held only if that drives it back), the impulse's moment
+    # taking the spin at x_b = (I_c spin - (h'/2) P_x) / P_y on the new base (0.4 m wide,
+    # h' = 0.2, centred 0.2 m ahead of the old corner): inside it
+    t_hat = (math.cos(-ALPHA), -math.sin(-ALPHA))
+    u = max(M_BODY * (v[0] * t_hat[0] + v[1] * t_hat[1]) / (M_BODY + 10.0), 0.0)
+    px, py = M_BODY * (u * t_hat[0] - v[0]), M_BODY * (u * t_hat[1] - v[1])
+    x_b = (i_c * spin - w / 2 * px) / py
+    assert -h / 2 < x_b < h / 2 and abs(px) < 40.0 * py
+    assert down.after["vx"] == pytest.approx(u * t_hat[0], rel=1e-9, abs=1e-12)
+    assert down.after["vy"] == pytest.approx(u * t_hat[1], rel=1e-9, abs=1e-12)
