@@ -100,6 +100,7 @@ class TumblingPhases:
         phi, phi'): palm k swings on alone, the object flies tumbling."""
         self._log(t, "leave", k + 1, state, state,
                   f"{why}: the object leaves palm {k + 1} turning at {body[5]:+.4g} rad/s")
+        self._left_angle = theta
         planned = None
         if self.rest_since[k] > t:  # (a palm held by its stop stays there)
             events = len(self.palm_events)
@@ -311,8 +312,8 @@ class TumblingPhases:
         rec = self._stage(p)
         if rec is None:
             prev = self._stage(k)
-            if prev is not None:
-                prev.update(handover_time=t, handover_angle=self.rest_angle[k],
+            if prev is not None:  # (palm k's angle where the object left it)
+                prev.update(handover_time=t, handover_angle=self._left_angle,
                             handover_speed=math.hypot(state["vx"], state["vy"]),
                             handover_vx=state["vx"], handover_vy=state["vy"])
             imp = ph.Impact(after["vx"], after["vy"], r.link_length * z[1], 0.0, 0.0, True)
