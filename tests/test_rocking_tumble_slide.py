@@ -225,7 +225,8 @@ def test_an_object_rolling_over_its_front_corner_comes_down_on_its_front_face():
     moment = i_c * spin + M_BODY * (r[1] * v[0] - r[0] * v[1])
     after = moment / (i_c + M_BODY * (r[0] ** 2 + r[1] ** 2))
     down = run.events[1]
-    assert down.before["face"] == 1  # its front face is its base now (0.4 wide, 0.2 high)
+    assert run.face == 1  # its front face is its base now (0.4 wide, 0.2 high)
+    assert (run.row.body_width, run.h) == (h, w)
     assert after < 0.0  # (-0.0133 spin / I_Q) that would press the corner down: it lies flat
     assert down.kind == "settle"
     # flat: a plastic sticking landing on palm 1 (10 kg, along t at -alpha; section 2.2a's

@@ -391,6 +391,7 @@ class EdgeSlidingPhases:
         """The object turned to pi/2 about its base corner at e along palm k (side +1: the
         front one): its side face comes down on the palm and is its base from then on
         (tumbling._turn_body); the corner is that face's rear (front) end: _come_down."""
+        state = dict(state, face=self.face)  # (phi as it was: in the frame of this face)
         self._turn_body(1 if side > 0.0 else 3)
         d = -side * 0.5 * self.row.body_width
         self._log(t, "roll", k + 1, state, state,

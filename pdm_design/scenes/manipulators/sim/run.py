@@ -71,6 +71,7 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         self._reach = (2.0 * max(self.ls) + 1.5 * self.row.palm_width
                        + max(self.row.body_width, self.h))
         self.face = 0  # quarter turns clockwise from its base to the face it lies on
+        self._left_angle = None  # the angle of the palm the object last left tumbling
         self.events: list[Event] = []
         self.palm_events: list[Event] = []
         self.stages: list[dict] = []
@@ -172,7 +173,7 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         return SimulationResult("manipulators", outcome, stages, log, self.acc, traj)
 
     def _log(self, time, kind, stage, before, after, detail="", failure=False):
-        if self.face and "x" in before:  # the object lies on another face than its base
+        if self.face and "x" in before and "face" not in before:  # it lies on another face
             before = dict(before, face=self.face)
         ev = Event(float(time), kind, int(stage), _floats(before), _floats(after), detail, failure)
         self.events.append(ev)

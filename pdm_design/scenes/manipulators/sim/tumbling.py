@@ -231,6 +231,7 @@ class TumblingPhases:
                               f"the tumbling object comes down on palm {p + 1} with no face "
                               "turned to come down about the contact (not followed)")
         turn, phi_b, d, side = frame
+        state = dict(state, face=self.face)  # (phi as it was: in the frame of this face)
         self._turn_body(turn)
         r = self._rocker(p, e - d, d)
         if what == "corner" and side is not None and e == math.copysign(
