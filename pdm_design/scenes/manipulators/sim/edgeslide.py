@@ -28,7 +28,7 @@ import numpy as np
 from .geometry import Box, face_guards, support_words
 from .ode import SLIP_START_ATOLS
 from .rocking import (
-    BASE_CORNERS,
+    CORNERS,
     Rocker,
     accelerations,
     impact_onto_pin,
@@ -220,11 +220,14 @@ class EdgeSlidingPhases:
         for box in self._obstacles(t0, k):
             slab = Box(box.palm, box.cx, 0.5 * self.row.palm_width,
                        box.y_high - self.row.palm_thickness, box.y_high)
-            for frac in BASE_CORNERS:
-                def point(z, bx=frac * self.row.body_width):
-                    return self._slide_point(k, z, dof(z), r, bx, 0.0, corner)
-                faces += [(f, dr, v, (kind, box.palm, frac * self.row.body_width))
+            for frac, high in CORNERS:  # a top corner meeting a palm is not followed
+                def point(z, bx=frac * self.row.body_width, by=high * r.h):
+                    return self._slide_point(k, z, dof(z), r, bx, by, corner)
+                faces += [(f, dr, v, (kind if not high else "over", box.palm,
+                                      frac * self.row.body_width))
                           for f, dr, v, kind in face_guards(lambda z, b=slab: b, point)]
+        faces += self._palm_corner_guards(
+            t0, k, lambda z: (*self._slide_point(k, z, dof(z), r, 0.0, 0.5 * r.h, corner), z[2]))
         t_split = self._next_arrival(t0, k)
         te, z, kind, sol = self._integrate(rhs, t0, list(z0), physics, faces,
                                            max_step=0.05 * math.sqrt(self.h / self.g),
@@ -290,22 +293,14 @@ class EdgeSlidingPhases:
         if kind == "tipped_over":
             return self._fail(t, "tipped_over", k + 1, state,
                               f"the object turned to pi/2 sliding on palm {k + 1}: it tipped over")
-        if isinstance(kind, tuple) and kind[0] != "top":
-            return self._fail(t, "blocked", k + 1, state,
-                              f"the sliding rocking object hits the side of palm {kind[1] + 1}")
-        if isinstance(kind, tuple):  # a base corner comes down on palm j (rocking._catch)
-            _, j, bx = kind
-            corner_x, _ = self._slide_point(k, z, d, r, bx, 0.0, corner)
+        if isinstance(kind, tuple):  # it meets palm j (rocking._meets)
             centre = self._slide_point(k, z, d, r, 0.0, 0.5 * r.h, corner)
             v = slide_centre_velocity(z, d, r, corner=corner)
             contact = self._slide_point(k, z, d, r, d, 0.0, corner)
             normal, _ = slide_frame(z[2], corner)
-            return self._catch(t, k, j, bx, (corner_x, z[2], v, z[3], centre),
+            return self._meets(t, k, kind, (z[2], v, z[3], centre),
                                (contact, normal, (z[0], z[1])), state)
-        if isinstance(kind, tuple):
-            what = f"comes down on palm {kind[1] + 1}"
-        else:
-            what = {"settle": "comes down flat", "stop": "rides its palm onto a stop"}[kind]
+        what = {"settle": "comes down flat", "stop": "rides its palm onto a stop"}[kind]
         return self._fail(t, "tip", k + 1, state,
                           f"the object sliding on its edge on palm {k + 1} {what} (not followed)")
 

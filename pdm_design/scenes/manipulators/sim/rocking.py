@@ -25,7 +25,7 @@ gives M(q) q'' = Q - C with
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -33,8 +33,8 @@ from . import phases as ph
 from .geometry import Box, face_guards, support_words
 
 START_ATOLS = 100.0  # rocking from rest on its edge starts at this many atol of edge speed
-# corners of the object's base (the two that can come down on a palm), from its base centre
-BASE_CORNERS = (-0.5, 0.5)
+# its four corners, in units of (width, height) from its base centre
+CORNERS = ((-0.5, 0.0), (0.5, 0.0), (-0.5, 1.0), (0.5, 1.0))
 
 
 @dataclass(frozen=True)
@@ -310,14 +310,16 @@ class RockingPhases:
         for box in self._obstacles(t0, k):
             slab = Box(box.palm, box.cx, 0.5 * self.row.palm_width,
                        box.y_high - self.row.palm_thickness, box.y_high)
-            for frac in BASE_CORNERS:
-                bx = frac * self.row.body_width
+            for frac, high in CORNERS:  # a top corner meeting a palm is not followed
+                bx, by = frac * self.row.body_width, high * self.h
 
-                def point(z, bx=bx):
-                    return body_point(z[0], z[2], bx, 0.0, r)
+                def point(z, bx=bx, by=by):
+                    return body_point(z[0], z[2], bx, by, r)
 
-                faces += [(f, dr, v, (kind, box.palm, bx))
+                faces += [(f, dr, v, (kind if not high else "over", box.palm, bx))
                           for f, dr, v, kind in face_guards(lambda z, b=slab: b, point)]
+        faces += self._palm_corner_guards(
+            t0, k, lambda z: (*body_point(z[0], z[2], 0.0, 0.5 * r.h, r), z[2]))
         t_split = self._next_arrival(t0, k)
         te, z, kind, sol = self._integrate(rhs, t0, list(z0), physics, faces,
                                            max_step=0.05 * math.sqrt(self.h / self.g),
@@ -429,36 +431,68 @@ class RockingPhases:
         return lambda: self._stuck_integrated(t, k, theta, speed / r.link_length, s)
 
     def _rock_catch(self, t, k, z, r, kind, state):
-        """A corner of the rocking object comes down on palm j's top (_catch); any other face
-        of palm j met is not followed (`blocked`)."""
+        """The rocking object meets palm j (kind: a base corner on a face of palm j's slab, or a
+        corner of palm j on a face of the object): _meets."""
+        theta, omega, phi, phid = z
+        v = centre_velocity(theta, omega, phi, phid, r)
+        ox, oy = body_point(theta, phi, r.d, 0.0, r)
+        normal = (math.sin(phi), math.cos(phi)) if r.edge else (0.0, 1.0)
+        centre = body_point(theta, phi, 0.0, 0.5 * r.h, r)
+        return self._meets(t, k, kind, (phi, v, phid, centre),
+                           ((ox, oy), normal, (theta, omega)), state)
+
+    def _meets(self, t, k, kind, body, old, state):
+        """The rocking (or edge-sliding) object on palm k meets palm j: its base corner bx on
+        palm j's top, or palm j's top corner on its base, is a catch (_catch); any other contact
+        is not followed (`blocked`). body: phi, the centre's velocity, the spin and the centre;
+        old: its contact on palm k (point, normal, palm k's (th, th'))."""
+        phi, v, phid, centre = body
+        if kind[0] == "palm_corner":  # (palm j's corner at (x, y), on the object's `face`)
+            _, j, face, x, y = kind
+            top_x, top_y = self.row.palm_top(j, self.rest_angle[j])
+            if face != "base" or y < top_y - 0.5 * self.row.palm_thickness:  # (its underside)
+                return self._fail(t, "blocked", k + 1, state,
+                                  f"the rocking object hits a corner of palm {j + 1}")
+            from .tumbling import world_to_body  # (tumbling imports this module)
+
+            d, _ = world_to_body(*centre, phi, x, top_y, self.h)
+            return self._catch(t, k, j, d, (x, phi, v, phid, centre), old, state,
+                               edge=x - top_x)
         face, j, bx = kind
         if face != "top":
             return self._fail(t, "blocked", k + 1, state,
                               f"the rocking object hits the side of palm {j + 1}")
-        theta, omega, phi, phid = z
-        v = centre_velocity(theta, omega, phi, phid, r)
-        corner_x, _ = body_point(theta, phi, bx, 0.0, r)
-        ox, oy = body_point(theta, phi, r.d, 0.0, r)
-        normal = (math.sin(phi), math.cos(phi)) if r.edge else (0.0, 1.0)
-        centre = body_point(theta, phi, 0.0, 0.5 * r.h, r)
-        return self._catch(t, k, j, bx, (corner_x, phi, v, phid, centre),
-                           ((ox, oy), normal, (theta, omega)), state)
+        corner_x = centre[0] + rotate(phi, bx, -0.5 * self.h)[0]
+        return self._catch(t, k, j, bx, (corner_x, phi, v, phid, centre), old, state)
 
-    def _catch(self, t, k, j, bx, body, old, state):
-        """The object's base corner bx comes down on palm j's top (palm j at rest on its stop):
-        a plastic impact about that corner (sticking, or sliding where the sticking impulse
+    def _catch(self, t, k, j, bx, body, old, state, edge=None):
+        """The object's base point bx comes down on palm j's top (palm j at rest on its stop):
+        its corner on palm j's face, or its base on palm j's edge `edge` along the palm (then
+        its side is that edge's: the rest of the object must be above palm j, side phi > 0).
+        A plastic impact about that point (sticking, or sliding where the sticking impulse
         leaves the friction cone: edgeslide.slide_impact), palm k released; the object rocks
-        (or rocks and slides) about the corner on palm j. body: the corner's x, phi, the
-        centre's velocity, the spin and the centre; old: the contact on palm k (point, its
-        normal, palm k's (th, th')), which must let go (its normal speed relative to palm k
-        outward after the impact), else the object would rest on two palms (not followed)."""
+        (or rocks and slides) about it on palm j. body: the point's x, phi, the centre's
+        velocity, the spin and the centre; old: the contact on palm k (point, its normal, palm
+        k's (th, th')), which must let go (its normal speed relative to palm k outward after
+        the impact), else the object would rest on two palms (not followed)."""
         corner_x, phi, v, phid, centre = body
         theta_j = self.rest_angle[j]
         top_x, _ = self.row.palm_top(j, theta_j)
         s_j = corner_x - top_x - bx
         r2 = self._rocker(j, s_j, bx)
+        side = math.copysign(1.0, bx if edge is None else edge)
+        if edge is not None:
+            r2 = replace(r2, edge=True)
+            if side * phi <= 0.0:
+                return self._fail(t, "tip", k + 1, state,
+                                  f"the rocking object comes down on the edge of palm {j + 1} "
+                                  "turned the way that brings its base onto palm j's top "
+                                  "(two contacts, not followed)")
         hold = "back" if theta_j <= -self.alphas[j] else "front" if theta_j >= self.fs else None
         th1, phi1, held, (px, py) = impact_onto_pin(*v, phid, theta_j, 0.0, phi, r2, hold)
+        if r2.edge:  # the impulse along the object's base and its normal
+            px, py = (px * math.cos(phi) - py * math.sin(phi),
+                      px * math.sin(phi) + py * math.cos(phi))
         z, slip = (theta_j, th1, phi, phi1), None
         if py <= 0.0 or abs(px) > self.mu * py:
             slid = self._tumble_slide_impact((*centre, *v, phi, phid), j, theta_j, 0.0, phi, r2,
@@ -470,7 +504,7 @@ class RockingPhases:
             z, held, slip = slid
             from .edgeslide import slide_centre_velocity  # (edgeslide imports this module)
 
-            u = slide_centre_velocity(z, r2.d, r2, corner=True)
+            u = slide_centre_velocity(z, r2.d, r2, corner=not r2.edge)
         else:
             u = centre_velocity(theta_j, th1, phi, phi1, r2)
         (ox, oy), (nx, ny), (theta, omega) = old
@@ -481,9 +515,9 @@ class RockingPhases:
             return self._fail(t, "tip", k + 1, state,
                               f"the rocking object comes down on palm {j + 1} still bearing on "
                               f"palm {k + 1} (two contacts, not followed)")
-        return self._caught(t, k, j, r2, z, held, slip, state)
+        return self._caught(t, k, j, r2, z, held, slip, state, side)
 
-    def _caught(self, t, k, j, r2, z, held, slip, state):
+    def _caught(self, t, k, j, r2, z, held, slip, state, side):
         """Bookkeeping of the catch of _catch: palm k hands the object over to palm j."""
         swinging = self._swinging_from_rest(t, j)
         if swinging is not None:
@@ -503,15 +537,16 @@ class RockingPhases:
                        release_speed=l * omega)
         self._release(k, t, theta, l * omega)
         after = (self._rock_state(j, z, r2) if slip is None
-                 else self._slide_state(j, z, r2.d, r2, True))
+                 else self._slide_state(j, z, r2.d, r2, not r2.edge))
         imp = ph.Impact(after["vx"], after["vy"], r2.link_length * z[1], 0.0, 0.0, True)
         self._new_stage(j, t, r2.e - r2.d, state["vx"], state["vy"], imp)
         self._log(t, "catch", k + 1, state, dict(after, palm=j + 1),
                   f"palm {k + 1} -> palm {j + 1}: the rocking object's "
-                  f"{'front' if r2.d > 0 else 'rear'} corner comes down on palm {j + 1}"
-                  f"{'' if slip is None else ', sliding'}")
+                  + (f"base comes down on palm {j + 1}'s {'front' if side > 0 else 'rear'} edge"
+                     if r2.edge else
+                     f"{'front' if side > 0 else 'rear'} corner comes down on palm {j + 1}")
+                  + ("" if slip is None else ", sliding"))
         self.rest_since[j] = t if held else math.inf
-        side = math.copysign(1.0, r2.d)
         if slip is not None:
             way = 1.0 if z[1] >= 0.0 else -1.0
             return lambda: self._edge_slide(t, j, r2, list(z), held, side, slip, way)

@@ -160,6 +160,26 @@ class TumblingPhases:
                       for f, d, v, face in face_guards(lambda z: body_box, edge)]
         return faces
 
+    def _palm_corner_guards(self, t0, k, pose):
+        """Face guards of the corners of the palms at rest (not k) entering the object, in its
+        own frame, for a phase where pose(z) gives its centre and rotation: kinds
+        ("palm_corner", palm, face of the object: "base", "over" (its top) or "side", and the
+        corner's place x, y)."""
+        W, T, h = self.row.palm_width, self.row.palm_thickness, self.h
+        body_box = Box(-1, 0.0, 0.5 * self.row.body_width, 0.0, h)
+        faces = []
+        for b in self._obstacles(t0, k):
+            for x, y in ((b.cx - 0.5 * W, b.y_high), (b.cx + 0.5 * W, b.y_high),
+                         (b.cx - 0.5 * W, b.y_high - T), (b.cx + 0.5 * W, b.y_high - T)):
+                def corner(z, x=x, y=y):
+                    cx, cy, phi = pose(z)
+                    return world_to_body(cx, cy, phi, x, y, h)
+                # face_guards' order: the box's top (the object's top), bottom (its base), sides
+                faces += [(f, d, v, ("palm_corner", b.palm, name, x, y))
+                          for (f, d, v, _), name in zip(face_guards(lambda z: body_box, corner),
+                                                        ("over", "base", "side", "side"))]
+        return faces
+
     def _tumble(self, t0, k, body, palm, planned, passed=None):
         """Free flight of the tumbling object (centre, velocity, phi, phi' = body) from palm k,
         with palm k's (th, th') = palm while it swings alone."""
