@@ -240,3 +240,36 @@ def test_an_object_rolling_over_its_front_corner_comes_down_on_its_front_face():
     assert -h / 2 < x_b < h / 2 and abs(px) < 40.0 * py
     assert down.after["vx"] == pytest.approx(u * t_hat[0], rel=1e-9, abs=1e-12)
     assert down.after["vy"] == pytest.approx(u * t_hat[1], rel=1e-9, abs=1e-12)
+
+
+def test_a_rocking_object_caught_on_the_next_palms_rear_edge():
+    # the object (turned nose up, phi = -0.1) comes down with its base on palm 2's rear top
+    # corner, 0.1 m ahead of the base's centre, while its contact on palm 1 moves away: a
+    # plastic impact about that point, against Newton-Euler at it (palm 2 of 10 kg along t),
+    # the impulse inside the friction cone of the base (its normal R(phi) y)
+    run = new_run(mass_ratio=0.1)
+    top_x, top_y = run.row.palm_top(1, -ALPHA)
+    contact, phi, d = (top_x - 0.8, top_y), -0.1, 0.1
+    lever = rotate(phi, -d, H_BODY / 2)  # the centre from the contact
+    centre = (contact[0] + lever[0], contact[1] + lever[1])
+    v, spin = (1.0, -1.5), 0.5
+    state = {"x": centre[0], "y": centre[1], "vx": v[0], "vy": v[1], "theta": 0.5,
+             "omega": 3.0, "offset": 0.0, "phi": phi, "spin": spin}
+    old = ((centre[0] - 0.3, centre[1] - 0.2), (0.0, 1.0), (0.5, 3.0))  # palm 1 moving off
+    run._catch(0.0, 0, 1, d, (contact[0], phi, v, spin, centre), old, state, edge=-0.8)
+    catch = run.events[-1]
+    assert catch.kind == "catch" and catch.after["palm"] == 2
+    r = (-lever[0], -lever[1])  # the contact from the centre
+    t_hat = (math.cos(-ALPHA), -math.sin(-ALPHA))
+    px, py, vx, vy, spin1, w = newton_euler_corner_impact(v, spin, r, t_hat, 10.0, False)
+    if w < 0.0:
+        px, py, vx, vy, spin1, w = newton_euler_corner_impact(v, spin, r, t_hat, 10.0, True)
+    normal = px * math.sin(phi) + py * math.cos(phi)
+    along = px * math.cos(phi) - py * math.sin(phi)
+    assert normal > 0.0 and abs(along) < 0.8 * normal
+    assert catch.after["spin"] == pytest.approx(spin1, rel=1e-9)
+    assert catch.after["omega"] * L == pytest.approx(w, abs=1e-12)
+    # turned nose down instead, the rest of it would be below palm 2's top: not followed
+    run = new_run(mass_ratio=0.1)
+    run._catch(0.0, 0, 1, d, (contact[0], 0.1, v, spin, centre), old, state, edge=-0.8)
+    assert run.failure.kind == "tip"
