@@ -25,10 +25,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from .geometry import Box, face_guards, support_words
+from .geometry import support_words
 from .ode import SLIP_START_ATOLS
 from .rocking import (
-    CORNERS,
     Rocker,
     accelerations,
     impact_onto_pin,
@@ -216,17 +215,7 @@ class EdgeSlidingPhases:
                               f"the rocking object on palm {k + 1}: no consistent slide "
                               "(not followed)")
         physics = self._slide_guards(k, z0, d0, r, held, side, slip, corner, acc, way)
-        faces = []
-        for box in self._obstacles(t0, k):
-            slab = Box(box.palm, box.cx, 0.5 * self.row.palm_width,
-                       box.y_high - self.row.palm_thickness, box.y_high)
-            for frac, high in CORNERS:  # a top corner meeting a palm is not followed
-                def point(z, bx=frac * self.row.body_width, by=high * r.h):
-                    return self._slide_point(k, z, dof(z), r, bx, by, corner)
-                faces += [(f, dr, v, (kind if not high else "over", box.palm,
-                                      frac * self.row.body_width))
-                          for f, dr, v, kind in face_guards(lambda z, b=slab: b, point)]
-        faces += self._palm_corner_guards(
+        faces = self._pinned_guards(
             t0, k, lambda z: (*self._slide_point(k, z, dof(z), r, 0.0, 0.5 * r.h, corner), z[2]))
         t_split = self._next_arrival(t0, k)
         te, z, kind, sol = self._integrate(rhs, t0, list(z0), physics, faces,

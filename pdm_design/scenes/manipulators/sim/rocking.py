@@ -30,11 +30,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import phases as ph
-from .geometry import Box, face_guards, support_words
+from .geometry import support_words
 
 START_ATOLS = 100.0  # rocking from rest on its edge starts at this many atol of edge speed
-# its four corners, in units of (width, height) from its base centre
-CORNERS = ((-0.5, 0.0), (0.5, 0.0), (-0.5, 1.0), (0.5, 1.0))
 
 
 @dataclass(frozen=True)
@@ -306,19 +304,7 @@ class RockingPhases:
                 physics.append((lambda t, z: way * z[1], "turn"))
             if k == self.n - 1 and theta0 < self.beta:
                 physics.append((lambda t, z: self.beta - z[0], "complete"))
-        faces = []
-        for box in self._obstacles(t0, k):
-            slab = Box(box.palm, box.cx, 0.5 * self.row.palm_width,
-                       box.y_high - self.row.palm_thickness, box.y_high)
-            for frac, high in CORNERS:  # a top corner meeting a palm is not followed
-                bx, by = frac * self.row.body_width, high * self.h
-
-                def point(z, bx=bx, by=by):
-                    return body_point(z[0], z[2], bx, by, r)
-
-                faces += [(f, dr, v, (kind if not high else "over", box.palm, bx))
-                          for f, dr, v, kind in face_guards(lambda z, b=slab: b, point)]
-        faces += self._palm_corner_guards(
+        faces = self._pinned_guards(
             t0, k, lambda z: (*body_point(z[0], z[2], 0.0, 0.5 * r.h, r), z[2]))
         t_split = self._next_arrival(t0, k)
         te, z, kind, sol = self._integrate(rhs, t0, list(z0), physics, faces,

@@ -55,6 +55,20 @@ def world_to_body(cx, cy, phi, x, y, h):
     return bx, by + 0.5 * h
 
 
+def last_value(fun):
+    """fun(z) kept for the last state it was asked for: the guards of one step all ask for the
+    same state, and share what it costs."""
+    memo = [None, None]
+
+    def remembered(z):
+        key = tuple(z)
+        if key != memo[0]:
+            memo[0], memo[1] = key, fun(z)
+        return memo[1]
+
+    return remembered
+
+
 def turned(turn, bx, by, w, h):
     """The object's point (bx, by) (from the base centre of its w x h outline) in the frame of
     its face `turn` quarter turns clockwise on: (bx', by', w', h'). Its centre-relative
@@ -160,24 +174,34 @@ class TumblingPhases:
                       for f, d, v, face in face_guards(lambda z: body_box, edge)]
         return faces
 
-    def _palm_corner_guards(self, t0, k, pose):
-        """Face guards of the corners of the palms at rest (not k) entering the object, in its
-        own frame, for a phase where pose(z) gives its centre and rotation: kinds
-        ("palm_corner", palm, face of the object: "base", "over" (its top) or "side", and the
-        corner's place x, y)."""
-        W, T, h = self.row.palm_width, self.row.palm_thickness, self.h
-        body_box = Box(-1, 0.0, 0.5 * self.row.body_width, 0.0, h)
+    def _pinned_guards(self, t0, k, pose):
+        """Contact guards of a phase where the object turns on palm k, pose(z) its centre and
+        rotation, against the palms at rest within reach: its corners entering a slab (kinds
+        (face, palm, bx): a base corner on a top is a catch, a top corner anywhere "over") and
+        the slabs' corners entering it, in its own frame (kinds ("palm_corner", palm, face of
+        the object: "base", "over" (its top) or "side", the corner's x, y))."""
+        w, h, W, T = self.row.body_width, self.h, self.row.palm_width, self.row.palm_thickness
+        pose = last_value(pose)
+        corners = last_value(lambda z: [body_to_world(*pose(z), fx * w, fy * h, h)
+                                        for fx, fy in CORNERS])
+        boxes = self._obstacles(t0, k, near=self.row.pivots[k][0])
+        points = [(b.palm, x, y) for b in boxes
+                  for x in (b.cx - 0.5 * W, b.cx + 0.5 * W) for y in (b.y_high, b.y_high - T)]
+        local = last_value(lambda z: [world_to_body(*pose(z), x, y, h) for _, x, y in points])
         faces = []
-        for b in self._obstacles(t0, k):
-            for x, y in ((b.cx - 0.5 * W, b.y_high), (b.cx + 0.5 * W, b.y_high),
-                         (b.cx - 0.5 * W, b.y_high - T), (b.cx + 0.5 * W, b.y_high - T)):
-                def corner(z, x=x, y=y):
-                    cx, cy, phi = pose(z)
-                    return world_to_body(cx, cy, phi, x, y, h)
-                # face_guards' order: the box's top (the object's top), bottom (its base), sides
-                faces += [(f, d, v, ("palm_corner", b.palm, name, x, y))
-                          for (f, d, v, _), name in zip(face_guards(lambda z: body_box, corner),
-                                                        ("over", "base", "side", "side"))]
+        for b in boxes:
+            slab = Box(b.palm, b.cx, 0.5 * W, b.y_high - T, b.y_high)
+            for i, (fx, fy) in enumerate(CORNERS):
+                faces += [(f, d, v, (kind if not fy else "over", b.palm, fx * w))
+                          for f, d, v, kind in face_guards(lambda z, s=slab: s,
+                                                           lambda z, i=i: corners(z)[i])]
+        body_box = Box(-1, 0.0, 0.5 * w, 0.0, h)
+        for i, (p, x, y) in enumerate(points):
+            # face_guards' order: the box's top (the object's top), bottom (its base), sides
+            faces += [(f, d, v, ("palm_corner", p, name, x, y))
+                      for (f, d, v, _), name in zip(face_guards(lambda z: body_box,
+                                                                lambda z, i=i: local(z)[i]),
+                                                    ("over", "base", "side", "side"))]
         return faces
 
     def _tumble(self, t0, k, body, palm, planned, passed=None):
