@@ -261,11 +261,11 @@ class RockingPhases:
     def _rock(self, t0, k, s, d, z0, held, way=None, side=None):
         """The object turning about its pin on palm k (offset s, pin d along its base), state
         z = (th, th', phi, phi'); held: palm k rests on a stop. Guards (positive while the phase
-        holds): phi back to 0 (`settle`), phi at pi/2 on its side (`tipped_over`: its base
-        stands vertical, it leaves its edge), the pin's normal force and friction cone (the
-        rocking the model does not follow: `tip`), the palm's stops, a held palm dragged off
-        its stop, beta on the last palm; a base corner entering a resting palm's slab through
-        its top is a `catch`, through another face `blocked`. side: the way the base is lifted
+        holds): phi back to 0 (`settle`), phi at pi/2 (about a corner its side face comes
+        down, `roll`; on a palm's edge `tipped_over`), the pin's normal force (it leaves the
+        palm, tumbling.py) and friction cone (it slides on the pin, edgeslide.py), the palm's
+        stops, a held palm dragged off its stop, beta on the last palm; contacts with the
+        palms at rest (tumbling._pinned_guards, _meets). side: the way the base is lifted
         (+1: its part behind the pin, phi > 0), by default that of phi' (else phi)."""
         r = self._rocker(k, s, d)
         if side is None:
@@ -351,22 +351,13 @@ class RockingPhases:
         return self._rock_fail(te, k, kind, z, r, state)
 
     def _rock_fail(self, t, k, kind, z, r, state):
-        words = {
-            "tipped_over": f"the object turned to pi/2 about the {'palm' if r.edge else 'base'}'s"
-                           f" edge on palm {k + 1}: it tipped over",
-            "lost": f"the rocking object leaves its edge on palm {k + 1} (not followed)",
-            "slides": f"the rocking object slides on its edge on palm {k + 1} (not followed)",
-        }
+        """The rocking ends where the model stops: at pi/2 on a palm's edge (its base stands
+        against the edge, `tipped_over`), or no event in the phase's time."""
         if kind is None:
             return self._fail(t, "timeout", k + 1, state, f"rocking on palm {k + 1}: no event")
-        rx, _ = lever(z[2], r.d, r.h)
-        past = rx * z[2] > 0.0 and z[2] * z[3] > 0.0  # its centre past the pin, turning outward
-        if kind != "tipped_over" and past:
-            return self._fail(t, "tipped_over", k + 1, state,
-                              f"{words[kind].replace(' (not followed)', '')} with its centre of "
-                              "mass past the edge's vertical, turning outward: it tipped over")
-        name = "tipped_over" if kind == "tipped_over" else "tip"
-        return self._fail(t, name, k + 1, state, words[kind])
+        return self._fail(t, "tipped_over", k + 1, state,
+                          f"the object turned to pi/2 on palm {k + 1}'s edge: its base stands "
+                          "against the edge (not followed)")
 
     def _rock_stop(self, t, k, s, d, z, r, kind, state, side=None):
         """Palm k reaches a stop while the object rocks on it: the stop takes a generalized
