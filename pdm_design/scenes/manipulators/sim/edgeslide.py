@@ -181,8 +181,8 @@ class EdgeSlidingPhases:
         else:
             physics += [(lambda t, z: z[0] + self.alphas[k], "stop"),
                         (lambda t, z: self.fs - z[0], "stop")]
-            if not self.plain:
-                physics.append((lambda t, z: way * z[1], "stop"))
+            if not self.plain:  # (the palm turning, where pivot friction may hold it)
+                physics.append((lambda t, z: way * z[1], "turn"))
             if k == self.n - 1 and z0[0] < self.beta:
                 physics.append((lambda t, z: self.beta - z[0], "complete"))
         return physics
@@ -289,7 +289,8 @@ class EdgeSlidingPhases:
             normal, _ = slide_frame(z[2], corner)
             return self._meets(t, k, kind, (z[2], v, z[3], centre),
                                (contact, normal, (z[0], z[1])), state)
-        what = {"settle": "comes down flat", "stop": "rides its palm onto a stop"}[kind]
+        what = {"stop": "rides its palm onto a stop",
+                "turn": "turns with its palm where pivot friction acts"}[kind]
         return self._fail(t, "tip", k + 1, state,
                           f"the object sliding on its edge on palm {k + 1} {what} (not followed)")
 
