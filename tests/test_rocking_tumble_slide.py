@@ -121,17 +121,17 @@ def test_a_frictionless_slide_on_a_swinging_palm_keeps_the_energy():
     assert end.kind == "stick" and energy(end.before, 0.1) < energy(start, 0.1) - 1e-3
 
 
-def newton_euler_corner_impact(v, spin, r, t_hat, M, held):
+def newton_euler_corner_impact(v, spin, r, t_hat, M, held, w0=0.0):
     """The plastic sticking impact at a corner r (from the centre) on a palm of mass M moving
-    along t_hat, at rest before: unknowns Px, Py, vx, vy, spin, w (the palm's speed after)."""
+    along t_hat at w0 before: unknowns Px, Py, vx, vy, spin, w (the palm's speed after)."""
     m, (dx, dy) = M_BODY, r
     A = np.array([[1, 0, -m, 0, 0, 0], [0, 1, 0, -m, 0, 0],
                   [dy, -dx, 0, 0, -I_C, 0],
                   [-t_hat[0], -t_hat[1], 0, 0, 0, -M],
                   [0, 0, 1, 0, dy, -t_hat[0]], [0, 0, 0, 1, -dx, -t_hat[1]]], float)
-    b = np.array([-m * v[0], -m * v[1], -I_C * spin, 0.0, 0.0, 0.0])
+    b = np.array([-m * v[0], -m * v[1], -I_C * spin, -M * w0, 0.0, 0.0])
     if held:  # the stop takes the palm's impulse: w = 0
-        A[3] = [0, 0, 0, 0, 0, 1]
+        A[3], b[3] = [0, 0, 0, 0, 0, 1], 0.0
     return np.linalg.solve(A, b)
 
 
@@ -273,3 +273,50 @@ def test_a_rocking_object_caught_on_the_next_palms_rear_edge():
     run = new_run(mass_ratio=0.1)
     run._catch(0.0, 0, 1, d, (contact[0], 0.1, v, spin, centre), old, state, edge=-0.8)
     assert run.failure.kind == "tip"
+
+
+def test_a_tumbling_object_comes_back_down_on_the_palm_it_left_while_that_palm_swings():
+    # the object leaves palm 1 (0.1 kg, swinging alone from th = -0.1 at th' = 1.5: l th'' =
+    # g sin th) with the palm's velocity, 0.5 m/s upwards more and a spin: the palm's top
+    # falls slower than g there, so the object comes back down on it. The landing where the
+    # lowest corner's path (written here) meets the palm's top (scipy's pendulum), and the
+    # impact against Newton-Euler with the palm moving
+    from scipy.integrate import solve_ivp
+
+    run = new_run()
+    th0, om0 = -0.1, 1.5
+    top_x, top_y = run.row.palm_top(0, th0)
+    c0 = (top_x + 0.1, top_y + H_BODY / 2 + 1e-3)
+    t_hat0 = (math.cos(th0), -math.sin(th0))
+    v0 = (L * om0 * t_hat0[0], L * om0 * t_hat0[1] + 0.5)
+    phi0, spin0 = 0.0, 0.8
+    state = {"x": c0[0], "y": c0[1] - H_BODY / 2, "vx": v0[0], "vy": v0[1]}
+    run.rest_since[0] = math.inf  # palm 1 carried the object: it is off its stops
+    finish(run._leave(0.0, 0, th0, om0, (*c0, *v0, phi0, spin0), L, state, "(test)"))
+    landing = next(e for e in run.events if e.kind == "landing")
+    assert landing.stage == 1 and landing.after["palm"] == 1
+
+    def palm(t):
+        sol = solve_ivp(lambda t, y: [y[1], G * math.sin(y[0]) / L], (0.0, t), [th0, om0],
+                        rtol=1e-12, atol=1e-13)
+        return sol.y[0][-1], sol.y[1][-1]
+
+    def gap(t, bx=W_BODY / 2):  # the front base corner above the palm's top (it turns forward)
+        dx, dy = rotate(phi0 + spin0 * t, bx, -H_BODY / 2)
+        return c0[1] + v0[1] * t - G * t * t / 2 + dy - (L * math.cos(palm(t)[0]))
+
+    ts = np.linspace(1e-4, 1.0, 2001)
+    first = next(t for t in ts if gap(t) < 0.0)
+    t_land = brentq(gap, first - 5e-4, first, xtol=1e-14)
+    assert landing.time == pytest.approx(t_land, abs=1e-8)
+    theta, omega = palm(t_land)
+    assert landing.after["theta"] == pytest.approx(theta, abs=1e-8)
+    phi = phi0 + spin0 * t_land
+    r = rotate(phi, W_BODY / 2, -H_BODY / 2)
+    v = (v0[0], v0[1] - G * t_land)
+    t_hat = (math.cos(theta), -math.sin(theta))
+    px, py, vx, vy, spin, w = newton_euler_corner_impact(v, spin0, r, t_hat, 0.1, False,
+                                                         L * omega)
+    assert py > 0.0 and abs(px) < 0.8 * py
+    assert landing.after["spin"] == pytest.approx(spin, rel=1e-8)
+    assert landing.after["omega"] * L == pytest.approx(w, rel=1e-8)
