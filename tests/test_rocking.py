@@ -150,31 +150,67 @@ def test_a_rocking_object_on_a_fixed_edge_settles_back_when_below_the_barrier():
     assert all(b < a for a, b in zip(spins, spins[1:]))
 
 
+def pinned_force(phi, phid):
+    """(tangential, normal) force of the fixed edge on the object turning about it, along and
+    across its base: F = m (C'' + g y) with C'' = a phi'' - rho phi'^2 of the pendulum."""
+    d, h = D_EDGE, H_BODY
+    rho = (-d * math.cos(phi) + h / 2 * math.sin(phi), centre_height(phi))
+    a = (d * math.sin(phi) + h / 2 * math.cos(phi), d * math.cos(phi) - h / 2 * math.sin(phi))
+    phidd = -M_BODY * G * a[1] / I_P
+    fx = M_BODY * (a[0] * phidd - rho[0] * phid**2)
+    fy = M_BODY * (a[1] * phidd - rho[1] * phid**2 + G)
+    return (fx * math.cos(phi) - fy * math.sin(phi), fx * math.sin(phi) + fy * math.cos(phi))
+
+
+def object_energy(state):
+    """Kinetic and potential energy of the object from an event state (its bottom centre's
+    place and velocity, its rotation and spin)."""
+    phi, spin = state["phi"], state["spin"]
+    rx, ry = H_BODY / 2 * math.sin(phi), H_BODY / 2 * math.cos(phi)  # the centre from there
+    vx, vy = state["vx"] + spin * ry, state["vy"] - spin * rx
+    return (0.5 * M_BODY * (vx * vx + vy * vy) + 0.5 * I_C * spin * spin
+            + M_BODY * G * (state["y"] + ry))
+
+
 def test_a_rocking_object_on_a_fixed_edge_tips_over_above_the_barrier():
     phid0 = 1.05 * barrier_speed()
     run = rocking_run(phid0)
-    assert rk.tips_over_on_fixed_edge(0.0, phid0, run._rocker(0, S_EDGE, D_EDGE))
-    assert not rk.tips_over_on_fixed_edge(0.0, 0.95 * barrier_speed(),
-                                          run._rocker(0, S_EDGE, D_EDGE))
+    # (the rocker of the object as it starts: the run's object lies on its side by its end)
+    rocker = Run(*make(mass_ratio=0.1), 2, (), accuracy("precise"), False)._rocker(
+        0, S_EDGE, D_EDGE)
+    assert rk.tips_over_on_fixed_edge(0.0, phid0, rocker)
+    assert not rk.tips_over_on_fixed_edge(0.0, 0.95 * barrier_speed(), rocker)
 
-    def quarter(t, z):
-        return 0.5 * math.pi - z[0]
+    # its edge holds until the force it needs leaves the friction cone (mu = 0.8)
+    def cone(t, z):
+        tangential, normal = pinned_force(z[0], z[1])
+        return 0.8 * normal - abs(tangential)
 
-    quarter.terminal = True
-    sol = fixed_edge(phid0, 10.0, [quarter])
-    fail = run.failure
-    assert fail.kind == "tipped_over"
-    # it turns to pi/2 unless its edge lets go first (past the vertical: also tipped over)
-    assert fail.time <= sol.t_events[0][0] + 1e-9
-    phi = fail.before["phi"]
-    energy = phid0**2 + 2 * M_BODY * G * (centre_height(0.0) - centre_height(phi)) / I_P
-    assert fail.before["spin"] ** 2 == pytest.approx(energy, rel=1e-8)
+    cone.terminal = True
+    sol = fixed_edge(phid0, 10.0, [cone])
+    slip = run.events[0]
+    assert slip.kind == "slip" and slip.stage == 1
+    assert slip.time == pytest.approx(sol.t_events[0][0], abs=1e-8)
+    phi, phid = sol.y_events[0][0]
+    assert slip.before["phi"] == pytest.approx(phi, abs=1e-8)
+    assert slip.before["spin"] == pytest.approx(phid, rel=1e-8)
+    # by then its centre is past the edge's vertical (tan phi > 2 d / h): it cannot come back;
+    # it slides on the edge and leaves palm 1 (friction takes energy, none is gained)
+    assert math.tan(phi) > 2 * D_EDGE / H_BODY
+    assert not any(e.kind == "settle" for e in run.events if e.stage == 1)
+    leave = next(e for e in run.events if e.kind == "leave")
+    assert leave.stage == 1 and leave.time > slip.time
+    assert object_energy(leave.before) <= object_energy(slip.before) * (1 + 1e-9)
 
 
 def test_the_barrier_speed_splits_settling_from_tipping_over():
     below, above = rocking_run(0.999 * barrier_speed()), rocking_run(1.001 * barrier_speed())
-    assert any(e.kind == "settle" for e in below.events)
-    assert above.failure.kind == "tipped_over"
+    # below it the object settles back on palm 1; above it, past the edge's vertical, it
+    # slides off palm 1's edge and leaves it (then lands on palm 2: tumbling.py)
+    assert any(e.kind == "settle" and e.stage == 1 for e in below.events)
+    assert not any(e.kind == "leave" for e in below.events)
+    assert any(e.kind == "leave" and e.stage == 1 for e in above.events)
+    assert not any(e.kind == "settle" and e.stage == 1 for e in above.events)
 
 
 def test_a_rocking_object_is_caught_by_the_next_palm():

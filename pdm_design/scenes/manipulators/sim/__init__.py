@@ -8,7 +8,12 @@ Phases (docs/manipulators_model.md has the model and its derivations):
   sliding  carry with the object sliding on palm k: solve_ivp with terminal events;
   bouncing (restitution > 0 only) object in flight above its moving palm: solve_ivp;
   lift-off the object flies on while its empty palm swings alone; where it meets that palm is
-           located exactly (closed-form swing time, Brent on bracketed roots): liftoff.py.
+           located exactly (closed-form swing time, Brent on bracketed roots): liftoff.py;
+  rocking  past a tip onset the object turns about an edge of its support: rocking.py;
+  edge slide  its edge or corner slides (Coulomb), it comes down flat or rolls onto a side
+           face: edgeslide.py;
+  tumbling it leaves its edge and flies turning until a corner or a palm's edge meets a palm:
+           tumbling.py.
 
 The run is *complete* when the object, carried by the last manipulator of the row, reaches that
 manipulator's handover angle beta (so it has been handed over by every other manipulator and
@@ -31,8 +36,10 @@ from .run import Run
 EVENT_KINDS = {
     "landing": "the object lands on a palm from a flight (at rest, or swinging after a lift-off)",
     "handover": "the object, carried by palm k, meets the next palm and lands on it",
-    "slip": "the carried object starts to slide on its palm (or reverses its sliding)",
-    "stick": "the sliding object comes to rest on its palm and is carried stuck",
+    "slip": "the carried object starts to slide on its palm (or reverses its sliding); the "
+            "rocking object's contact starts to slide (or reverses its sliding)",
+    "stick": "the sliding object comes to rest on its palm and is carried stuck; the rocking "
+             "object's sliding contact sticks again",
     "jam": "a sliding contact jams (Painleve-type tangential impact) and sticks",
     "bounce": "the object bounces off a palm (restitution > 0)",
     "front_stop": "an empty palm reaches its front stop and is stopped",
@@ -44,6 +51,10 @@ EVENT_KINDS = {
     "settle": "the rocking object comes back down flat on its palm and is carried on",
     "catch": "a corner of the rocking object comes down on another palm, which carries it on",
     "release": "the rocking object drags its palm off the stop it rested on",
+    "roll": "the object turned to pi/2 about its base corner: the side face it turned onto "
+            "comes down on the palm and is its base from then on",
+    "leave": "the rocking object leaves its palm (its contact force vanishes, or its sliding "
+             "contact runs off the end of its base or of the palm) and flies on, tumbling",
     "lift_off": "the palm's normal force vanished (v^2 >= g l cos th): the object flies on and "
                 "the empty palm swings alone",
 }
@@ -51,11 +62,12 @@ FAILURE_KINDS = {
     "blocked": "the object hits the side or underside of a palm (outside the model)",
     "fell_clear": "the object fell past the row",
     "missed": "the object lifted off and fell past the row without landing on a palm",
-    "tip": "the object tips in a way the model does not follow: with restitution > 0, while "
-           "sliding, or while it rocks it slides on or leaves its edge, or comes to rest across "
-           "two palms",
-    "tipped_over": "the rocking object turned to pi/2 about its edge, or left its edge with its "
-                   "centre of mass past the edge's vertical: it fell off",
+    "tip": "the object tips or tumbles in a way the model does not follow: with restitution "
+           "> 0, while carried sliding, coming to rest across two palms, landing with no face "
+           "turned to come down about its contact, a slip or sliding impact that would "
+           "reverse, a sliding contact riding its palm onto a stop",
+    "tipped_over": "the rocking object turned to pi/2 on a palm's edge (its base stands against "
+                   "the edge; not followed)",
     "stall": "the carry stops before the top: the palm swings back to its back stop",
     "slid_off": "the object's centre slid off the end of its palm",
     "stranded": "the palm reached its front stop still carrying the object (no handover)",

@@ -87,7 +87,9 @@ def _draw_mechanisms(ax, row, result):
             continue
         if "theta" in state and 0 <= k < len(row):
             _draw_palm(ax, row, k, state["theta"], color=color)
-        ax.add_patch(_rect(state["x"] - w / 2, state["y"], w, h, "C3" if e.failure else "C1"))
+        ww, hh = (h, w) if int(e.before.get("face", 0)) % 2 else (w, h)  # lying on its side
+        ax.add_patch(_rect(state["x"] - ww / 2, state["y"], ww, hh,
+                           "C3" if e.failure else "C1"))
 
 
 def _draw_palm(ax, row, k, theta, color):

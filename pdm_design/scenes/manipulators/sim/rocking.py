@@ -25,16 +25,14 @@ gives M(q) q'' = Q - C with
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from . import phases as ph
-from .geometry import Box, face_guards, support_words
+from .geometry import support_words
 
 START_ATOLS = 100.0  # rocking from rest on its edge starts at this many atol of edge speed
-# corners of the object's base (the two that can come down on a palm), from its base centre
-BASE_CORNERS = (-0.5, 0.5)
 
 
 @dataclass(frozen=True)
@@ -230,8 +228,10 @@ class RockingPhases:
         th1, phi1, held, (px, py) = impact_onto_pin(vx, vy, 0.0, theta, w / r.link_length, 0.0,
                                                     r, held_at)
         side = 1.0 if point > hi else -1.0
-        if side * phi1 <= 0.0 or py <= 0.0 or abs(px) > self.mu * py:
-            return None  # (no rocking landing: the impulse slides, or does not lift the base)
+        if side * phi1 > 0.0 and py > 0.0 and abs(px) > self.mu * py:  # (edgeslide.py)
+            return self._slide_landing(t, j, theta, w, (vx, vy), r, held_at, side, before, rec)
+        if side * phi1 <= 0.0 or py <= 0.0:
+            return None  # (no rocking landing: the impulse does not lift the base)
         state = self._rock_state(j, (theta, th1, 0.0, phi1), r)
         if rec is not None:
             rec["landing_speed"] = r.link_length * th1
@@ -258,16 +258,18 @@ class RockingPhases:
                   f"the {'palm' if r.edge else 'base'}'s {'front' if side > 0 else 'rear'} edge")
         return lambda: self._rock(t, k, s, d, (theta, omega, 0.0, phid), False)
 
-    def _rock(self, t0, k, s, d, z0, held, way=None):
+    def _rock(self, t0, k, s, d, z0, held, way=None, side=None):
         """The object turning about its pin on palm k (offset s, pin d along its base), state
         z = (th, th', phi, phi'); held: palm k rests on a stop. Guards (positive while the phase
-        holds): phi back to 0 (`settle`), phi at pi/2 on its side (`tipped_over`: its base
-        stands vertical, it leaves its edge), the pin's normal force and friction cone (the
-        rocking the model does not follow: `tip`), the palm's stops, a held palm dragged off
-        its stop, beta on the last palm; a base corner entering a resting palm's slab through
-        its top is a `catch`, through another face `blocked`."""
+        holds): phi back to 0 (`settle`), phi at pi/2 (about a corner its side face comes
+        down, `roll`; on a palm's edge `tipped_over`), the pin's normal force (it leaves the
+        palm, tumbling.py) and friction cone (it slides on the pin, edgeslide.py), the palm's
+        stops, a held palm dragged off its stop, beta on the last palm; contacts with the
+        palms at rest (tumbling._pinned_guards, _meets). side: the way the base is lifted
+        (+1: its part behind the pin, phi > 0), by default that of phi' (else phi)."""
         r = self._rocker(k, s, d)
-        side = 1.0 if z0[3] > 0.0 or (z0[3] == 0.0 and z0[2] > 0.0) else -1.0
+        if side is None:
+            side = 1.0 if z0[3] > 0.0 or (z0[3] == 0.0 and z0[2] > 0.0) else -1.0
         theta0, omega0 = z0[0], z0[1]
         if way is None:  # the sign of th' the pivots' Coulomb torque opposes
             way = 1.0 if omega0 >= 0.0 else -1.0
@@ -302,18 +304,8 @@ class RockingPhases:
                 physics.append((lambda t, z: way * z[1], "turn"))
             if k == self.n - 1 and theta0 < self.beta:
                 physics.append((lambda t, z: self.beta - z[0], "complete"))
-        faces = []
-        for box in self._obstacles(t0, k):
-            slab = Box(box.palm, box.cx, 0.5 * self.row.palm_width,
-                       box.y_high - self.row.palm_thickness, box.y_high)
-            for frac in BASE_CORNERS:
-                bx = frac * self.row.body_width
-
-                def point(z, bx=bx):
-                    return body_point(z[0], z[2], bx, 0.0, r)
-
-                faces += [(f, dr, v, (kind, box.palm, bx))
-                          for f, dr, v, kind in face_guards(lambda z, b=slab: b, point)]
+        faces = self._pinned_guards(
+            t0, k, lambda z: (*body_point(z[0], z[2], 0.0, 0.5 * r.h, r), z[2]))
         t_split = self._next_arrival(t0, k)
         te, z, kind, sol = self._integrate(rhs, t0, list(z0), physics, faces,
                                            max_step=0.05 * math.sqrt(self.h / self.g),
@@ -325,7 +317,7 @@ class RockingPhases:
                 self._rec(t, st["x"], st["y"], st["vx"], st["vy"], st["theta"], k + 1)
         state = self._rock_state(k, z, r)
         if kind is None and t_split is not None and te >= t_split:
-            return lambda: self._rock(te, k, s, d, z, held)
+            return lambda: self._rock(te, k, s, d, z, held, side=side)
         if kind == "turn":  # the palm stops: it moves on the way its acceleration takes it
             z[1] = 0.0
             ahead = accelerations(z[0], 0.0, z[2], z[3], r, direction=1.0)[0]
@@ -334,41 +326,40 @@ class RockingPhases:
                 return self._fail(te, "stall", k + 1, state,
                                   f"palm {k + 1} stops where its pivot friction holds it, the "
                                   "object rocking on it (not followed)")
-            return lambda: self._rock(te, k, s, d, z, held, 1.0 if ahead > 0.0 else -1.0)
+            return lambda: self._rock(te, k, s, d, z, held, 1.0 if ahead > 0.0 else -1.0,
+                                      side=side)
         if kind == "release":
             self.rest_since[k] = math.inf
             self._log(te, "release", k + 1, state, state,
                       f"the rocking object drags palm {k + 1} off its stop")
-            return lambda: self._rock(te, k, s, d, z, False)
+            return lambda: self._rock(te, k, s, d, z, False, side=side)
         if kind in ("back_stop", "front_stop"):
-            return self._rock_stop(te, k, s, d, z, r, kind, state)
+            return self._rock_stop(te, k, s, d, z, r, kind, state, side)
         if kind == "settle":
             return self._rock_settle(te, k, s, d, z, r, held, state)
         if isinstance(kind, tuple):
             return self._rock_catch(te, k, z, r, kind, state)
         if kind == "complete":
             return self._complete(te, k, z[0], z[1], s)
+        if kind == "lost":  # the object flies off its pin, tumbling (tumbling.py)
+            return self._leave_edge(te, k, z, r, state)
+        if kind == "slides":  # the pin slides (edgeslide.py)
+            return self._slide_onset(te, k, z, r, held, side, way, state)
+        if kind == "tipped_over" and not r.edge:  # its side face comes down (edgeslide.py)
+            body = (centre_velocity(*z, r), body_point(z[0], z[2], 0.0, 0.5 * r.h, r), z[3])
+            return self._roll_over(te, k, z[0], z[1], body, r.e, side, held, state)
         return self._rock_fail(te, k, kind, z, r, state)
 
     def _rock_fail(self, t, k, kind, z, r, state):
-        words = {
-            "tipped_over": f"the object turned to pi/2 about the {'palm' if r.edge else 'base'}'s"
-                           f" edge on palm {k + 1}: it tipped over",
-            "lost": f"the rocking object leaves its edge on palm {k + 1} (not followed)",
-            "slides": f"the rocking object slides on its edge on palm {k + 1} (not followed)",
-        }
+        """The rocking ends where the model stops: at pi/2 on a palm's edge (its base stands
+        against the edge, `tipped_over`), or no event in the phase's time."""
         if kind is None:
             return self._fail(t, "timeout", k + 1, state, f"rocking on palm {k + 1}: no event")
-        rx, _ = lever(z[2], r.d, r.h)
-        past = rx * z[2] > 0.0 and z[2] * z[3] > 0.0  # its centre past the pin, turning outward
-        if kind != "tipped_over" and past:
-            return self._fail(t, "tipped_over", k + 1, state,
-                              f"{words[kind].replace(' (not followed)', '')} with its centre of "
-                              "mass past the edge's vertical, turning outward: it tipped over")
-        name = "tipped_over" if kind == "tipped_over" else "tip"
-        return self._fail(t, name, k + 1, state, words[kind])
+        return self._fail(t, "tipped_over", k + 1, state,
+                          f"the object turned to pi/2 on palm {k + 1}'s edge: its base stands "
+                          "against the edge (not followed)")
 
-    def _rock_stop(self, t, k, s, d, z, r, kind, state):
+    def _rock_stop(self, t, k, s, d, z, r, kind, state, side=None):
         """Palm k reaches a stop while the object rocks on it: the stop takes a generalized
         impulse along th only, so p_phi = M12 th' + M22 phi' is kept and th'+ = 0."""
         _, m12, m22 = mass_matrix(z[0], z[2], r)
@@ -378,7 +369,7 @@ class RockingPhases:
         self.rest_angle[k], self.rest_since[k] = stop, t
         self._log(t, kind, k + 1, state, self._rock_state(k, after, r),
                   f"palm {k + 1} stopped with the object rocking on it")
-        return lambda: self._rock(t, k, s, d, after, True)
+        return lambda: self._rock(t, k, s, d, after, True, side=side)
 
     def _rock_settle(self, t, k, s, d, z, r, held, state):
         """The base comes back down onto palm k: a plastic impact at the other end of the
@@ -417,34 +408,94 @@ class RockingPhases:
         return lambda: self._stuck_integrated(t, k, theta, speed / r.link_length, s)
 
     def _rock_catch(self, t, k, z, r, kind, state):
-        """A corner of the rocking object comes down on palm j's top: a plastic impact about
-        that corner (palm j at rest on its stop), palm k released; the object rocks about the
-        corner on palm j."""
+        """The rocking object meets palm j (kind: a base corner on a face of palm j's slab, or a
+        corner of palm j on a face of the object): _meets."""
+        theta, omega, phi, phid = z
+        v = centre_velocity(theta, omega, phi, phid, r)
+        ox, oy = body_point(theta, phi, r.d, 0.0, r)
+        normal = (math.sin(phi), math.cos(phi)) if r.edge else (0.0, 1.0)
+        centre = body_point(theta, phi, 0.0, 0.5 * r.h, r)
+        return self._meets(t, k, kind, (phi, v, phid, centre),
+                           ((ox, oy), normal, (theta, omega)), state)
+
+    def _meets(self, t, k, kind, body, old, state):
+        """The rocking (or edge-sliding) object on palm k meets palm j: its base corner bx on
+        palm j's top, or palm j's top corner on its base, is a catch (_catch); any other contact
+        is not followed (`blocked`). body: phi, the centre's velocity, the spin and the centre;
+        old: its contact on palm k (point, normal, palm k's (th, th'))."""
+        phi, v, phid, centre = body
+        if kind[0] == "palm_corner":  # (palm j's corner at (x, y), on the object's `face`)
+            _, j, face, x, y = kind
+            top_x, top_y = self.row.palm_top(j, self.rest_angle[j])
+            if face != "base" or y < top_y - 0.5 * self.row.palm_thickness:  # (its underside)
+                return self._fail(t, "blocked", k + 1, state,
+                                  f"the rocking object hits a corner of palm {j + 1}")
+            from .tumbling import world_to_body  # (tumbling imports this module)
+
+            d, _ = world_to_body(*centre, phi, x, top_y, self.h)
+            return self._catch(t, k, j, d, (x, phi, v, phid, centre), old, state,
+                               edge=x - top_x)
         face, j, bx = kind
         if face != "top":
             return self._fail(t, "blocked", k + 1, state,
                               f"the rocking object hits the side of palm {j + 1}")
-        theta, omega, phi, phid = z
-        vx, vy = centre_velocity(theta, omega, phi, phid, r)
-        cx, _ = body_point(theta, phi, bx, 0.0, r)
+        corner_x = centre[0] + rotate(phi, bx, -0.5 * self.h)[0]
+        return self._catch(t, k, j, bx, (corner_x, phi, v, phid, centre), old, state)
+
+    def _catch(self, t, k, j, bx, body, old, state, edge=None):
+        """The object's base point bx comes down on palm j's top (palm j at rest on its stop):
+        its corner on palm j's face, or its base on palm j's edge `edge` along the palm (then
+        its side is that edge's: the rest of the object must be above palm j, side phi > 0).
+        A plastic impact about that point (sticking, or sliding where the sticking impulse
+        leaves the friction cone: edgeslide.slide_impact), palm k released; the object rocks
+        (or rocks and slides) about it on palm j. body: the point's x, phi, the centre's
+        velocity, the spin and the centre; old: the contact on palm k (point, its normal, palm
+        k's (th, th')), which must let go (its normal speed relative to palm k outward after
+        the impact), else the object would rest on two palms (not followed)."""
+        corner_x, phi, v, phid, centre = body
         theta_j = self.rest_angle[j]
         top_x, _ = self.row.palm_top(j, theta_j)
-        s_j = cx - top_x - bx
+        s_j = corner_x - top_x - bx
         r2 = self._rocker(j, s_j, bx)
+        side = math.copysign(1.0, bx if edge is None else edge)
+        if edge is not None:
+            r2 = replace(r2, edge=True)
+            if side * phi <= 0.0:
+                return self._fail(t, "tip", k + 1, state,
+                                  f"the rocking object comes down on the edge of palm {j + 1} "
+                                  "turned the way that brings its base onto palm j's top "
+                                  "(two contacts, not followed)")
         hold = "back" if theta_j <= -self.alphas[j] else "front" if theta_j >= self.fs else None
-        th1, phi1, held, (px, py) = impact_onto_pin(vx, vy, phid, theta_j, 0.0, phi, r2, hold)
-        after = self._rock_state(j, (theta_j, th1, phi, phi1), r2)
-        # the old pin leaves palm k: its normal speed relative to palm k's surface is outward
-        ox, oy = body_point(theta, phi, r.d, 0.0, r)
-        ux, uy = self._point_speed(after, phi1, r2, theta_j, phi, ox, oy)
-        l = r.link_length
-        nx, ny = (math.sin(phi), math.cos(phi)) if r.edge else (0.0, 1.0)
-        away = ((ux - l * omega * math.cos(theta)) * nx
-                + (uy + l * omega * math.sin(theta)) * ny)
-        if away < 0.0 or py <= 0.0 or abs(px) > self.mu * py:
+        th1, phi1, held, (px, py) = impact_onto_pin(*v, phid, theta_j, 0.0, phi, r2, hold)
+        if r2.edge:  # the impulse along the object's base and its normal
+            px, py = (px * math.cos(phi) - py * math.sin(phi),
+                      px * math.sin(phi) + py * math.cos(phi))
+        z, slip = (theta_j, th1, phi, phi1), None
+        if py <= 0.0 or abs(px) > self.mu * py:
+            slid = self._tumble_slide_impact((*centre, *v, phi, phid), j, theta_j, 0.0, phi, r2,
+                                             hold)
+            if slid is None:
+                return self._fail(t, "tip", k + 1, state,
+                                  f"the rocking object comes down on palm {j + 1}: no "
+                                  "consistent sliding impact (not followed)")
+            z, held, slip = slid
+            from .edgeslide import slide_centre_velocity  # (edgeslide imports this module)
+
+            u = slide_centre_velocity(z, r2.d, r2, corner=not r2.edge)
+        else:
+            u = centre_velocity(theta_j, th1, phi, phi1, r2)
+        (ox, oy), (nx, ny), (theta, omega) = old
+        l = self.ls[k]
+        away = ((u[0] + z[3] * (oy - centre[1]) - l * omega * math.cos(theta)) * nx
+                + (u[1] - z[3] * (ox - centre[0]) + l * omega * math.sin(theta)) * ny)
+        if away < 0.0:
             return self._fail(t, "tip", k + 1, state,
                               f"the rocking object comes down on palm {j + 1} still bearing on "
-                              f"palm {k + 1}, or sliding (not followed)")
+                              f"palm {k + 1} (two contacts, not followed)")
+        return self._caught(t, k, j, r2, z, held, slip, state, side)
+
+    def _caught(self, t, k, j, r2, z, held, slip, state, side):
+        """Bookkeeping of the catch of _catch: palm k hands the object over to palm j."""
         swinging = self._swinging_from_rest(t, j)
         if swinging is not None:
             return self._fail(t, "swinging_palm", j + 1, state,
@@ -454,22 +505,29 @@ class RockingPhases:
             return self._fail(t, "skipped_palm", self.at + 2, state,
                               f"the object flew over palm {self.at + 2} and came onto palm "
                               f"{j + 1}")
+        theta, omega = state["theta"], state["omega"]
+        l = self.ls[k]
         rec = self._stage(k)
         if rec is not None:
             rec.update(handover_time=t, handover_speed=math.hypot(state["vx"], state["vy"]),
                        handover_angle=theta, handover_vx=state["vx"], handover_vy=state["vy"],
                        release_speed=l * omega)
         self._release(k, t, theta, l * omega)
-        imp = ph.Impact(after["vx"], after["vy"], r2.link_length * th1, px, py, True)
-        self._new_stage(j, t, s_j, state["vx"], state["vy"], imp)
+        after = (self._rock_state(j, z, r2) if slip is None
+                 else self._slide_state(j, z, r2.d, r2, not r2.edge))
+        imp = ph.Impact(after["vx"], after["vy"], r2.link_length * z[1], 0.0, 0.0, True)
+        self._new_stage(j, t, r2.e - r2.d, state["vx"], state["vy"], imp)
         self._log(t, "catch", k + 1, state, dict(after, palm=j + 1),
                   f"palm {k + 1} -> palm {j + 1}: the rocking object's "
-                  f"{'front' if bx > 0 else 'rear'} corner comes down on palm {j + 1}")
-        if held:
-            self.rest_since[j] = t
-        else:
-            self.rest_since[j] = math.inf
-        return lambda: self._rock(t, j, s_j, bx, (theta_j, th1, phi, phi1), held)
+                  + (f"base comes down on palm {j + 1}'s {'front' if side > 0 else 'rear'} edge"
+                     if r2.edge else
+                     f"{'front' if side > 0 else 'rear'} corner comes down on palm {j + 1}")
+                  + ("" if slip is None else ", sliding"))
+        self.rest_since[j] = t if held else math.inf
+        if slip is not None:
+            way = 1.0 if z[1] >= 0.0 else -1.0
+            return lambda: self._edge_slide(t, j, r2, list(z), held, side, slip, way)
+        return lambda: self._rock(t, j, r2.e - r2.d, r2.d, z, held, side=side)
 
     @staticmethod
     def _point_speed(after, phid, r, theta, phi, px, py):

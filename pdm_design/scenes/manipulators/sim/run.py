@@ -16,11 +16,13 @@ from ....sim.core import Event, Outcome, SimulationResult
 from ....sim.numerics import brentq
 from .. import physics as phys
 from . import phases as ph
+from .edgeslide import EdgeSlidingPhases
 from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
 from .rocking import RockingPhases
 from .swinging import SwingingPhases
+from .tumbling import TumblingPhases
 
 FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object is given up
 ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact
@@ -28,7 +30,8 @@ PHASE_TIME = 200.0  # longest integrated phase, in units of sqrt(l / g)
 EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chattering)
 
 
-class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases):
+class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhases,
+          EdgeSlidingPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record, parts=None,
@@ -64,7 +67,11 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases):
         self._pivot_order = sorted(range(stages), key=lambda j: self.row.pivots[j][0])
         self._pivot_x = [self.row.pivots[j][0] for j in self._pivot_order]
         self._boxes: dict = {}
-        self._reach = 2.0 * max(self.ls) + 1.5 * self.row.palm_width + self.row.body_width
+        # (the object's larger side: it may come to lie on either, tumbling.TumblingPhases)
+        self._reach = (2.0 * max(self.ls) + 1.5 * self.row.palm_width
+                       + max(self.row.body_width, self.h))
+        self.face = 0  # quarter turns clockwise from its base to the face it lies on
+        self._left_angle = None  # the angle of the palm the object last left tumbling
         self.events: list[Event] = []
         self.palm_events: list[Event] = []
         self.stages: list[dict] = []
@@ -166,6 +173,8 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases):
         return SimulationResult("manipulators", outcome, stages, log, self.acc, traj)
 
     def _log(self, time, kind, stage, before, after, detail="", failure=False):
+        if self.face and "x" in before and "face" not in before:  # it lies on another face
+            before = dict(before, face=self.face)
         ev = Event(float(time), kind, int(stage), _floats(before), _floats(after), detail, failure)
         self.events.append(ev)
         if failure:
