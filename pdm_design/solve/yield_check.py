@@ -82,7 +82,7 @@ def _check(scene, design, tolerances, allocated, target, stages, accuracy):
     runs, first = {}, {}
     screening, showable = builds * stages >= SCREEN_ENTRIES, _showable(target, builds)
 
-    def run(factor, confirm, meanwhile=None):
+    def run(factor, confirm, meanwhile=None, known=None):
         sized = shrunk(tolerances, allocated, factor)
         if screening and factor == 1.0 and "mapped" not in first:  # the screen's margins
             from ..tolerances.parallel import local_workers
@@ -92,7 +92,7 @@ def _check(scene, design, tolerances, allocated, target, stages, accuracy):
         runs[factor] = yield_of(scene, design, sized, builds=builds, stages=stages, seed=seed,
                                 confirm=confirm, accuracy=accuracy, scales=(),
                                 sensitivity_samples=0, mapped=first.get("mapped")
-                                if factor == 1.0 else None, meanwhile=meanwhile)
+                                if factor == 1.0 else None, meanwhile=meanwhile, known=known)
         return runs[factor].ci_low >= target
 
     screened, ahead = {}, {}
@@ -107,9 +107,9 @@ def _check(scene, design, tolerances, allocated, target, stages, accuracy):
         if not (screening and factor == 1.0):
             return run(factor, tolerances.confirm)
         # screening: the run at 1 without the random confirmations, the screen meanwhile;
-        # run again with them where it meets the target (it is the answer then)
+        # where it meets the target (it is the answer then) they are simulated too
         return (run(1.0, 0, meanwhile=screen if showable else None)
-                and run(1.0, tolerances.confirm))
+                and run(1.0, tolerances.confirm, known=runs[1.0].verdicts))
 
     best, met = _search(judge, showable, screen if screening else None)
     if not met:  # the factor whose lower end came nearest the target

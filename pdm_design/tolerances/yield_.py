@@ -77,6 +77,8 @@ class YieldResult:
     # command's, commands.yield_.yield_identity), first in the JSON document
     identity: dict = field(default_factory=dict)
     extras: dict = field(default_factory=dict)  # the scene's own entries (Scene.yield_extras)
+    # the event simulator's verdicts, build index -> (stages passed, failure): not in the JSON
+    verdicts: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return {
@@ -159,7 +161,7 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
              scales=SCALES, sensitivity_samples: int = SOBOL_SAMPLES,
              progress=None, allow_skips: bool = False, workers: int | None = None,
              scheduler: str | None = None, mapped: BuildOutcome | None = None,
-             meanwhile=None) -> YieldResult:
+             meanwhile=None, known: dict | None = None) -> YieldResult:
     """Yield of `design` built with `tolerances` (every one with a value), K = `stages`.
     scales: the tolerance scales of the yield curve (() for none); sensitivity_samples: the
     Sobol' base sample (0: no sensitivity); allow_skips: the spec's [verification]
@@ -168,7 +170,8 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     default: the tolerances' workers, else one process per core); the result is the same.
     mapped: the closed-form outcome of these builds (map_builds of the same arguments) when
     the caller has it already. meanwhile: the caller's own work (a callable), done while the
-    workers simulate."""
+    workers simulate. known: the simulator's verdicts of builds of the same run (a previous
+    result's `verdicts`), not simulated again."""
     missing = [t.quantity for t in tolerances if t.value is None]
     if missing or not len(tolerances):
         raise ValueError("a yield needs tolerances with values" + (
@@ -185,7 +188,8 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     sample, open_builds = _to_confirm(outcome, seed, confirm)
     curve = _scale_maps(scene, design, tolerances, builds, stages, seed, scales)
     # every build the event simulator runs, the headline's and the curve's, in one batch
-    tasks = [(1.0, int(i)) for i in sample] + [(1.0, int(i)) for i in open_builds]
+    known = known or {}
+    tasks = [(1.0, int(i)) for i in (*sample, *open_builds) if int(i) not in known]
     tasks += [(scale, int(i)) for scale, o in curve for i in np.flatnonzero(~o.closed_form)]
     from .parallel import BuildRun, start_builds
 
@@ -202,7 +206,7 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     except BaseException:
         started.close()
         raise
-    got = dict(zip(tasks, started.answers()))
+    got = dict(zip(tasks, started.answers())) | {(1.0, i): v for i, v in known.items()}
     confirmed = _confirm(got, sample, open_builds, passed, failure)
     whole = failure == ""
     low, high = wilson(whole.sum(), builds)
@@ -223,7 +227,8 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
         sensitivity=tuple(sensitivity), sensitivity_note=note,
         scale_curve=tuple(_scale_curve(curve, got, builds, scales,
                                        headline=(int(whole.sum()), confirmed))),
-        source=source, extras=extras)
+        source=source, extras=extras,
+        verdicts={int(i): got[(1.0, int(i))] for i in (*sample, *open_builds)})
 
 
 def _to_confirm(outcome, seed, confirm):
