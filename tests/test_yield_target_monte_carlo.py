@@ -279,3 +279,4 @@ def test_the_screened_check_meets_the_target_in_two_runs(answer, monkeypatch):
                    scales=(), sensitivity_samples=0)
     assert (run.estimate, run.ci_low) == (checked.record["estimate"], checked.record["ci_low"])
     assert run.ci_low >= TARGET
+

@@ -129,3 +129,27 @@ def test_the_map_on_two_workers_is_the_map_in_one_process(monkeypatch):
     two = yield_module.map_builds(spec.scene, design, tolerances, 300, 8, 5, workers=2)
     for field in ("stages_passed", "failure", "min_margin", "closed_form"):
         assert np.array_equal(getattr(one, field), getattr(two, field)), field
+
+
+def test_a_run_given_its_known_verdicts_is_the_run_made_whole(monkeypatch):
+    """yield_of(known=...): the simulator's verdicts of a run without the random confirmations,
+    given to the same run with them, are not simulated again, and the result is the whole
+    run's (the yield target's check at its run at 1)."""
+    from pdm_design.tolerances.yield_ import yield_of
+
+    spec = load_spec(str(SPEC))
+    args = dict(builds=BUILDS, stages=spec.verification.stages, seed=spec.tolerances.seed,
+                scales=(), sensitivity_samples=0, workers=1)
+    design = spec.design_at()
+    bare = yield_of(spec.scene, design, spec.tolerances, confirm=0, **args)
+    whole = yield_of(spec.scene, design, spec.tolerances, confirm=5, **args)
+    asked = []
+    start = parallel.start_builds
+    monkeypatch.setattr(parallel, "start_builds",
+                        lambda run, tasks, **kw: asked.extend(tasks) or start(run, tasks, **kw))
+    given = yield_of(spec.scene, design, spec.tolerances, confirm=5, known=bare.verdicts,
+                     **args)
+    assert given.to_json() == whole.to_json() and given.verdicts == whole.verdicts
+    assert len(bare.verdicts) >= 5  # builds that left the closed forms, simulated once
+    assert not {i for _, i in asked} & set(bare.verdicts)
+    assert len(asked) == len(whole.verdicts) - len(bare.verdicts) > 0
