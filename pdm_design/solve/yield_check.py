@@ -100,7 +100,7 @@ def _check(scene, design, tolerances, allocated, target, stages, accuracy):
     def screen():  # the screen's factor, found while the run at 1 simulates
         if "found" not in ahead:
             ahead["found"] = _screen(scene, design, tolerances, allocated, first["mapped"],
-                                     target, stages, screened)
+                                     target, stages, screened, accuracy)
         return ahead["found"]
 
     def judge(factor):
@@ -168,16 +168,17 @@ def _ladder(judge, above: float, rungs) -> tuple[float, bool]:
     return 0.0, False
 
 
-def _screen(scene, design, tolerances, allocated, mapped, target, stages, screened):
+def _screen(scene, design, tolerances, allocated, mapped, target, stages, screened,
+            accuracy="default"):
     """(a factor, whether found): the ladder's on the builds most at risk alone. Those are
     every build the map at factor 1 (`mapped`) fails or leaves to the simulator, and the
-    SCREEN_SHARE of the others with the smallest margins. At a factor each is drawn as the
-    run draws it (its allocated deviations that factor times those at 1) and mapped; one that
-    fails there or leaves the closed forms counts as failing, every other build as passing,
-    and the factor passes where the Wilson interval's lower end of that count reaches the
-    target. Each rung of 1 and LADDER with the 2^STEPS factors above it up to the rung above
-    (the bisections' grid) in one map: the first rung that passes, and the last factor
-    above it before one that does not. `screened`: factor -> failures counted, filled."""
+    SCREEN_SHARE of the others with the smallest margins; every other build counts as passing.
+    At a factor each is drawn as the run draws it (its allocated deviations that factor times
+    those at 1) and mapped, a rung of 1 and LADDER and the 2^STEPS factors above it (the
+    bisections' grid) in one map. A factor passes where the Wilson interval's lower end of the
+    failing count reaches the target; the builds the map leaves there are simulated where
+    their verdict decides it (_resolve). The first rung that passes, then a bisection of its
+    grid. `screened`: factor -> failures counted, filled."""
     import numpy as np
 
     from ..tolerances import run_builds
@@ -195,12 +196,36 @@ def _screen(scene, design, tolerances, allocated, mapped, target, stages, screen
         stacked = {q: np.concatenate([d * f for f in grid]) if q in allocated
                    else np.concatenate([d] * len(grid)) for q, d in base.items()}
         out = run_builds(scene, design, stacked, stages)
-        failing = ((out.failure != "") | ~out.closed_form).reshape(len(grid), -1).sum(axis=1)
-        screened.update({float(f): int(n) for f, n in zip(grid, failing)})
-        passes = wilson(builds - failing, builds)[0] >= target
-        if passes[0]:
-            return float(grid[np.argmin(passes) - 1 if not passes.all() else -1]), True
+        shape = (len(grid), len(chosen))
+        left = (~out.closed_form).reshape(shape)
+        failing = ((out.failure != "").reshape(shape) & ~left).sum(axis=1)
+
+        def passes(k, grid=grid, left=left, failing=failing):
+            known = failing[k] + (_resolve(scene, design, tolerances, allocated, grid[k],
+                                           chosen[left[k]], stages, accuracy)
+                                  if left[k].any() else 0)
+            screened[float(grid[k])] = int(known)
+            return float(wilson(builds - known, builds)[0]) >= target
+
+        if passes(0):
+            lo, hi = 0, len(grid)  # passes at lo; the rung above did not
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                lo, hi = (mid, hi) if passes(mid) else (lo, mid)
+            return float(grid[lo]), True
     return 0.0, False
+
+
+def _resolve(scene, design, tolerances, allocated, factor, indices, stages, accuracy) -> int:
+    """How many of the builds `indices`, the allocated tolerances at `factor`, fail in the
+    event simulator, in this process (a few builds; the workers may be simulating the run at
+    1 meanwhile)."""
+    from ..tolerances.parallel import BuildRun, simulate_builds
+
+    run = BuildRun(scene, design, {float(factor): shrunk(tolerances, allocated, factor)},
+                   tolerances.seed, stages, accuracy)
+    answers = simulate_builds(run, [(float(factor), int(i)) for i in indices], workers=1)
+    return sum(1 for _, failure in answers if failure)
 
 
 def _record(runs, best, target, stages, tolerances, linearised, first_linearised, met) -> dict:
