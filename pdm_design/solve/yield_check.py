@@ -74,54 +74,68 @@ def check_allocation(scene, design, tolerances, allocated, *, target: float, sta
 
 
 def _check(scene, design, tolerances, allocated, target, stages, accuracy):
-    from ..tolerances.yield_ import map_builds, yield_of
     from .yield_allocation import linearised_yield_function
 
-    linearised = linearised_yield_function(scene)
-    builds, seed = tolerances.builds, tolerances.seed
-    runs, first = {}, {}
-    screening, showable = builds * stages >= SCREEN_ENTRIES, _showable(target, builds)
-
-    def run(factor, confirm, meanwhile=None, known=None):
-        sized = shrunk(tolerances, allocated, factor)
-        if screening and factor == 1.0 and "mapped" not in first:  # the screen's margins
-            from ..tolerances.parallel import local_workers
-
-            first["mapped"] = map_builds(scene, design, sized, builds, stages, seed,
-                                         workers=local_workers(getattr(sized, "workers", None)))
-        runs[factor] = yield_of(scene, design, sized, builds=builds, stages=stages, seed=seed,
-                                confirm=confirm, accuracy=accuracy, scales=(),
-                                sensitivity_samples=0, mapped=first.get("mapped")
-                                if factor == 1.0 else None, meanwhile=meanwhile, known=known)
-        return runs[factor].ci_low >= target
-
-    screened, ahead = {}, {}
-
-    def screen():  # the screen's factor, found while the run at 1 simulates
-        if "found" not in ahead:
-            ahead["found"] = _screen(scene, design, tolerances, allocated, first["mapped"],
-                                     target, stages, screened, accuracy)
-        return ahead["found"]
-
-    def judge(factor):
-        if not (screening and factor == 1.0):
-            return run(factor, tolerances.confirm)
-        # screening: the run at 1 without the random confirmations, the screen meanwhile;
-        # where it meets the target (it is the answer then) they are simulated too
-        return (run(1.0, 0, meanwhile=screen if showable else None)
-                and run(1.0, tolerances.confirm, known=runs[1.0].verdicts))
-
-    best, met = _search(judge, showable, screen if screening else None)
+    runs = _Runs(scene, design, tolerances, allocated, target, stages, accuracy)
+    best, met = _search(runs.judge, runs.showable, runs.screen if runs.screening else None)
     if not met:  # the factor whose lower end came nearest the target
-        best = max(runs, key=lambda f: (runs[f].ci_low, f))
+        best = max(runs.done, key=lambda f: (runs.done[f].ci_low, f))
     sized = shrunk(tolerances, allocated, best)
-    record = _record(runs, best, target, stages, tolerances,
+    linearised = linearised_yield_function(scene)
+    record = _record(runs.done, best, target, stages, tolerances,
                      linearised(scene, design, sized, stages)["yield"],
                      linearised(scene, design, tolerances, stages)["yield"], met)
-    if screened:
-        record["screened"] = [{"scale": f, "failures": n} for f, n in screened.items()]
-    words = "" if met else _unmet_words(runs, best, target, builds, stages)
+    if runs.screened:
+        record["screened"] = [{"scale": f, "failures": n} for f, n in runs.screened.items()]
+    words = "" if met else _unmet_words(runs.done, best, target, tolerances.builds, stages)
     return CheckedAllocation(sized, best, met, record, words)
+
+
+class _Runs:
+    """The Monte Carlo runs of one check: `done` (factor -> YieldResult), judge(factor) (a
+    run there; whether its lower end reaches the target) and, on long runs (`screening`),
+    screen() (_screen's factor, found while the run at 1 simulates)."""
+
+    def __init__(self, scene, design, tolerances, allocated, target, stages, accuracy):
+        self.scene, self.design, self.tolerances, self.allocated = (scene, design, tolerances,
+                                                                    allocated)
+        self.target, self.stages, self.accuracy = target, stages, accuracy
+        self.screening = tolerances.builds * stages >= SCREEN_ENTRIES
+        self.showable = _showable(target, tolerances.builds)
+        self.done, self.screened, self.mapped, self.found = {}, {}, None, None
+
+    def run(self, factor, confirm, meanwhile=None, known=None) -> bool:
+        from ..tolerances.yield_ import yield_of
+
+        sized = shrunk(self.tolerances, self.allocated, factor)
+        if self.screening and factor == 1.0 and self.mapped is None:  # the screen's margins
+            from ..tolerances.parallel import local_workers
+            from ..tolerances.yield_ import map_builds
+
+            self.mapped = map_builds(self.scene, self.design, sized, sized.builds,
+                                     self.stages, sized.seed,
+                                     workers=local_workers(getattr(sized, "workers", None)))
+        self.done[factor] = yield_of(
+            self.scene, self.design, sized, builds=sized.builds, stages=self.stages,
+            seed=sized.seed, confirm=confirm, accuracy=self.accuracy, scales=(),
+            sensitivity_samples=0, mapped=self.mapped if factor == 1.0 else None,
+            meanwhile=meanwhile, known=known)
+        return self.done[factor].ci_low >= self.target
+
+    def judge(self, factor) -> bool:
+        if not (self.screening and factor == 1.0):
+            return self.run(factor, self.tolerances.confirm)
+        # screening: the run at 1 without the random confirmations, the screen meanwhile;
+        # where it meets the target (it is the answer then) they are simulated too
+        return (self.run(1.0, 0, meanwhile=self.screen if self.showable else None)
+                and self.run(1.0, self.tolerances.confirm, known=self.done[1.0].verdicts))
+
+    def screen(self) -> tuple[float, bool]:
+        if self.found is None:
+            self.found = _screen(self.scene, self.design, self.tolerances, self.allocated,
+                                 self.mapped, self.target, self.stages, self.screened,
+                                 self.accuracy)
+        return self.found
 
 
 def _showable(target: float, builds: int) -> bool:
