@@ -55,11 +55,16 @@ EVENT_KINDS = {
             "comes down on the palm and is its base from then on",
     "leave": "the rocking object leaves its palm (its contact force vanishes, or its sliding "
              "contact runs off the end of its base or of the palm) and flies on, tumbling",
+    "push": "the carried object meets the rear end of the next palm, resting on its back "
+            "stop, and pushes it off the stop (a plastic impact with friction at its corner)",
+    "part": "the palm the carried object pushes parts from it and swings on alone",
     "lift_off": "the palm's normal force vanished (v^2 >= g l cos th): the object flies on and "
                 "the empty palm swings alone",
 }
 FAILURE_KINDS = {
-    "blocked": "the object hits the side or underside of a palm (outside the model)",
+    "blocked": "the object hits the side or underside of a palm (outside the model); or, "
+               "pushing the next palm off its back stop, slips, tips or meets another palm "
+               "before that palm parts from it (a sustained push: not followed)",
     "fell_clear": "the object fell past the row",
     "missed": "the object lifted off and fell past the row without landing on a palm",
     "tip": "the object tips or tumbles in a way the model does not follow: with restitution "

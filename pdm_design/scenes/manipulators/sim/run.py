@@ -20,6 +20,7 @@ from .edgeslide import EdgeSlidingPhases
 from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
+from .pushing import PushingPhases
 from .rocking import RockingPhases
 from .swinging import SwingingPhases
 from .tumbling import TumblingPhases
@@ -31,7 +32,7 @@ EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chatteri
 
 
 class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhases,
-          EdgeSlidingPhases):
+          EdgeSlidingPhases, PushingPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record, parts=None,
@@ -576,6 +577,10 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
             return self._complete(te, k, theta_e, omega_e, s)
         if kind == "stranded":
             return self._stop_with_object(te, k, omega_e, s, 0.0)
+        if kind == "blocked":  # the next palm's rear end, on its back stop: pushed (pushing.py)
+            hc = self._push_contact(te, k, theta_e, s, entry.palm)
+            if hc is not None:
+                return self._push(te, k, theta_e, omega_e, s, entry.palm, hc)
         if kind == "slip":
             self._log(te, "slip", k + 1, state, state,
                       f"|tan th| = {abs(math.tan(theta_e)):.6g} reaches mu = {self.mu:g}")
