@@ -13,7 +13,9 @@ Phases (docs/manipulators_model.md has the model and its derivations):
   edge slide  its edge or corner slides (Coulomb), it comes down flat or rolls onto a side
            face: edgeslide.py;
   tumbling it leaves its edge and flies turning until a corner or a palm's edge meets a palm:
-           tumbling.py.
+           tumbling.py;
+  pushing  the carried object pushes a palm ahead off its back stop until that palm parts and
+           swings on alone (followed as a palm swinging from rest): pushing.py.
 
 The run is *complete* when the object, carried by the last manipulator of the row, reaches that
 manipulator's handover angle beta (so it has been handed over by every other manipulator and
