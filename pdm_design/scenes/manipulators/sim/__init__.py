@@ -81,8 +81,9 @@ FAILURE_KINDS = {
     "impact_jam": "an impact has no consistent sliding solution (Painleve paradox)",
     "skipped_palm": "the object flew over a palm and came onto one further on (a spec may allow "
                     "it: [verification] allow_skips)",
-    "swinging_palm": "the object meets the side of a palm released past the vertical while it "
-                     "still swings from rest, or passes one after rocking (not followed)",
+    "swinging_palm": "the object meets the side of a palm released past the vertical (or "
+                     "pushed off its back stop) while it still swings, or passes one after "
+                     "rocking (not followed)",
     "timeout": "a phase ran longer than the model allows without an event",
     "too_many_events": "the run exceeded its event budget",
 }

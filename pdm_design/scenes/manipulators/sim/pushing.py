@@ -131,8 +131,6 @@ class PushingPhases:
         stop; None when that is not the contact (another face, the palm elsewhere)."""
         if j <= k or self.rest_since[j] > t or self.rest_angle[j] != -self.alphas[j]:
             return None
-        if self._tracked(t, k):  # palms swinging from rest: not carried along here
-            return None
         px, py = self.row.pivots[k]
         x = px + self.ls[k] * math.sin(theta) + s
         y = py + self.ls[k] * math.cos(theta)
@@ -238,10 +236,19 @@ class PushingPhases:
             thdd_k, thdd_j, _ = accel(z)
             return [z[1], thdd_k, z[3], thdd_j]
 
+        tracked = self._tracked(t0, k)  # palms swinging (from rest, or pushed earlier)
+        z0, rhs, more = self._with_swinging(tracked, t0, [theta0, omega0, th_j0, om_j0], rhs,
+                                            point)
         t_split = self._next_arrival(t0, k)
-        te, z, kind, _ = self._integrate(rhs, t0, [theta0, omega0, th_j0, om_j0], physics, faces,
-                                         t_end=t_split)
-        return self._push_ended(te, kind, k, s, j, [float(v) for v in z], t_split, hc0)
+        te, z, kind, _ = self._integrate(rhs, t0, z0, physics, faces + more, t_end=t_split)
+        self._swung_to(te, z, 4, tracked)
+        if isinstance(kind, tuple) and len(kind) == 3:  # a swinging palm met: j parts there
+            theta, omega, th_j, om_j = (float(v) for v in z[:4])
+            state = dict(self._on_palm(k, theta, omega, s), palm_theta=th_j, palm_omega=om_j)
+            self._part(te, k, theta, omega, s, j, th_j, om_j, state)
+            return self._met_swinging(te, kind, z, 4, tracked, None, state, k + 1,
+                                      carrier=(k, theta, omega, s, 0.0))
+        return self._push_ended(te, kind, k, s, j, [float(v) for v in z[:4]], t_split, hc0)
 
     def _push_ended(self, t, kind, k, s, j, z, t_split, hc0):
         """What follows the push phase's end: palm j parts (N falls to zero, or the palm rises
@@ -282,6 +289,7 @@ class PushingPhases:
         if len(self.palm_events) > events:
             self._planned[j] = self.palm_events[-1]
         self.unmet.add(j)
+        self.pushed.add(j)
         self._free[j] = (t, th_j, om_j)
         return lambda: self._stuck(t, k, theta, self.ls[k] * omega, s)
 

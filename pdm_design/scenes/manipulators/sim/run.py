@@ -88,6 +88,7 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         self.from_rest = self._release_past_vertical()
         # followed while they swing (swinging.py) until the object meets one
         self.unmet = set(self.from_rest)
+        self.pushed: set[int] = set()  # palms the carried object pushed off their back stops
         self._free = {k: (0.0, -self.alphas[k], 0.0) for k in self.from_rest}
 
     def _release_past_vertical(self):
