@@ -167,3 +167,69 @@ def test_the_map_leaves_every_build_whose_object_pushes_a_palm_to_the_simulator(
     assert len(pushed) >= 10  # (builds 67, 73, 79, 136, 140, ... of this seed)
     assert not mapped.closed_form[pushed].any()
     assert (mapped.failure[pushed] != "").any()  # the map's own account: most fail there
+
+
+def test_the_sliding_push_starts_where_the_stuck_push_leaves_its_cone():
+    """At the friction coefficient where the stuck push's palm-k force lies on its cone, the
+    sliding push (five balances, pushslide.py) must have the object start from relative rest
+    (s'' = 0) with the stuck push's accelerations and forces: two formulations, one state."""
+    from scipy.optimize import brentq
+
+    from pdm_design.scenes.manipulators.sim.phases import stuck_contact_force
+    from pdm_design.scenes.manipulators.sim.pushslide import slide_push_accelerations
+
+    th_k, om_k, th_j, om_j, sgn = 0.45, 1.5, -0.03, 1.45, -1.0
+    l_k, l_j, m, M_k, m_j, g = 2.0, 2.0, 1.0, 0.1, 0.1, 9.81
+
+    def stuck(mu):
+        thdd_k, thdd_j, n = push_accelerations(
+            th_k, om_k, th_j, om_j, acc_k=g * math.sin(th_k) / l_k,
+            acc_j=g * math.sin(th_j) / l_j, l_k=l_k, l_j=l_j, m_k=m + M_k, m_j=m_j, mu=mu,
+            sgn=sgn)
+        fx, fn = stuck_contact_force(th_k, om_k, thdd_k, gravity=g, link_length=l_k)
+        return thdd_k, thdd_j, n, m * fx + n, m * fn + sgn * mu * n
+
+    mu = brentq(lambda c: abs(stuck(c)[3]) - c * stuck(c)[4], 0.05, 3.0, xtol=1e-14)
+    thdd_k, thdd_j, n, fx, fn = stuck(mu)
+    assert fn > 0.0 and n > 0.0
+    got = slide_push_accelerations(
+        (th_k, om_k, 0.1, 0.0, th_j, om_j), acc_k=g * math.sin(th_k) / l_k,
+        acc_j=g * math.sin(th_j) / l_j, l_k=l_k, l_j=l_j, m=m, m_k=M_k, m_j=m_j, mu=mu, sgn=sgn,
+        sgn_s=-math.copysign(1.0, fx), g=g)
+    assert got[1] == pytest.approx(0.0, abs=1e-9)
+    assert got[[0, 2, 3, 4]] == pytest.approx([thdd_k, thdd_j, fn, n], rel=1e-9)
+
+
+def test_the_object_sliding_while_it_pushes_keeps_its_face_on_the_corner(tmp_path):
+    """Rocking-row build 180 (seed 0, skips allowed): palm 5's object pushes palm 7, slips on
+    palm 5 while pushing, and palm 7 parts: from the slip to the part the face stays on the
+    corner (l_5 sin th_5 + s - l_7 sin th_7 kept) and no energy is gained."""
+    text = (ROOT / "results" / "rocking_row.toml").read_text()
+    spec_path = tmp_path / "rocking_skips.toml"
+    spec_path.write_text(text.replace("[verification]", "[verification]\nallow_skips = true", 1))
+    spec = load_spec(spec_path)
+    design = spec.design_at()
+    tol = sized_tolerances(spec, spec_path, design, 8)
+    result = simulate_one(spec.scene, design, tol, 0, 180, 8, allow_skips=True)
+    slip = next(e for e in result.events if e.kind == "slip" and "pushes palm 7" in e.detail)
+    part = next(e for e in result.events if e.kind == "part")
+    assert slip.time < part.time and "palm 7" in part.detail
+    dev = one_build(tol, 0, 180, 8, scene=spec.scene)
+    l_k, l_j = 2.0 + dev["link_length"][0][4], 2.0 + dev["link_length"][0][6]
+    masses = spec.scene.body.mass / design.mass_ratio + dev["palm_mass"][0]
+    M_k, M_j, m, g = masses[4], masses[6], spec.scene.body.mass, spec.scene.gravity
+
+    def gap(e):
+        return (l_k * math.sin(e.after["theta"]) + e.after["offset"]
+                - l_j * math.sin(e.after["palm_theta"]))
+
+    def energy(e):
+        a = e.after
+        return (0.5 * m * (a["vx"] ** 2 + a["vy"] ** 2) + m * g * l_k * math.cos(a["theta"])
+                + 0.5 * M_k * (l_k * a["omega"]) ** 2 + M_k * g * l_k * math.cos(a["theta"])
+                + 0.5 * M_j * (l_j * a["palm_omega"]) ** 2
+                + M_j * g * l_j * math.cos(a["palm_theta"]))
+
+    assert abs(part.after["offset"] - slip.after["offset"]) > 1e-6  # it has slid
+    assert gap(part) == pytest.approx(gap(slip), abs=1e-6)
+    assert energy(part) < energy(slip)

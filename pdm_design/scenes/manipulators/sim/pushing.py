@@ -248,6 +248,11 @@ class PushingPhases:
             self._part(te, k, theta, omega, s, j, th_j, om_j, state)
             return self._met_swinging(te, kind, z, 4, tracked, None, state, k + 1,
                                       carrier=(k, theta, omega, s, 0.0))
+        if kind == "slip":  # the object slides on palm k, still pushing (pushslide.py)
+            theta, omega, th_j, om_j = (float(v) for v in z[:4])
+            state = dict(self._on_palm(k, theta, omega, s), palm_theta=th_j, palm_omega=om_j)
+            fx = self._push_forces(z, accel, k, sgn)[0]
+            return self._push_slip(te, k, theta, omega, s, j, th_j, om_j, fx, state)
         return self._push_ended(te, kind, k, s, j, [float(v) for v in z[:4]], t_split, hc0)
 
     def _push_ended(self, t, kind, k, s, j, z, t_split, hc0):
@@ -268,8 +273,8 @@ class PushingPhases:
             self._part(t, k, theta, omega, s, j, th_j, om_j, state)  # (it swings on, followed)
             return self._handover(t, k, theta, omega, s, 0.0, kind[1])
         details = {
-            "lift": "the object lifts off its palm", "slip": "the object slips on its palm",
-            "tip": "the object tips on its palm", "corner_sticks": "the corner sticks on its face",
+            "lift": "the object lifts off its palm", "tip": "the object tips on its palm",
+            "corner_sticks": "the corner sticks on its face",
             "below": "the palm's top comes level with the object's base",
             "stall": "its palm stops", "front_stop": "a palm reaches its front stop",
             None: "no event",
@@ -279,9 +284,10 @@ class PushingPhases:
         return self._fail(t, "blocked", k + 1, state,
                           f"while the carried object pushes palm {j + 1}: {what} (not followed)")
 
-    def _part(self, t, k, theta, omega, s, j, th_j, om_j, state):
+    def _part(self, t, k, theta, omega, s, j, th_j, om_j, state, sd=0.0):
         """Palm j parts from the object: it swings on alone from (th_j, th_j'), followed as a
-        palm swinging from rest is (swinging.py) until the object meets it; the carry goes on."""
+        palm swinging from rest is (swinging.py) until the object meets it; the carry goes on
+        (stuck, or sliding at s' = sd)."""
         self._log(t, "part", k + 1, state, state,
                   f"palm {j + 1} parts from the object at th = {th_j:.6g} rad")
         events = len(self.palm_events)
@@ -291,5 +297,7 @@ class PushingPhases:
         self.unmet.add(j)
         self.pushed.add(j)
         self._free[j] = (t, th_j, om_j)
+        if sd != 0.0:
+            return lambda: self._sliding(t, k, theta, omega, s, sd)
         return lambda: self._stuck(t, k, theta, self.ls[k] * omega, s)
 

@@ -21,6 +21,7 @@ from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
 from .pushing import PushingPhases
+from .pushslide import SlidingPushPhases
 from .rocking import RockingPhases
 from .swinging import SwingingPhases
 from .tumbling import TumblingPhases
@@ -32,7 +33,7 @@ EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chatteri
 
 
 class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhases,
-          EdgeSlidingPhases, PushingPhases):
+          EdgeSlidingPhases, PushingPhases, SlidingPushPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record, parts=None,
