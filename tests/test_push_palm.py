@@ -233,3 +233,20 @@ def test_the_object_sliding_while_it_pushes_keeps_its_face_on_the_corner(tmp_pat
     assert abs(part.after["offset"] - slip.after["offset"]) > 1e-6  # it has slid
     assert gap(part) == pytest.approx(gap(slip), abs=1e-6)
     assert energy(part) < energy(slip)
+
+
+def test_a_second_push_while_the_first_pushed_palm_swings_is_followed(tmp_path):
+    """Rocking-row build 293 (seed 0, skips allowed): palm 4's object pushes palm 5, which
+    parts and swings on; then pushes palm 6 and slips while pushing it, palm 5 carried along as
+    a swinging palm; palm 6 parts and the carry goes on."""
+    text = (ROOT / "results" / "rocking_row.toml").read_text()
+    spec_path = tmp_path / "rocking_skips.toml"
+    spec_path.write_text(text.replace("[verification]", "[verification]\nallow_skips = true", 1))
+    spec = load_spec(spec_path)
+    design = spec.design_at()
+    tol = sized_tolerances(spec, spec_path, design, 8)
+    events = simulate_one(spec.scene, design, tol, 0, 293, 8, allow_skips=True).events
+    kinds = [(e.kind, e.detail.split(" off")[0][-6:]) for e in events
+             if e.kind in ("push", "part", "slip")]
+    assert [k for k, _ in kinds] == ["push", "part", "push", "slip", "part"]
+    assert "palm 5" in kinds[0][1] and "palm 6" in kinds[2][1]

@@ -15,7 +15,8 @@ Phases (docs/manipulators_model.md has the model and its derivations):
   tumbling it leaves its edge and flies turning until a corner or a palm's edge meets a palm:
            tumbling.py;
   pushing  the carried object pushes a palm ahead off its back stop until that palm parts and
-           swings on alone (followed as a palm swinging from rest): pushing.py.
+           swings on alone (followed as a palm swinging from rest): pushing.py; sliding on its
+           palm while it pushes: pushslide.py.
 
 The run is *complete* when the object, carried by the last manipulator of the row, reaches that
 manipulator's handover angle beta (so it has been handed over by every other manipulator and
@@ -65,7 +66,7 @@ EVENT_KINDS = {
 }
 FAILURE_KINDS = {
     "blocked": "the object hits the side or underside of a palm (outside the model); or, "
-               "pushing the next palm off its back stop, slips, tips or meets another palm "
+               "pushing the next palm off its back stop, lifts, tips or meets another palm "
                "before that palm parts from it (a sustained push: not followed)",
     "fell_clear": "the object fell past the row",
     "missed": "the object lifted off and fell past the row without landing on a palm",

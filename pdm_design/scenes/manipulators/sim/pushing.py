@@ -12,9 +12,9 @@ vertical: palms translate) and Coulomb friction along the face.
            = const ties the two swings, the contact force N >= 0 follows from it
            (push_accelerations); the phase ends when N falls through zero: palm j parts and
            swings on alone, followed as a palm swinging from rest (swinging.py), and the carry
-           goes on. Not followed (`blocked`, with the reason): the object slipping or lifting
-           on palm k, tipping, the corner running off the face, a stop reached, another palm
-           met while pushing.
+           goes on. The object slipping on palm k while it pushes: pushslide.py. Not followed
+           (`blocked`, with the reason): the object lifting or tipping on palm k, the corner's
+           slip stopping, a stop reached, another palm's side met while pushing.
 """
 
 from __future__ import annotations

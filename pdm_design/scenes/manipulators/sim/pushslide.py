@@ -64,7 +64,7 @@ class SlidingPushPhases:
 
         def solve(z):
             return slide_push_accelerations(
-                z, acc_k=ph.swing_acceleration(z[0], z[1], sw_k, direction=1.0),
+                z[:6], acc_k=ph.swing_acceleration(z[0], z[1], sw_k, direction=1.0),
                 acc_j=ph.swing_acceleration(z[4], z[5], sw_j, direction=1.0), **kw)
 
         return solve
