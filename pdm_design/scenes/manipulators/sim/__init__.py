@@ -13,7 +13,10 @@ Phases (docs/manipulators_model.md has the model and its derivations):
   edge slide  its edge or corner slides (Coulomb), it comes down flat or rolls onto a side
            face: edgeslide.py;
   tumbling it leaves its edge and flies turning until a corner or a palm's edge meets a palm:
-           tumbling.py.
+           tumbling.py;
+  pushing  the carried object pushes a palm ahead off its back stop until that palm parts and
+           swings on alone (followed as a palm swinging from rest): pushing.py; sliding on its
+           palm while it pushes: pushslide.py.
 
 The run is *complete* when the object, carried by the last manipulator of the row, reaches that
 manipulator's handover angle beta (so it has been handed over by every other manipulator and
@@ -55,11 +58,16 @@ EVENT_KINDS = {
             "comes down on the palm and is its base from then on",
     "leave": "the rocking object leaves its palm (its contact force vanishes, or its sliding "
              "contact runs off the end of its base or of the palm) and flies on, tumbling",
+    "push": "the carried object meets the rear end of the next palm, resting on its back "
+            "stop, and pushes it off the stop (a plastic impact with friction at its corner)",
+    "part": "the palm the carried object pushes parts from it and swings on alone",
     "lift_off": "the palm's normal force vanished (v^2 >= g l cos th): the object flies on and "
                 "the empty palm swings alone",
 }
 FAILURE_KINDS = {
-    "blocked": "the object hits the side or underside of a palm (outside the model)",
+    "blocked": "the object hits the side or underside of a palm (outside the model); or, "
+               "pushing the next palm off its back stop, lifts, tips or meets another palm "
+               "before that palm parts from it (a sustained push: not followed)",
     "fell_clear": "the object fell past the row",
     "missed": "the object lifted off and fell past the row without landing on a palm",
     "tip": "the object tips or tumbles in a way the model does not follow: with restitution "
@@ -74,8 +82,9 @@ FAILURE_KINDS = {
     "impact_jam": "an impact has no consistent sliding solution (Painleve paradox)",
     "skipped_palm": "the object flew over a palm and came onto one further on (a spec may allow "
                     "it: [verification] allow_skips)",
-    "swinging_palm": "the object meets the side of a palm released past the vertical while it "
-                     "still swings from rest, or passes one after rocking (not followed)",
+    "swinging_palm": "the object meets the side of a palm released past the vertical (or "
+                     "pushed off its back stop) while it still swings, or passes one after "
+                     "rocking (not followed)",
     "timeout": "a phase ran longer than the model allows without an event",
     "too_many_events": "the run exceeded its event budget",
 }

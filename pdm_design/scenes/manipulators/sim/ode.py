@@ -237,6 +237,9 @@ class OdePhases:
         if isinstance(kind, tuple):
             if kind[0] == "handover":
                 return self._handover(te, k, theta, omega, s, 0.0, kind[1])
+            hc = self._push_contact(te, k, theta, s, kind[1])  # pushed off its stop (pushing.py)
+            if hc is not None:
+                return self._push(te, k, theta, omega, s, kind[1], hc)
             return self._fail(te, "blocked", k + 1, state,
                               f"the carried object hits the side of palm {kind[1] + 1}")
         if kind == "complete":

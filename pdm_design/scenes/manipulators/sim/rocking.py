@@ -499,8 +499,8 @@ class RockingPhases:
         swinging = self._swinging_from_rest(t, j)
         if swinging is not None:
             return self._fail(t, "swinging_palm", j + 1, state,
-                              f"the object reaches palm {j + 1} while palm {swinging}, released "
-                              "past the vertical, still swings from rest")
+                              f"the object reaches palm {j + 1} while palm {swinging}, "
+                              f"{self._swing_origin(swinging - 1)}, still swings")
         if self._comes_onto(j):
             return self._fail(t, "skipped_palm", self.at + 2, state,
                               f"the object flew over palm {self.at + 2} and came onto palm "

@@ -20,6 +20,8 @@ from .edgeslide import EdgeSlidingPhases
 from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
 from .ode import OdePhases
+from .pushing import PushingPhases
+from .pushslide import SlidingPushPhases
 from .rocking import RockingPhases
 from .swinging import SwingingPhases
 from .tumbling import TumblingPhases
@@ -31,7 +33,7 @@ EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chatteri
 
 
 class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhases,
-          EdgeSlidingPhases):
+          EdgeSlidingPhases, PushingPhases, SlidingPushPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record, parts=None,
@@ -87,6 +89,7 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         self.from_rest = self._release_past_vertical()
         # followed while they swing (swinging.py) until the object meets one
         self.unmet = set(self.from_rest)
+        self.pushed: set[int] = set()  # palms the carried object pushed off their back stops
         self._free = {k: (0.0, -self.alphas[k], 0.0) for k in self.from_rest}
 
     def _release_past_vertical(self):
@@ -576,6 +579,10 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
             return self._complete(te, k, theta_e, omega_e, s)
         if kind == "stranded":
             return self._stop_with_object(te, k, omega_e, s, 0.0)
+        if kind == "blocked":  # the next palm's rear end, on its back stop: pushed (pushing.py)
+            hc = self._push_contact(te, k, theta_e, s, entry.palm)
+            if hc is not None:
+                return self._push(te, k, theta_e, omega_e, s, entry.palm, hc)
         if kind == "slip":
             self._log(te, "slip", k + 1, state, state,
                       f"|tan th| = {abs(math.tan(theta_e)):.6g} reaches mu = {self.mu:g}")

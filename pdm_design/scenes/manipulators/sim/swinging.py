@@ -83,8 +83,9 @@ class SwingingPhases:
         theta, omega = float(z[base + 2 * i]), float(z[base + 2 * i + 1])
         if face != "top":
             return self._fail(t, "swinging_palm", j + 1, state,
-                              f"the object meets the side of palm {j + 1}, released past the "
-                              f"vertical, while it swings at th = {theta:.6g} rad (not followed)")
+                              f"the object meets the side of palm {j + 1}, "
+                              f"{self._swing_origin(j)}, while it swings at th = {theta:.6g} "
+                              "rad (not followed)")
         self._unplan(j)
         w = self.ls[j] * omega
         if carrier is not None:  # (palm k, th, th', s, s') of the carry
@@ -92,6 +93,12 @@ class SwingingPhases:
         return self._impact(t, j, theta, w, *obj, log_as="landing", stage=stage,
                             before=dict(state, palm_theta=theta, palm_omega=omega),
                             at_rest=False)
+
+    def _swing_origin(self, j):
+        """How palm j came to swing: pushed off its back stop by the carried object
+        (pushing.py), or released past the vertical at the build."""
+        return ("pushed off its back stop" if j in self.pushed
+                else "released past the vertical")
 
     def _unplan(self, j):
         """Palm j is met while it swings from rest: its planned stop does not happen."""

@@ -344,8 +344,8 @@ class TumblingPhases:
         swinging = self._swinging_from_rest(t, p)
         if swinging is not None:
             return self._fail(t, "swinging_palm", p + 1, state,
-                              f"the object reaches palm {p + 1} while palm {swinging}, released "
-                              "past the vertical, still swings from rest")
+                              f"the object reaches palm {p + 1} while palm {swinging}, "
+                              f"{self._swing_origin(swinging - 1)}, still swings")
         if p != self.at and self._comes_onto(p):
             return self._fail(t, "skipped_palm", self.at + 2, state,
                               f"the object flew over palm {self.at + 2} and came onto palm "
