@@ -170,8 +170,9 @@ def yield_of(scene, design, tolerances: Tolerances, *, builds: int, stages: int,
     default: the tolerances' workers, else one process per core); the result is the same.
     mapped: the closed-form outcome of these builds (map_builds of the same arguments) when
     the caller has it already. meanwhile: the caller's own work (a callable), done while the
-    workers simulate (in this process: it must not start worker processes of its own). known: the simulator's verdicts of builds of the same run (a previous
-    result's `verdicts`), not simulated again."""
+    workers simulate (in this process: it must not start worker processes of its own).
+    known: the simulator's verdicts of builds of the same run (a previous result's
+    `verdicts`), not simulated again."""
     missing = [t.quantity for t in tolerances if t.value is None]
     if missing or not len(tolerances):
         raise ValueError("a yield needs tolerances with values" + (
