@@ -170,10 +170,10 @@ def test_with_the_pivots_every_corner_passes(tmp_path, quantity):
     assert result.verification["passed"]
     assert result.verification["samples"] == 12 * 2 + random_builds(16, 6) + 1  # + nominal
     assert _failures(spec, result, 1.0, alternate=quantity in PER_PART) == []
-    # not vacuous: 2.5 times the box fails (the simulator's first failure, bisected once on
-    # the scale: 2.07-2.31 times, a tip on an alternating pattern; the pivots' box alone
-    # fails from 1.99 times, as the NLP's slip rows hold where the simulator slides on)
-    assert _failures(spec, result, 2.5, first=True)
+    # not vacuous: 3 times the box fails (the simulator's first failure: a skipped palm on an
+    # alternating pattern; with link_mass 2.5 times passes, the tip onset there rocking back
+    # since the simulator follows it; the NLP's slip rows hold where the simulator slides on)
+    assert _failures(spec, result, 3.0, first=True)
 
 
 @pytest.fixture(scope="module")
