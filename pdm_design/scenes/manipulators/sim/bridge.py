@@ -1,22 +1,25 @@
-"""The object resting across two palms, stuck on both: a one-degree-of-freedom linkage. Mixed
-into run.Run (docs/physics.md, section 2.2d).
+"""The object resting across two palms, each contact stuck or sliding. Mixed into run.Run
+(docs/physics.md, section 2.2d).
 
-After a plastic impact that sticks at both contacts (twocontact.py) the object's point b_i (in
-its own frame, from its centre) stays on palm i's point e_i (along its top, from the top's
-centre), for palm j (the new contact) and palm k (the old). Coordinates
-q = (X, Y, phi, th_j, th_k), M = diag(m, m, I_c, F_j l_j^2, F_k l_k^2), the contact forces
-lambda_i (on the object) enter as J_i^T lambda_i (twocontact.contact_jacobian), and each
-contact's relative acceleration vanishes:
+After a plastic impact at both contacts (twocontact.py) the object bears on palm j (the new
+contact) and palm k (the old). A stuck contact keeps the object's point b_i (its frame, from its
+centre) on palm i's point e_i (along the top, from its centre); a sliding one keeps only the
+normal gap closed (the object's corner on the palm's face, or the palm's edge along the
+object's base), its force N (n - mu sgn(slip) t). Coordinates q = (X, Y, phi, th_j, th_k),
+M = diag(m, m, I_c, F_j l_j^2, F_k l_k^2), forces lambda_i on the object entering as
+J_i^T lambda_i (twocontact.contact_jacobian):
 
-    M q'' = Q + J_j^T lambda_j + J_k^T lambda_k,
-    J_i q'' = phi'^2 r_i - l_i th_i'^2 r_hat_i - (2 g_i' + g_i / tau) / tau     (r_i = R(phi) b_i)
+    M q'' = Q + J_j^T lambda_j + J_k^T lambda_k
+    stuck:   J_i q'' = phi'^2 r_i - l_i th_i'^2 r_hat_i      (r_i = R(phi) b_i)
+    sliding: n . J_i q'' = the same along n (a corner), or, a palm's edge on the base,
+             -l th'^2 r_hat . n_b - 2 phi' (v_c - l th' t) . tau_b - phi'^2 r . n_b
 
-(Q: gravity on the object, each palm's own `(W g l sin th - tau sgn th' - c th')`; the last term
-a Baumgarte correction of the drift g_i of the contact's points, tau = 0.01 sqrt(h / g)). A palm
-held by a stop drops its coordinate. Guards: a contact's normal force through zero (it opens:
-the object rocks about the other contact, rocking.py), a force leaving its friction cone (not
-followed, `tip`), a free palm reaching a stop (`tip`), a held palm dragged off its stop (it is
-free from then on), any other palm met (`blocked`).
+each with a Baumgarte term -(2 g' + g / tau) / tau against drift, tau = 0.01 sqrt(h / g); a palm
+held by a stop drops its coordinate. Guards: a normal force through zero (it opens: the object
+rocks about the other contact, rocking.py), a stuck force leaving its cone (`slip`), a slip
+stopping (`stick`), a sliding contact running off the palm's or base's end (it opens), a held
+palm dragged off its stop; not followed: a free palm reaching a stop (`tip`), any other palm
+met (`blocked`). At rest across both: `stranded`.
 """
 
 from __future__ import annotations

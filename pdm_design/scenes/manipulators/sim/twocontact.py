@@ -15,12 +15,10 @@ no impulse). Plastic: the normal relative speeds after vanish at both contacts; 
 sticks (g_i = 0) while its impulse lies in the friction cone, else it slides with
 P_i = p_i (n_i - mu sgn(sigma_i) t_i), sigma_i its slip before (kept through the impact).
 M (q'+ - q'-) = sum J_i^T P_i and the conditions are linear in the impulses: two_contact_impact.
+Modes are tried stuck-stuck, stuck-sliding, sliding-stuck, sliding-sliding (solve_two_contacts).
 A palm resting on a stop that its impulse drives into the stop is held (its column dropped).
 
-After the impact both contacts touch with no normal speed. The object rocks on about the new
-contact on palm j (rocking.py) when the old contact then separates: its normal relative
-acceleration, with no force there (palm k swinging alone), is >= 0 (old_contact_separates).
-Otherwise it would rest on both palms: not followed (`tip`).
+After the impact the object rests across both palms (bridge.py) until one contact opens.
 """
 
 from __future__ import annotations
@@ -211,8 +209,9 @@ class TwoContactPhases:
             after, impulses, modes = solved
             pushes = [float((jacs[i].T @ _impulse(normals[i], impulses[i]))[3 + i])
                       for i in range(2)]
-            if all(into[holds[i]] * (pushes[i] if held[i] else after[3 + i]) <= 0.0
-                   if not held[i] else into[holds[i]] * pushes[i] > 0.0 for i in range(2)):
+            # a held palm's contact pushes it into its stop; a free one is not driven through
+            if all(into[holds[i]] * pushes[i] > 0.0 if held[i] else
+                   into[holds[i]] * after[3 + i] <= 0.0 for i in range(2)):
                 return after, held[0], held[1], modes
         return None
 
