@@ -308,10 +308,6 @@ class BridgePhases:
                          "stick": f"sticks on palm {br.palms[i] + 1}"}[kind[0]])
             return lambda: self._bridge(t, nxt, y, sides)
         if isinstance(kind, tuple) and kind[0] == "open":
-            if br.modes[1 - kind[1]] != "stick":
-                return self._fail(t, "tip", k + 1, state,
-                                  f"the object across palms {k + 1} and {j + 1} lets go of one "
-                                  "while it slides on the other (not followed)")
             return self._bridge_open(t, br, y, kind[1], sides, state)
         words = {"stop": "a palm reaches a stop or stops", None: "no event"}
         if kind in words:
@@ -328,16 +324,15 @@ class BridgePhases:
         return bridge_accelerations(y, masses, forces(y), geometry, tau, self.mu)[1]
 
     def _bridge_open(self, t, br, y, i, sides, state):
-        """Contact i opens: the object rocks on about the other one. Palm k letting go is the
-        handover onto palm j (rocking._caught); palm j letting go leaves it on palm k, palm j
-        swinging on alone (or at rest on its stop)."""
+        """Contact i opens: the object rocks on (or rocks and slides, edgeslide.py) about the
+        other one. Palm k letting go is the handover onto palm j (rocking._caught); palm j
+        letting go leaves it on palm k, palm j swinging on alone (or at rest on its stop)."""
         j, k = br.palms
+        n = 1 - i  # the contact that stays
+        r, z, slip = self._staying(br, y, n)
         if i == 1:
-            z = (y[3], y[8], y[2], y[7])
-            return self._caught(t, k, j, self._bridge_rocker(br, 0), z, br.held[0], None, state,
-                                sides[0], release=y[9],
+            return self._caught(t, k, j, r, z, br.held[0], slip, state, sides[0], release=y[9],
                                 note=f" (after resting across palms {k + 1} and {j + 1})")
-        r = self._bridge_rocker(br, 1)
         if br.held[0]:
             self.rest_since[j] = t
         else:
@@ -346,5 +341,29 @@ class BridgePhases:
             self.rest_since[k] = t
         self._log(t, "rock", k + 1, state, state,
                   f"the object lets go of palm {j + 1}: it rocks on palm {k + 1}")
-        z = (y[4], y[9], y[2], y[7])
+        if slip is not None:
+            way = 1.0 if z[1] >= 0.0 else -1.0
+            return lambda: self._edge_slide(t, k, r, list(z), br.held[1], sides[1], slip, way)
         return lambda: self._rock(t, k, r.e - r.d, r.d, z, br.held[1], side=sides[1])
+
+    def _staying(self, br, y, n):
+        """The Rocker, state and slip of the contact n that stays: stuck, the rocking state
+        (th, th', phi, phi') and None; sliding, edgeslide's (th, th', phi, phi', u, u') with u
+        the corner's place along the palm (e) or the palm's edge's along the base (d), and
+        the slip's sign."""
+        zr = (y[3 + n], y[8 + n], y[2], y[7])
+        if br.modes[n] == "stick":
+            return self._bridge_rocker(br, n), zr, None
+        contact = self._bridge_model(br)[2][0][n]
+        q = np.array([y[0], y[1], y[2], y[3 + n], 0.0])
+        qd = np.array([y[5], y[6], y[7], y[8 + n], 0.0])
+        r, jac, _, _, nv = contact_geometry(q, qd, contact, br.modes[n], self.h)
+        slip = float(np.array([nv[1], -nv[0]]) @ (jac @ qd))
+        if br.edge[n]:  # u = d along the base, d' = -slip
+            d = float(r @ np.array([nv[1], -nv[0]]))
+            rocker = self._bridge_rocker(Bridge(br.palms, tuple(
+                (d, -0.5 * self.h) if m == n else b for m, b in enumerate(br.b)), br.e,
+                br.edge, br.held, br.modes), n)
+            return rocker, (*zr, d, -slip), br.modes[n]
+        nxt = self._restick(br, y, n)  # the corner's place e on the palm now
+        return self._bridge_rocker(nxt, n), (*zr, nxt.e[n], slip), br.modes[n]
