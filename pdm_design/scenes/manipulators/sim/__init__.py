@@ -81,7 +81,7 @@ FAILURE_KINDS = {
            "> 0, while carried sliding, landing with no face turned to come down about its "
            "contact, a slip or sliding impact that would reverse, a sliding contact riding its "
            "palm onto a stop; across two palms: no consistent impact or slide, a palm reaching "
-           "a stop, one contact opening while the other slides, both palms held",
+           "a stop, both palms held",
     "tipped_over": "the rocking object turned to pi/2 on a palm's edge (its base stands against "
                    "the edge; not followed)",
     "stall": "the carry stops before the top: the palm swings back to its back stop",

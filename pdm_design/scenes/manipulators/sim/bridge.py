@@ -16,10 +16,10 @@ J_i^T lambda_i (twocontact.contact_jacobian):
 
 each with a Baumgarte term -(2 g' + g / tau) / tau against drift, tau = 0.01 sqrt(h / g); a palm
 held by a stop drops its coordinate. Guards: a normal force through zero (it opens: the object
-rocks about the other contact, rocking.py), a stuck force leaving its cone (`slip`), a slip
-stopping (`stick`), a sliding contact running off the palm's or base's end (it opens), a held
-palm dragged off its stop; not followed: a free palm reaching a stop (`tip`), any other palm
-met (`blocked`). At rest across both: `stranded`.
+rocks about the other contact, rocking.py, or rocks and slides on it, edgeslide.py), a stuck
+force leaving its cone (`slip`), a slip stopping (`stick`), a sliding contact running off the
+palm's or base's end (it opens), a held palm dragged off its stop; not followed: a free palm
+reaching a stop (`tip`), any other palm met (`blocked`). At rest across both: `stranded`.
 """
 
 from __future__ import annotations
