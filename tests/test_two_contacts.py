@@ -209,7 +209,7 @@ def test_the_rocking_rows_two_contact_builds_rest_across_two_palms(tmp_path):
     """Rocking row, skips allowed, seed 0: builds 9, 21 and 74 come down on a second palm still
     bearing on their own (before, `tip` there): each now logs `bridge`, the impact at both
     contacts, and ends later (21 and 74 at rest across the two palms, `stranded`); the map
-    hands every one of them to the simulator (closed_form False)."""
+    hands every one of them to the simulator (closed_form False); build 561 completes."""
     from pdm_design.tolerances.yield_ import map_builds
 
     text = (ROOT / "results" / "rocking_row.toml").read_text()
@@ -226,5 +226,12 @@ def test_the_rocking_rows_two_contact_builds_rest_across_two_palms(tmp_path):
         assert kinds.index("bridge") < len(kinds) - 1  # followed past the impact
         if i in (21, 74):
             assert result.outcome.failure.kind == "stranded"
-    mapped = map_builds(spec.scene, design, tol, 80, 8, 0)
-    assert not mapped.closed_form[list(builds)].any()
+    mapped = map_builds(spec.scene, design, tol, 562, 8, 0)
+    assert not mapped.closed_form[[*builds, 561]].any()
+    # build 561: across palms 6 and 5 both contacts slide, palm 6 lets go and the object,
+    # sliding on palm 5 (the edge slide), goes on to complete the row
+    result = simulate_one(spec.scene, design, tol, 0, 561, 8, allow_skips=True)
+    kinds = [e.kind for e in result.events]
+    assert result.outcome.completed
+    after = kinds[kinds.index("bridge"):]
+    assert "catch" in after and after.index("slip") < after.index("catch")
