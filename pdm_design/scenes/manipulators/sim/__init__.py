@@ -16,7 +16,10 @@ Phases (docs/manipulators_model.md has the model and its derivations):
            tumbling.py;
   pushing  the carried object pushes a palm ahead off its back stop until that palm parts and
            swings on alone (followed as a palm swinging from rest): pushing.py; sliding on its
-           palm while it pushes: pushslide.py.
+           palm while it pushes: pushslide.py;
+  bridge   the rocking object comes down on a second palm still bearing on its own: a plastic
+           impact at both contacts (twocontact.py), then it rests across both, stuck or
+           sliding on each, until one contact opens: bridge.py.
 
 The run is *complete* when the object, carried by the last manipulator of the row, reaches that
 manipulator's handover angle beta (so it has been handed over by every other manipulator and
@@ -53,7 +56,11 @@ EVENT_KINDS = {
             "impulse line reached it), or rocks on to the base's other end",
     "settle": "the rocking object comes back down flat on its palm and is carried on",
     "catch": "a corner of the rocking object comes down on another palm, which carries it on",
-    "release": "the rocking object drags its palm off the stop it rested on",
+    "release": "the rocking object (or the object across two palms) drags a palm off the stop "
+               "it rested on",
+    "bridge": "the rocking object comes down on a second palm still bearing on its own: a "
+              "plastic impact at both contacts, then it rests across both palms until one "
+              "contact opens",
     "roll": "the object turned to pi/2 about its base corner: the side face it turned onto "
             "comes down on the palm and is its base from then on",
     "leave": "the rocking object leaves its palm (its contact force vanishes, or its sliding "
@@ -71,14 +78,16 @@ FAILURE_KINDS = {
     "fell_clear": "the object fell past the row",
     "missed": "the object lifted off and fell past the row without landing on a palm",
     "tip": "the object tips or tumbles in a way the model does not follow: with restitution "
-           "> 0, while carried sliding, coming to rest across two palms, landing with no face "
-           "turned to come down about its contact, a slip or sliding impact that would "
-           "reverse, a sliding contact riding its palm onto a stop",
+           "> 0, while carried sliding, landing with no face turned to come down about its "
+           "contact, a slip or sliding impact that would reverse, a sliding contact riding its "
+           "palm onto a stop; across two palms: no consistent impact or slide, a palm reaching "
+           "a stop, both palms held",
     "tipped_over": "the rocking object turned to pi/2 on a palm's edge (its base stands against "
                    "the edge; not followed)",
     "stall": "the carry stops before the top: the palm swings back to its back stop",
     "slid_off": "the object's centre slid off the end of its palm",
-    "stranded": "the palm reached its front stop still carrying the object (no handover)",
+    "stranded": "the palm reached its front stop still carrying the object (no handover), or "
+                "the object came to rest across two palms",
     "impact_jam": "an impact has no consistent sliding solution (Painleve paradox)",
     "skipped_palm": "the object flew over a palm and came onto one further on (a spec may allow "
                     "it: [verification] allow_skips)",

@@ -288,7 +288,7 @@ class EdgeSlidingPhases:
             contact = self._slide_point(k, z, d, r, d, 0.0, corner)
             normal, _ = slide_frame(z[2], corner)
             return self._meets(t, k, kind, (z[2], v, z[3], centre),
-                               (contact, normal, (z[0], z[1])), state)
+                               (contact, normal, (z[0], z[1]), not corner), state)
         what = {"stop": "rides its palm onto a stop",
                 "turn": "turns with its palm where pivot friction acts"}[kind]
         return self._fail(t, "tip", k + 1, state,

@@ -416,13 +416,14 @@ class RockingPhases:
         normal = (math.sin(phi), math.cos(phi)) if r.edge else (0.0, 1.0)
         centre = body_point(theta, phi, 0.0, 0.5 * r.h, r)
         return self._meets(t, k, kind, (phi, v, phid, centre),
-                           ((ox, oy), normal, (theta, omega)), state)
+                           ((ox, oy), normal, (theta, omega), r.edge), state)
 
     def _meets(self, t, k, kind, body, old, state):
         """The rocking (or edge-sliding) object on palm k meets palm j: its base corner bx on
         palm j's top, or palm j's top corner on its base, is a catch (_catch); any other contact
         is not followed (`blocked`). body: phi, the centre's velocity, the spin and the centre;
-        old: its contact on palm k (point, normal, palm k's (th, th'))."""
+        old: its contact on palm k (point, normal, palm k's (th, th'), whether palm k's edge
+        bears on the base)."""
         phi, v, phid, centre = body
         if kind[0] == "palm_corner":  # (palm j's corner at (x, y), on the object's `face`)
             _, j, face, x, y = kind
@@ -450,8 +451,8 @@ class RockingPhases:
         leaves the friction cone: edgeslide.slide_impact), palm k released; the object rocks
         (or rocks and slides) about it on palm j. body: the point's x, phi, the centre's
         velocity, the spin and the centre; old: the contact on palm k (point, its normal, palm
-        k's (th, th')), which must let go (its normal speed relative to palm k outward after
-        the impact), else the object would rest on two palms (not followed)."""
+        k's (th, th'), edge), which lets go if its normal speed relative to palm k is outward
+        after the impact; else both contacts take an impulse (twocontact.py)."""
         corner_x, phi, v, phid, centre = body
         theta_j = self.rest_angle[j]
         top_x, _ = self.row.palm_top(j, theta_j)
@@ -484,18 +485,19 @@ class RockingPhases:
             u = slide_centre_velocity(z, r2.d, r2, corner=not r2.edge)
         else:
             u = centre_velocity(theta_j, th1, phi, phi1, r2)
-        (ox, oy), (nx, ny), (theta, omega) = old
+        (ox, oy), (nx, ny), (theta, omega) = old[:3]
         l = self.ls[k]
         away = ((u[0] + z[3] * (oy - centre[1]) - l * omega * math.cos(theta)) * nx
                 + (u[1] - z[3] * (ox - centre[0]) + l * omega * math.sin(theta)) * ny)
-        if away < 0.0:
-            return self._fail(t, "tip", k + 1, state,
-                              f"the rocking object comes down on palm {j + 1} still bearing on "
-                              f"palm {k + 1} (two contacts, not followed)")
+        if away < 0.0:  # the old contact takes an impulse too (twocontact.py)
+            return self._two_contact_catch(t, k, j, r2, (centre, v, phi, phid, hold), old,
+                                           state, side)
         return self._caught(t, k, j, r2, z, held, slip, state, side)
 
-    def _caught(self, t, k, j, r2, z, held, slip, state, side):
-        """Bookkeeping of the catch of _catch: palm k hands the object over to palm j."""
+    def _caught(self, t, k, j, r2, z, held, slip, state, side, release=None, note=""):
+        """Bookkeeping of the catch of _catch: palm k hands the object over to palm j;
+        release: palm k's th' after the catch (default its th' before), note: added to the
+        event's text."""
         swinging = self._swinging_from_rest(t, j)
         if swinging is not None:
             return self._fail(t, "swinging_palm", j + 1, state,
@@ -505,7 +507,7 @@ class RockingPhases:
             return self._fail(t, "skipped_palm", self.at + 2, state,
                               f"the object flew over palm {self.at + 2} and came onto palm "
                               f"{j + 1}")
-        theta, omega = state["theta"], state["omega"]
+        theta, omega = state["theta"], state["omega"] if release is None else release
         l = self.ls[k]
         rec = self._stage(k)
         if rec is not None:
@@ -522,7 +524,7 @@ class RockingPhases:
                   + (f"base comes down on palm {j + 1}'s {'front' if side > 0 else 'rear'} edge"
                      if r2.edge else
                      f"{'front' if side > 0 else 'rear'} corner comes down on palm {j + 1}")
-                  + ("" if slip is None else ", sliding"))
+                  + ("" if slip is None else ", sliding") + note)
         self.rest_since[j] = t if held else math.inf
         if slip is not None:
             way = 1.0 if z[1] >= 0.0 else -1.0

@@ -16,6 +16,7 @@ from ....sim.core import Event, Outcome, SimulationResult
 from ....sim.numerics import brentq
 from .. import physics as phys
 from . import phases as ph
+from .bridge import BridgePhases
 from .edgeslide import EdgeSlidingPhases
 from .geometry import Arc, Ballistic, build_row, first_contact, support_words
 from .liftoff import LiftOffPhases
@@ -25,6 +26,7 @@ from .pushslide import SlidingPushPhases
 from .rocking import RockingPhases
 from .swinging import SwingingPhases
 from .tumbling import TumblingPhases
+from .twocontact import TwoContactPhases
 
 FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object is given up
 ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact
@@ -33,7 +35,8 @@ EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chatteri
 
 
 class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhases,
-          EdgeSlidingPhases, PushingPhases, SlidingPushPhases):
+          EdgeSlidingPhases, PushingPhases, SlidingPushPhases, TwoContactPhases,
+          BridgePhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record, parts=None,
