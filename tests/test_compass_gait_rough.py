@@ -53,6 +53,7 @@ def _monte_carlo(t, walkers, steps, seed=11):
     return run.steps.mean(), run.steps.std(ddof=1) / math.sqrt(walkers)
 
 
+@pytest.mark.slow  # the Monte Carlo walkers: about 9 s
 def test_flux_sampling_agrees_with_monte_carlo():
     """t = 0.012 rad: a mean of about 70 steps; levels forced (reach 0.5, the last stage once
     95 % fall) so that the splitting's nested product is what is compared."""

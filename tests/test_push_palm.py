@@ -148,6 +148,7 @@ def test_a_pushed_palm_parts_swings_as_its_pendulum_and_later_receives_the_objec
     assert onto
 
 
+@pytest.mark.slow  # 240 builds simulated: about 8 s
 def test_the_map_leaves_every_build_whose_object_pushes_a_palm_to_the_simulator(tmp_path):
     """The closed forms have no push: a build where the simulator logs one (the carried object
     against a palm's rear end) must be one the map hands over (closed_form False)."""

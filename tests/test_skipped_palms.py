@@ -94,7 +94,7 @@ def test_allow_skips_must_be_a_boolean_and_is_for_manipulators():
         parse_spec(stairs, "stairs.toml")
 
 
-@pytest.mark.parametrize("allow_skips", [False, True])
+@pytest.mark.parametrize("allow_skips", [False, pytest.param(True, marks=pytest.mark.slow)])
 def test_the_yield_passes_exactly_the_completed_runs(paper, allow_skips):
     # pivots +-0.45 m down the row: some builds fly over a palm; every build simulated one by
     # one, its outcome compared with the yield's count

@@ -133,6 +133,7 @@ def test_the_reported_estimate_is_the_yield_run_of_the_answer(answer):
     assert shown == {t["quantity"]: t["value"] for t in out["tolerances"]}
 
 
+@pytest.mark.slow  # the report's run: about 7 s
 def test_the_text_report_shows_the_check(answer):
     path, _, _, out = answer
     run = CliRunner().invoke(main, ["optimize", str(path), "--no-verify"])
@@ -143,6 +144,7 @@ def test_the_text_report_shows_the_check(answer):
     assert f"shrunk to {record['scale']:.4g} of that size" in run.output
 
 
+@pytest.mark.slow  # an NLP and a run of its own: about 7 s
 def test_a_target_too_few_builds_can_show_is_refused_in_words(tmp_path):
     # no failure at all among n builds gives the Wilson interval's lower end n / (n + z^2):
     # 400 builds cannot show 99.5 % (lower end 99.05 %) whatever the tolerances
@@ -284,6 +286,7 @@ def test_the_screened_check_meets_the_target_in_two_runs(answer, monkeypatch):
 
 
 
+@pytest.mark.slow  # an NLP and five runs of its own: about 4 s
 def test_the_screen_simulates_the_builds_it_cannot_map_and_finds_the_plain_factor(
         tmp_path, monkeypatch):
     """The 20-stage manipulators row sized for 99.9 %: at the NLP's size 7 of its 5 000 builds
