@@ -12,7 +12,8 @@ beta free, IPOPT at the default preset's settings (8 starts, tol 1e-8), no linea
 * Without damping both paths apply. The closed form is exact to rounding; the integrated path is
   asked for by the accuracy key `carry = "integrated"` (`verification.accuracy`, `--accuracy
   carry=integrated`), with as many steps as physics.carry_steps gives for a tenth of each agreement
-  tolerance of a ladder (the presets' fast / default / precise marked: 1e-4, 1e-7, 1e-9). Error: the periodic handover speed of the NLP's own model
+  tolerance of a ladder (the presets' fast / default / precise marked: 1e-4, 1e-7, 1e-9).
+  Error: the periodic handover speed of the NLP's own model
   (its fixed point S = v(beta)^2, iterated in floats with the same steps) at the design it found,
   against the closed form at that design.
 * With pivot damping 0.3 N m s/rad only the integrated path applies (the CLI chooses it). Error:

@@ -2,12 +2,15 @@
 `python results/json_diff.py BEFORE_DIR AFTER_DIR` prints one line per document (results/
 seam_unchanged.md)."""
 import json
-import math
 import os
 import sys
 
 base, after = sys.argv[1], sys.argv[2]
-SKIP = {"time", "build_time", "solve_time", "wall_time", "seconds", "ipopt_time", "total_time", "elapsed", "t_wall", "t_proc_total", "creation_time", "nlp_time", "check_time", "verify_time", "solver_creation_time"}
+SKIP = {"time", "build_time", "solve_time", "wall_time", "seconds", "ipopt_time", "total_time",
+        "elapsed", "t_wall", "t_proc_total", "creation_time", "nlp_time", "check_time",
+        "verify_time", "solver_creation_time"}
+
+
 def walk(a, b, path, out):
     if isinstance(a, dict) and isinstance(b, dict):
         for k in set(a) | set(b):
@@ -19,22 +22,28 @@ def walk(a, b, path, out):
             walk(a[k], b[k], f"{path}.{k}", out)
     elif isinstance(a, list) and isinstance(b, list):
         if len(a) != len(b):
-            out.append(f"{path}: length {len(a)} vs {len(b)}"); return
+            out.append(f"{path}: length {len(a)} vs {len(b)}")
+            return
         for i, (x, y) in enumerate(zip(a, b)):
             walk(x, y, f"{path}[{i}]", out)
     elif a != b:
         out.append(f"{path}: {str(a)[:60]} vs {str(b)[:60]}")
+
+
 for f in sorted(os.listdir(base)):
     if not f.endswith(".json"):
         continue
     try:
         a = json.load(open(os.path.join(base, f)))
     except Exception:
-        print(f, "base: no JSON"); continue
+        print(f, "base: no JSON")
+        continue
     try:
         b = json.load(open(os.path.join(after, f)))
     except Exception:
-        print(f, "after: no JSON"); continue
+        print(f, "after: no JSON")
+        continue
     out = []
     walk(a, b, "", out)
-    print(f, "identical (timings aside)" if not out else f"{len(out)} differences: " + "; ".join(out[:6]))
+    print(f, "identical (timings aside)" if not out
+          else f"{len(out)} differences: " + "; ".join(out[:6]))

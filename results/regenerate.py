@@ -35,8 +35,8 @@ RESULTS = ROOT / "results"
 PAPER_SPECS = ("paper_stairs_frictionless", "paper_stairs_friction", "paper_manipulators")
 OPTIMISED_SPECS = ("manipulators_robust", "manipulators_robust_all_free", "stairs_design",
                    "manipulators_long_row")
-REPORT_SPECS = ("manipulators_robust", "manipulators_long_row", "stairs_design", "rimless_wheel_ramp",
-                "compass_gait_ramp")
+REPORT_SPECS = ("manipulators_robust", "manipulators_long_row", "stairs_design",
+                "rimless_wheel_ramp", "compass_gait_ramp")
 TABLES = {  # folder: (spec, sweeps)
     "manipulators_mass_ratio": ("problems/paper_manipulators.toml", ["mass_ratio=1:30:30"]),
     "manipulators_alpha_beta": ("problems/paper_manipulators.toml",
