@@ -10,8 +10,9 @@ old one (--old DIR: its own PYTHONPATH), on problems/manipulators_long_row_yield
 problems/manipulators_yield_target.toml (20 and 100 stages) and
 results/specs/manipulators_yield_target_1000.toml (its given tolerances a tenth). A run longer
 than --timeout seconds is stopped and reported as such. Each answer's design is then built
-`--builds` times with the spec's seed and judged as `pdm-design yield` judges it (tolerances.yield_.yield_of, this
-checkout's), both designs on the same builds (one run where the designs agree to 12 digits).
+`--builds` times with the spec's seed and judged as `pdm-design yield` judges it
+(tolerances.yield_.yield_of, this checkout's), both designs on the same builds (one run where
+the designs agree to 12 digits).
 The machine is shared: the load average is written beside every run, and CPU seconds beside
 the wall's.
 
