@@ -87,7 +87,7 @@ def test_max_yield_needs_values_and_a_row_of_manipulators():
 @pytest.mark.slow  # two optimisations and their yields (30-60 s): the slow suite, CI's own step
 def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_builds():
     # the long row with its stop angles free, optimised for yield and for the worst-case box,
-    # each design built 2000 times with the same seed (the same deviations) and judged as
+    # each design built 10000 times with the same seed (the same deviations) and judged as
     # `pdm-design yield` judges it (the map, the simulator on every build that leaves it).
     # Paired on the builds: of the builds one design passes and the other fails, the
     # max_yield design must win significantly (exact one-sided sign test, p < 0.05)
@@ -95,7 +95,7 @@ def test_the_max_yield_design_outyields_the_worst_case_optimum_on_the_same_build
     from pdm_design.tolerances.yield_ import yield_of
 
     spec = load_spec(PROBLEMS / "manipulators_long_row_yield.toml")
-    stages, builds = spec.verification.stages, 2000
+    stages, builds = spec.verification.stages, 10000
     passed = {}
     for objective in ("max_yield", "max_offset_tolerance"):
         asked = dataclasses.replace(spec, objective={objective: 1.0})
