@@ -32,6 +32,7 @@ FALL_DEPTH = 3.0  # link lengths below the lowest pivot where a falling object i
 ZENO_FRACTION = 1e-4  # bounces separating slower than this times sqrt(g l) end in contact
 PHASE_TIME = 200.0  # longest integrated phase, in units of sqrt(l / g)
 EVENTS_PER_STAGE = 2000  # event budget per manipulator (guards against chattering)
+CHATTER_EVENTS, CHATTER_SPAN = 50, 1e-6  # so many events within so many s: chattering
 
 
 class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhases,
@@ -162,9 +163,11 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         budget = EVENTS_PER_STAGE * (self.n + 1)
         while step is not None:
             budget -= 1
-            if budget < 0:
+            if budget < 0 or self._chattering():
                 t = self.events[-1].time if self.events else 0.0
-                self._fail(t, "too_many_events", 0, {}, "event budget exhausted (chattering?)")
+                self._fail(t, "too_many_events", 0, {},
+                           "event budget exhausted (chattering?)" if budget < 0 else
+                           f"{CHATTER_EVENTS} events within {CHATTER_SPAN:g} s (chattering)")
                 break
             step = step()
         t_end = self.events[-1].time if self.events else 0.0
@@ -177,6 +180,14 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         stages = [rec if all(type(v) in _PLAIN for v in rec.values())
                   else {k: _plain(v) for k, v in rec.items()} for rec in self.stages]
         return SimulationResult("manipulators", outcome, stages, log, self.acc, traj)
+
+    def _chattering(self) -> bool:
+        """The last CHATTER_EVENTS events all within CHATTER_SPAN: impacts without end (a
+        rocking object caught again and again 7e-9 s apart ran to the event budget, minutes
+        of a yield)."""
+        events = self.events
+        return (len(events) >= CHATTER_EVENTS
+                and events[-1].time - events[-CHATTER_EVENTS].time < CHATTER_SPAN)
 
     def _log(self, time, kind, stage, before, after, detail="", failure=False):
         if self.face and "x" in before and "face" not in before:  # it lies on another face
