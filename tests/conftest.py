@@ -117,3 +117,20 @@ def _module_memory(request):
 def pytest_sessionfinish(session):
     if MEMLOG:
         _log(f"peak {_worker(session.config)} {_peak_mb():.0f}")
+
+
+@pytest.fixture(scope="session")
+def rocking_skips(tmp_path_factory):
+    """results/rocking_row.toml with `[verification] allow_skips = true` (as an engine without
+    the row's skip rule counts): (the spec, its design, its tolerances for 8 stages)."""
+    from pathlib import Path
+
+    from pdm_design.commands.yield_ import sized_tolerances
+    from pdm_design.spec.loader import load_spec
+
+    text = (Path(__file__).resolve().parents[1] / "results" / "rocking_row.toml").read_text()
+    path = tmp_path_factory.mktemp("rocking") / "rocking_skips.toml"
+    path.write_text(text.replace("[verification]", "[verification]\nallow_skips = true", 1))
+    spec = load_spec(path)
+    design = spec.design_at()
+    return spec, design, sized_tolerances(spec, path, design, 8)

@@ -6,18 +6,13 @@ pushed palm parts, swings to its front stop as scipy's pendulum does and later r
 object."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from pdm_design.commands.yield_ import sized_tolerances
 from pdm_design.scenes.manipulators.sim.pushing import push_accelerations, push_impact
-from pdm_design.spec.loader import load_spec
 from pdm_design.tolerances.yield_ import one_build, simulate_one
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def _keller_by_steps(u_k, u_j, th_k, th_j, m_k, m_j, mu, steps=2000000):
@@ -97,13 +92,8 @@ def test_the_push_is_the_three_balances_solved_together():
         assert got == pytest.approx(tuple(want), rel=1e-10)
 
 
-def test_a_pushed_palm_parts_swings_as_its_pendulum_and_later_receives_the_object(tmp_path):
-    text = (ROOT / "results" / "rocking_row.toml").read_text()
-    spec_path = tmp_path / "rocking_skips.toml"
-    spec_path.write_text(text.replace("[verification]", "[verification]\nallow_skips = true", 1))
-    spec = load_spec(spec_path)
-    design = spec.design_at()
-    tol = sized_tolerances(spec, spec_path, design, 8)
+def test_a_pushed_palm_parts_swings_as_its_pendulum_and_later_receives_the_object(rocking_skips):
+    spec, design, tol = rocking_skips
     result = simulate_one(spec.scene, design, tol, 0, 198, 8, allow_skips=True)
     kinds = [e.kind for e in result.events]
     assert "push" in kinds and "part" in kinds
@@ -149,17 +139,12 @@ def test_a_pushed_palm_parts_swings_as_its_pendulum_and_later_receives_the_objec
 
 
 @pytest.mark.slow  # 240 builds simulated: about 8 s
-def test_the_map_leaves_every_build_whose_object_pushes_a_palm_to_the_simulator(tmp_path):
+def test_the_map_leaves_every_build_whose_object_pushes_a_palm_to_the_simulator(rocking_skips):
     """The closed forms have no push: a build where the simulator logs one (the carried object
     against a palm's rear end) must be one the map hands over (closed_form False)."""
     from pdm_design.tolerances.yield_ import map_builds
 
-    text = (ROOT / "results" / "rocking_row.toml").read_text()
-    spec_path = tmp_path / "rocking_skips.toml"
-    spec_path.write_text(text.replace("[verification]", "[verification]\nallow_skips = true", 1))
-    spec = load_spec(spec_path)
-    design = spec.design_at()
-    tol = sized_tolerances(spec, spec_path, design, 8)
+    spec, design, tol = rocking_skips
     builds = 240
     mapped = map_builds(spec.scene, design, tol, builds, 8, 0)
     pushed = [i for i in range(builds)
@@ -201,16 +186,11 @@ def test_the_sliding_push_starts_where_the_stuck_push_leaves_its_cone():
     assert got[[0, 2, 3, 4]] == pytest.approx([thdd_k, thdd_j, fn, n], rel=1e-9)
 
 
-def test_the_object_sliding_while_it_pushes_keeps_its_face_on_the_corner(tmp_path):
+def test_the_object_sliding_while_it_pushes_keeps_its_face_on_the_corner(rocking_skips):
     """Rocking-row build 180 (seed 0, skips allowed): palm 5's object pushes palm 7, slips on
     palm 5 while pushing, and palm 7 parts: from the slip to the part the face stays on the
     corner (l_5 sin th_5 + s - l_7 sin th_7 kept) and no energy is gained."""
-    text = (ROOT / "results" / "rocking_row.toml").read_text()
-    spec_path = tmp_path / "rocking_skips.toml"
-    spec_path.write_text(text.replace("[verification]", "[verification]\nallow_skips = true", 1))
-    spec = load_spec(spec_path)
-    design = spec.design_at()
-    tol = sized_tolerances(spec, spec_path, design, 8)
+    spec, design, tol = rocking_skips
     result = simulate_one(spec.scene, design, tol, 0, 180, 8, allow_skips=True)
     slip = next(e for e in result.events if e.kind == "slip" and "pushes palm 7" in e.detail)
     part = next(e for e in result.events if e.kind == "part")
@@ -236,16 +216,11 @@ def test_the_object_sliding_while_it_pushes_keeps_its_face_on_the_corner(tmp_pat
     assert energy(part) < energy(slip)
 
 
-def test_a_second_push_while_the_first_pushed_palm_swings_is_followed(tmp_path):
+def test_a_second_push_while_the_first_pushed_palm_swings_is_followed(rocking_skips):
     """Rocking-row build 293 (seed 0, skips allowed): palm 4's object pushes palm 5, which
     parts and swings on; then pushes palm 6 and slips while pushing it, palm 5 carried along as
     a swinging palm; palm 6 parts and the carry goes on."""
-    text = (ROOT / "results" / "rocking_row.toml").read_text()
-    spec_path = tmp_path / "rocking_skips.toml"
-    spec_path.write_text(text.replace("[verification]", "[verification]\nallow_skips = true", 1))
-    spec = load_spec(spec_path)
-    design = spec.design_at()
-    tol = sized_tolerances(spec, spec_path, design, 8)
+    spec, design, tol = rocking_skips
     events = simulate_one(spec.scene, design, tol, 0, 293, 8, allow_skips=True).events
     kinds = [(e.kind, e.detail.split(" off")[0][-6:]) for e in events
              if e.kind in ("push", "part", "slip")]

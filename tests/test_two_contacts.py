@@ -6,23 +6,19 @@ scipy with the energy kept (stuck, or sliding without friction) or lost (with fr
 rocking row's builds that come down on two palms."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import null_space
 
-from pdm_design.commands.yield_ import sized_tolerances
 from pdm_design.scenes.manipulators.sim.bridge import bridge_accelerations, contact_geometry
 from pdm_design.scenes.manipulators.sim.twocontact import (
     contact_jacobian,
     two_contact_impact,
 )
-from pdm_design.spec.loader import load_spec
 from pdm_design.tolerances.yield_ import simulate_one
 
-ROOT = Path(__file__).resolve().parents[1]
 M_OBJ, W, H, G = 1.0, 0.4, 0.2, 9.81
 I_C = M_OBJ * (W * W + H * H) / 12.0
 
@@ -205,19 +201,14 @@ def _slip_sign(y, contact, edge):
     return math.copysign(1.0, _slip(y, contact))
 
 
-def test_the_rocking_rows_two_contact_builds_rest_across_two_palms(tmp_path):
+def test_the_rocking_rows_two_contact_builds_rest_across_two_palms(rocking_skips):
     """Rocking row, skips allowed, seed 0: builds 9, 21 and 74 come down on a second palm still
     bearing on their own (before, `tip` there): each now logs `bridge`, the impact at both
     contacts, and ends later (21 and 74 at rest across the two palms, `stranded`); the map
     hands every one of them to the simulator (closed_form False); build 561 completes."""
     from pdm_design.tolerances.yield_ import map_builds
 
-    text = (ROOT / "results" / "rocking_row.toml").read_text()
-    spec_path = tmp_path / "rocking_skips.toml"
-    spec_path.write_text(text.replace("[verification]", "[verification]\nallow_skips = true", 1))
-    spec = load_spec(spec_path)
-    design = spec.design_at()
-    tol = sized_tolerances(spec, spec_path, design, 8)
+    spec, design, tol = rocking_skips
     builds = (9, 21, 74)
     for i in builds:
         result = simulate_one(spec.scene, design, tol, 0, i, 8, allow_skips=True)
