@@ -25,6 +25,23 @@ from dataclasses import dataclass
 from . import phases as ph
 from .geometry import face_guards
 
+# a push's ends that are not followed, in words (push_end)
+PUSH_ENDS = {
+    "lift": "the object lifts off its palm", "tip": "the object tips on its palm",
+    "slid_off": "the object slides off its palm",
+    "corner_sticks": "the corner sticks on its face",
+    "below": "the palm's top comes level with the object's base",
+    "stall": "its palm stops", "front_stop": "a palm reaches its front stop",
+    None: "no event",
+}
+
+
+def push_end(kind) -> str:
+    """What ended a push the phases do not follow on (a guard's kind, or (kind, palm))."""
+    if kind in PUSH_ENDS:
+        return PUSH_ENDS[kind]
+    return f"it meets palm {kind[1] + 1}" if isinstance(kind, tuple) else str(kind)
+
 
 @dataclass(frozen=True)
 class Push:
@@ -272,17 +289,9 @@ class PushingPhases:
         if isinstance(kind, tuple) and kind[0] == "top":
             self._part(t, k, theta, omega, s, j, th_j, om_j, state)  # (it swings on, followed)
             return self._handover(t, k, theta, omega, s, 0.0, kind[1])
-        details = {
-            "lift": "the object lifts off its palm", "tip": "the object tips on its palm",
-            "corner_sticks": "the corner sticks on its face",
-            "below": "the palm's top comes level with the object's base",
-            "stall": "its palm stops", "front_stop": "a palm reaches its front stop",
-            None: "no event",
-        }
-        what = details.get(kind, f"it meets palm {kind[1] + 1}" if isinstance(kind, tuple)
-                           else str(kind))
         return self._fail(t, "blocked", k + 1, state,
-                          f"while the carried object pushes palm {j + 1}: {what} (not followed)")
+                          f"while the carried object pushes palm {j + 1}: {push_end(kind)} "
+                          "(not followed)")
 
     def _part(self, t, k, theta, omega, s, j, th_j, om_j, state, sd=0.0):
         """Palm j parts from the object: it swings on alone from (th_j, th_j'), followed as a

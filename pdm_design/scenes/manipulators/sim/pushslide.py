@@ -16,6 +16,7 @@ import numpy as np
 
 from . import phases as ph
 from .geometry import face_guards
+from .pushing import push_end
 
 SLIP_START_ATOLS = 100.0  # initial slip speed from relative rest, in units of atol (as ode.py)
 
@@ -144,16 +145,6 @@ class SlidingPushPhases:
         if isinstance(kind, tuple) and kind[0] == "top":
             self._part(t, k, theta, omega, s, j, th_j, om_j, state, sd=sd)
             return self._handover(t, k, theta, omega, s, sd, kind[1])
-        details = {
-            "lift": "the object lifts off its palm", "tip": "the object tips on its palm",
-            "slid_off": "the object slides off its palm",
-            "corner_sticks": "the corner sticks on its face",
-            "below": "the palm's top comes level with the object's base",
-            "stall": "its palm stops", "front_stop": "a palm reaches its front stop",
-            None: "no event",
-        }
-        what = details.get(kind, f"it meets palm {kind[1] + 1}" if isinstance(kind, tuple)
-                           else str(kind))
         return self._fail(t, "blocked", k + 1, state,
-                          f"while the object sliding on its palm pushes palm {j + 1}: {what} "
-                          "(not followed)")
+                          f"while the object sliding on its palm pushes palm {j + 1}: "
+                          f"{push_end(kind)} (not followed)")
