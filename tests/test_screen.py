@@ -83,9 +83,8 @@ def _screened_and_plain(monkeypatch, spec):
     return screened, module.optimize(spec)
 
 
-def test_a_yield_targets_score_is_its_largest_scale_meeting_the_target():
-    """Each sampled design's score: its nines row (the linearised yield against the target)
-    evaluated directly at the score is on its bound, and broken a millionth above it."""
+def _target_starts(count):
+    """(the 20-stage yield target's NLP, the start vectors of `count` sampled designs)."""
     from pdm_design.formulation import formulate
     from pdm_design.solve.ipopt import start_designs
 
@@ -94,8 +93,15 @@ def test_a_yield_targets_score_is_its_largest_scale_meeting_the_target():
     names = form.design_names
     guess = {n: spec.design[n].guess for n in names}
     designs = start_designs(names, [spec.design[n].min for n in names],
-                            [spec.design[n].max for n in names], guess, 32, 0)
-    xs = np.column_stack(form.defined_starts(designs, guess, form.p_default))
+                            [spec.design[n].max for n in names], guess, count, 0)
+    return form, form.defined_starts(designs, guess, form.p_default)
+
+
+def test_a_yield_targets_score_is_its_largest_scale_meeting_the_target():
+    """Each sampled design's score: its nines row (the linearised yield against the target)
+    evaluated directly at the score is on its bound, and broken a millionth above it."""
+    form, starts = _target_starts(32)
+    xs = np.column_stack(starts)
     scales = screen.target_scales(form, form.p_default, xs)
     k, row = form.x_names.index(screen.AUX), screen.target_row(form)
     rows = ca.Function("g", [form.nlp["x"], form.nlp["p"]], [form.nlp["g"]])
@@ -133,17 +139,9 @@ def test_the_target_scales_split_among_forked_workers_are_the_same(monkeypatch):
     scales are the same to the bit as in one process."""
     import os
 
-    from pdm_design.formulation import formulate
-    from pdm_design.solve.ipopt import start_designs
     from pdm_design.tolerances import parallel
 
-    spec = _target_spec(20)
-    form = formulate(spec)
-    names = form.design_names
-    guess = {n: spec.design[n].guess for n in names}
-    designs = start_designs(names, [spec.design[n].min for n in names],
-                            [spec.design[n].max for n in names], guess, 8, 0)
-    starts = form.defined_starts(designs, guess, form.p_default)
+    form, starts = _target_starts(8)
     alone = screen.at_target_scales(form, form.p_default, starts)
     monkeypatch.setattr(parallel, "local_workers", lambda workers=None: 2)
     monkeypatch.setattr(screen, "SPLIT_SECONDS", 0.0)
