@@ -187,7 +187,7 @@ def test_restitution_bounce_keeps_momentum_and_matches_a_stepped_impact():
     assert abs(gn_after + eps * landing.before["vy"]) > 0.05
 
 
-def test_side_hit_in_flight_is_blocked_where_the_faces_meet():
+def test_side_hit_in_flight_is_followed_from_where_the_faces_meet():
     # manipulator 2 raised 0.5 m: its palm's rear end stands in the flight path
     scene, design = make()
     result = simulate_manipulators(scene, design, stages=3, offsets=[offset(2, dy=0.5)])
@@ -197,8 +197,12 @@ def test_side_hit_in_flight_is_blocked_where_the_faces_meet():
     y = Y0 - 0.5 * G * t * t
     top2 = -pitch_y + 0.5 + L * math.cos(ALPHA)
     assert top2 - 0.05 - 0.2 < y < top2  # the object's side overlaps the slab's end then
-    assert result.outcome.failure.kind == "blocked"
-    assert result.outcome.failure.time == pytest.approx(t, abs=1e-12)
+    hit = result.events[0]  # from there the time stepping follows it (sim/stepped.py)
+    assert hit.kind == "stepped" and "hit the side of palm 2" in hit.detail
+    assert hit.time == pytest.approx(t, abs=1e-12)
+    # it falls back onto palm 1 (which it had not reached) and palm 2, struck, swings forward
+    assert any(e.kind == "stepped" and "lies on palm 1" in e.detail for e in result.events)
+    assert any(e.kind == "front_stop" and e.stage == 2 for e in result.events)
 
 
 def test_carried_object_meeting_the_next_palm_rear_end_pushes_it():

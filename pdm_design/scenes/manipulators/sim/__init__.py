@@ -68,33 +68,41 @@ EVENT_KINDS = {
     "push": "the carried object meets the rear end of the next palm, resting on its back "
             "stop, and pushes it off the stop (a plastic impact with friction at its corner)",
     "part": "the palm the carried object pushes parts from it and swings on alone",
+    "stepped": "a contact no phase follows (a palm's side or corner met, a third contact, an "
+               "impact or slide with no consistent mode) is followed by time stepping from "
+               "there; logged again when the object lies flat on one palm and the phases take "
+               "it on",
     "lift_off": "the palm's normal force vanished (v^2 >= g l cos th): the object flies on and "
                 "the empty palm swings alone",
 }
 FAILURE_KINDS = {
-    "blocked": "the object hits the side or underside of a palm (outside the model); or, "
-               "pushing the next palm off its back stop, lifts, tips or meets another palm "
-               "before that palm parts from it (a sustained push: not followed)",
+    "blocked": "the object hits the side or underside of a palm where time stepping cannot "
+               "take it on (restitution > 0); or, pushing the next palm off its back stop, "
+               "lifts, tips or meets another palm before that palm parts from it (a sustained "
+               "push: not followed)",
     "fell_clear": "the object fell past the row",
     "missed": "the object lifted off and fell past the row without landing on a palm",
     "tip": "the object tips or tumbles in a way the model does not follow: with restitution "
-           "> 0, while carried sliding, landing with no face turned to come down about its "
-           "contact, a slip or sliding impact that would reverse, a sliding contact riding its "
-           "palm onto a stop; across two palms: no consistent impact or slide, a palm reaching "
-           "a stop, both palms held",
+           "> 0, or (restitution 0, where time stepping does not take it on) landing with no "
+           "face turned to come down about its contact, a slip or sliding impact that would "
+           "reverse, a sliding contact riding its palm onto a stop; across two palms: no "
+           "consistent impact or slide, a palm reaching a stop, both palms held",
     "tipped_over": "the rocking object turned to pi/2 on a palm's edge (its base stands against "
                    "the edge; not followed)",
     "stall": "the carry stops before the top: the palm swings back to its back stop",
     "slid_off": "the object's centre slid off the end of its palm",
     "stranded": "the palm reached its front stop still carrying the object (no handover), or "
-                "the object came to rest across two palms",
+                "the object came to rest across two palms (or, time stepped, wedged among "
+                "palms)",
     "impact_jam": "an impact has no consistent sliding solution (Painleve paradox)",
     "skipped_palm": "the object flew over a palm and came onto one further on (a spec may allow "
                     "it: [verification] allow_skips)",
     "swinging_palm": "the object meets the side of a palm released past the vertical (or "
                      "pushed off its back stop) while it still swings, or passes one after "
-                     "rocking (not followed)",
-    "timeout": "a phase ran longer than the model allows without an event",
+                     "rocking (not followed: restitution > 0; with restitution 0 it is time "
+                     "stepped)",
+    "timeout": "a phase ran longer than the model allows without an event (time stepping: "
+               "3 s without reaching a state the phases follow)",
     "too_many_events": "the run exceeded its event budget",
 }
 

@@ -166,9 +166,11 @@ class BridgePhases:
 
         bad = self._slip_inconsistent(br, geometry, solved(y0), y0)
         if bad is not None:
-            return self._fail(t0, "tip", k + 1, self._bridge_state(y0, 1, br),
-                              f"the object across palms {k + 1} and {j + 1}: no consistent "
-                              f"slide on palm {br.palms[bad] + 1} (not followed)")
+            why = (f"the object across palms {k + 1} and {j + 1}: no consistent slide on palm "
+                   f"{br.palms[bad] + 1}")
+            state = self._bridge_state(y0, 1, br)
+            return (self._bridge_stepped(t0, br, y0, state, why)
+                    or self._fail(t0, "tip", k + 1, state, why + " (not followed)"))
         physics = self._bridge_guards(br, geometry, solved, forces, y0)
         for p in br.palms:  # neither is an obstacle while it bears the object
             self.rest_since[p] = math.inf
@@ -314,9 +316,15 @@ class BridgePhases:
             return self._fail(t, "tip" if kind else "timeout", k + 1, state,
                               f"the object resting across palms {k + 1} and {j + 1}: "
                               f"{words[kind]} (not followed)")
-        return self._fail(t, "blocked", k + 1, state,
-                          f"the object resting across palms {k + 1} and {j + 1} meets palm "
-                          f"{kind[1] + 1}")
+        why = f"the object resting across palms {k + 1} and {j + 1} meets palm {kind[1] + 1}"
+        return self._bridge_stepped(t, br, y, state, why) or self._fail(t, "blocked", k + 1,
+                                                                         state, why)
+
+    def _bridge_stepped(self, t, br, y, state, why):
+        """Time stepping (stepped.py) from the bridge's state y."""
+        body = (y[0], y[1], y[5], y[6], y[2], y[7])
+        moving = {p: (y[3 + i], y[8 + i]) for i, p in enumerate(br.palms)}
+        return self._stepped(t, body, moving, state, why)
 
     def _bridge_forces(self, br, y):
         masses, forces, geometry = self._bridge_model(br)

@@ -211,9 +211,10 @@ class EdgeSlidingPhases:
         # acceleration yet: one that is against the slip beyond rounding is not consistent
         from_rest = abs(slip_speed(z0, corner)) <= 2.0 * SLIP_START_ATOLS * self.acc.atol
         if from_rest and slip * slip_speed(rhs(t0, z0), corner) < -ROUNDING * self.g:
-            return self._fail(t0, "tip", k + 1, self._slide_state(k, z0, dof(z0), r, corner),
-                              f"the rocking object on palm {k + 1}: no consistent slide "
-                              "(not followed)")
+            state = self._slide_state(k, z0, dof(z0), r, corner)
+            why = f"the rocking object on palm {k + 1}: no consistent slide"
+            return (self._stepped_state(t0, k, state, why)
+                    or self._fail(t0, "tip", k + 1, state, why + " (not followed)"))
         physics = self._slide_guards(k, z0, d0, r, held, side, slip, corner, acc, way)
         faces = self._pinned_guards(
             t0, k, lambda z: (*self._slide_point(k, z, dof(z), r, 0.0, 0.5 * r.h, corner), z[2]))
@@ -363,9 +364,10 @@ class EdgeSlidingPhases:
         slid = self._tumble_slide_impact((*centre, *v, 0.0, phid), k, theta, omega, 0.0, r2,
                                          hold)
         if slid is None:
-            return self._fail(t, "tip", k + 1, state,
-                              f"the object comes down on the other end of its base on palm "
-                              f"{k + 1}: no consistent sliding impact (not followed)")
+            why = (f"the object comes down on the other end of its base on palm {k + 1}: no "
+                   "consistent sliding impact")
+            return (self._stepped(t, (*centre, *v, 0.0, phid), {k: (theta, omega)}, state, why)
+                    or self._fail(t, "tip", k + 1, state, why + " (not followed)"))
         z2, held2, slip2 = slid
         self._log(t, "rock", k + 1, state, self._slide_state(k, z2, other, r2, not r2.edge),
                   "comes down on the other end of its base: rocks about it, sliding")
@@ -392,10 +394,12 @@ class EdgeSlidingPhases:
         spin_moment = self.m * (self.row.body_width ** 2 + self.h ** 2) / 12.0 * phid
         xb = (spin_moment - 0.5 * self.h * imp.pt) / imp.pn if imp.pn > 0.0 else math.nan
         if imp.jam or not lo <= xb <= hi:
-            return self._fail(t, "tip", k + 1, state,
-                              f"the object comes down flat on palm {k + 1}: the impulse "
-                              f"{'is not consistent' if imp.jam else support_words(xb, (lo, hi))}"
-                              " (not followed)")
+            why = (f"the object comes down flat on palm {k + 1}: the impulse "
+                   f"{'is not consistent' if imp.jam else support_words(xb, (lo, hi))}")
+            top_x, top_y = self.row.palm_top(k, theta)
+            body = (top_x + s, top_y + 0.5 * self.h, v[0], v[1], 0.0, phid)
+            return (self._stepped(t, body, {k: (theta, omega)}, state, why)
+                    or self._fail(t, "tip", k + 1, state, why + " (not followed)"))
         after = {"x": state["x"], "y": state["y"], "vx": imp.vx, "vy": imp.vy, "theta": theta,
                  "omega": imp.w / l, "offset": s}
         self._log(t, "settle", k + 1, state, after,

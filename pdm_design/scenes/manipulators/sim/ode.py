@@ -123,8 +123,9 @@ class OdePhases:
             face, j = kind
             if face == "top":
                 return self._handover(te, k, theta, omega, s, sd, j)
-            return self._fail(te, "blocked", k + 1, state,
-                              f"the sliding object hits the side of palm {j + 1}")
+            why = f"the sliding object hits the side of palm {j + 1}"
+            return (self._stepped_carry(te, k, (theta, omega, s, sd), z, 4, tracked, state, why)
+                    or self._fail(te, "blocked", k + 1, state, why))
         if kind == "slip_stop":
             if self._sticks(theta, omega, k):
                 self._log(te, "stick", k + 1, state, state, f"sticks again at th = {theta:.6g}")
@@ -147,6 +148,11 @@ class OdePhases:
             "slid_off": f"the object's centre passed the end of palm {k + 1}",
             "stall": f"the palm stops at th = {theta:.6g} rad and swings back",
         }
+        if kind in ("tip", "slid_off"):  # the object turns off its palm: time stepped
+            stepped = self._stepped_carry(te, k, (theta, omega, s, sd), z, 4, tracked, state,
+                                          details[kind])
+            if stepped is not None:
+                return stepped
         return self._fail(te, kind, k + 1, state, details[kind])
 
     def _sticks(self, theta, omega, k):
@@ -386,10 +392,16 @@ class OdePhases:
         if len(kind) == 3:  # a palm swinging from rest: the object lands on it (or not)
             if kind[0] == "top":
                 self._release(k, te, z[4], l * z[5])
-            return self._met_swinging(te, kind, zs, 6, tracked, tuple(z[:4]), state, k + 1)
+            return self._met_swinging(te, kind, zs, 6, tracked, tuple(z[:4]), state, k + 1,
+                                      palm=(k, z[4], z[5]))
         face, j = kind
         if face != "top":
-            return self._fail(te, "blocked", k + 1, state, f"hits the side of palm {j + 1}")
+            why = f"hits the side of palm {j + 1}"
+            moving = {k: (z[4], z[5])}
+            moving.update((p, (zs[6 + 2 * i], zs[7 + 2 * i])) for i, p in enumerate(tracked))
+            return (self._stepped(te, (z[0], z[1] + 0.5 * self.h, z[2], z[3], 0.0, 0.0), moving,
+                                  state, why)
+                    or self._fail(te, "blocked", k + 1, state, why))
         if j == k:
             return self._impact(te, k, z[4], l * z[5], z[0], z[1], z[2], z[3],
                                 log_as="landing" if lifted else "rebound", stage=k + 1,

@@ -167,9 +167,9 @@ class PushingPhases:
         if imp is None or imp.stick or imp.u_k <= 0.0 or imp.u_j <= 0.0:
             what = ("both palms stop" if imp is not None and imp.stick else
                     "no consistent impact" if imp is None else "a palm is driven back")
-            return self._fail(t, "blocked", k + 1, before,
-                              f"the carried object pushes palm {j + 1} off its back stop: "
-                              f"{what} (not followed)")
+            why = f"the carried object pushes palm {j + 1} off its back stop: {what}"
+            return (self._stepped_carry(t, k, (theta, omega, s, 0.0), (), 0, [], before, why)
+                    or self._fail(t, "blocked", k + 1, before, why + " (not followed)"))
         omega, om_j = imp.u_k / self.ls[k], imp.u_j / self.ls[j]
         after = dict(self._on_palm(k, theta, omega, s), palm_theta=th_j, palm_omega=om_j)
         self._log(t, "push", k + 1, before, after,
@@ -289,9 +289,10 @@ class PushingPhases:
         if isinstance(kind, tuple) and kind[0] == "top":
             self._part(t, k, theta, omega, s, j, th_j, om_j, state)  # (it swings on, followed)
             return self._handover(t, k, theta, omega, s, 0.0, kind[1])
-        return self._fail(t, "blocked", k + 1, state,
-                          f"while the carried object pushes palm {j + 1}: {push_end(kind)} "
-                          "(not followed)")
+        why = f"while the carried object pushes palm {j + 1}: {push_end(kind)}"
+        return (self._stepped_carry(t, k, (theta, omega, s, 0.0), (th_j, om_j), 0, [j], state,
+                                    why)
+                or self._fail(t, "blocked", k + 1, state, why + " (not followed)"))
 
     def _part(self, t, k, theta, omega, s, j, th_j, om_j, state, sd=0.0):
         """Palm j parts from the object: it swings on alone from (th_j, th_j'), followed as a

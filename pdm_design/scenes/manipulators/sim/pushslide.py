@@ -145,6 +145,7 @@ class SlidingPushPhases:
         if isinstance(kind, tuple) and kind[0] == "top":
             self._part(t, k, theta, omega, s, j, th_j, om_j, state, sd=sd)
             return self._handover(t, k, theta, omega, s, sd, kind[1])
-        return self._fail(t, "blocked", k + 1, state,
-                          f"while the object sliding on its palm pushes palm {j + 1}: "
-                          f"{push_end(kind)} (not followed)")
+        why = f"while the object sliding on its palm pushes palm {j + 1}: {push_end(kind)}"
+        return (self._stepped_carry(t, k, (theta, omega, s, sd), (th_j, om_j), 0, [j], state,
+                                    why)
+                or self._fail(t, "blocked", k + 1, state, why + " (not followed)"))

@@ -429,8 +429,9 @@ class RockingPhases:
             _, j, face, x, y = kind
             top_x, top_y = self.row.palm_top(j, self.rest_angle[j])
             if face != "base" or y < top_y - 0.5 * self.row.palm_thickness:  # (its underside)
-                return self._fail(t, "blocked", k + 1, state,
-                                  f"the rocking object hits a corner of palm {j + 1}")
+                why = f"the rocking object hits a corner of palm {j + 1}"
+                return (self._stepped(t, (*centre, *v, phi, phid), {k: old[2]}, state, why)
+                        or self._fail(t, "blocked", k + 1, state, why))
             from .tumbling import world_to_body  # (tumbling imports this module)
 
             d, _ = world_to_body(*centre, phi, x, top_y, self.h)
@@ -438,8 +439,9 @@ class RockingPhases:
                                edge=x - top_x)
         face, j, bx = kind
         if face != "top":
-            return self._fail(t, "blocked", k + 1, state,
-                              f"the rocking object hits the side of palm {j + 1}")
+            why = f"the rocking object hits the side of palm {j + 1}"
+            return (self._stepped(t, (*centre, *v, phi, phid), {k: old[2]}, state, why)
+                    or self._fail(t, "blocked", k + 1, state, why))
         corner_x = centre[0] + rotate(phi, bx, -0.5 * self.h)[0]
         return self._catch(t, k, j, bx, (corner_x, phi, v, phid, centre), old, state)
 
@@ -454,6 +456,13 @@ class RockingPhases:
         k's (th, th'), edge), which lets go if its normal speed relative to palm k is outward
         after the impact; else both contacts take an impulse (twocontact.py)."""
         corner_x, phi, v, phid, centre = body
+        swinging = self._swinging_from_rest(t, j)
+        if swinging is not None:  # (it may meet that palm in the stepper's time)
+            stepped = self._stepped(t, (*centre, *v, phi, phid), {k: old[2]}, state,
+                                    f"the object reaches palm {j + 1} while palm {swinging}, "
+                                    f"{self._swing_origin(swinging - 1)}, still swings")
+            if stepped is not None:
+                return stepped
         theta_j = self.rest_angle[j]
         top_x, _ = self.row.palm_top(j, theta_j)
         s_j = corner_x - top_x - bx
@@ -462,10 +471,10 @@ class RockingPhases:
         if edge is not None:
             r2 = replace(r2, edge=True)
             if side * phi <= 0.0:
-                return self._fail(t, "tip", k + 1, state,
-                                  f"the rocking object comes down on the edge of palm {j + 1} "
-                                  "turned the way that brings its base onto palm j's top "
-                                  "(two contacts, not followed)")
+                why = (f"the rocking object comes down on the edge of palm {j + 1} turned the "
+                       "way that brings its base onto palm j's top (two contacts)")
+                return (self._stepped(t, (*centre, *v, phi, phid), {k: old[2]}, state, why)
+                        or self._fail(t, "tip", k + 1, state, why + " (not followed)"))
         hold = "back" if theta_j <= -self.alphas[j] else "front" if theta_j >= self.fs else None
         th1, phi1, held, (px, py) = impact_onto_pin(*v, phid, theta_j, 0.0, phi, r2, hold)
         if r2.edge:  # the impulse along the object's base and its normal
@@ -476,9 +485,10 @@ class RockingPhases:
             slid = self._tumble_slide_impact((*centre, *v, phi, phid), j, theta_j, 0.0, phi, r2,
                                              hold)
             if slid is None:
-                return self._fail(t, "tip", k + 1, state,
-                                  f"the rocking object comes down on palm {j + 1}: no "
-                                  "consistent sliding impact (not followed)")
+                why = (f"the rocking object comes down on palm {j + 1}: no consistent sliding "
+                       "impact")
+                return (self._stepped(t, (*centre, *v, phi, phid), {k: old[2]}, state, why)
+                        or self._fail(t, "tip", k + 1, state, why + " (not followed)"))
             z, held, slip = slid
             from .edgeslide import slide_centre_velocity  # (edgeslide imports this module)
 

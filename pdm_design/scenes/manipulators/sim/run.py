@@ -24,6 +24,7 @@ from .ode import OdePhases
 from .pushing import PushingPhases
 from .pushslide import SlidingPushPhases
 from .rocking import RockingPhases
+from .stepped import SteppedPhases
 from .swinging import SwingingPhases
 from .tumbling import TumblingPhases
 from .twocontact import TwoContactPhases
@@ -37,7 +38,7 @@ CHATTER_EVENTS, CHATTER_SPAN = 50, 1e-6  # so many events within so many s: chat
 
 class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhases,
           EdgeSlidingPhases, PushingPhases, SlidingPushPhases, TwoContactPhases,
-          BridgePhases):
+          BridgePhases, SteppedPhases):
     """Mutable bookkeeping of one run around the pure phase functions."""
 
     def __init__(self, scene, design, stages, offsets, acc, record, parts=None,
@@ -90,6 +91,7 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         self.zeno_speed = ZENO_FRACTION * math.sqrt(self.g * self.l)
         self.phase_time = PHASE_TIME * math.sqrt(self.l / self.g)
         self._planned: dict = {}  # a palm swinging from rest: its planned stop (palm event)
+        self._launched: dict = {}  # a palm swinging alone: (t, th, th') it was released at
         self.from_rest = self._release_past_vertical()
         # followed while they swing (swinging.py) until the object meets one
         self.unmet = set(self.from_rest)
@@ -249,6 +251,7 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
                                                    front_stop=self.fs)
         else:
             dt, stop, speed = self._free_swing_arrival(k, theta, w)
+        self._launched[k] = (t, theta, w / self.ls[k])
         self.rest_angle[k], self.rest_since[k] = stop, t + dt
         if len(self.swinging) > 2:  # palms at rest by now are dropped now and then
             self.swinging = [j for j in self.swinging if self.rest_since[j] > t]
@@ -304,8 +307,10 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         j = entry.palm
         if entry.kind != "top":
             where = "side" if entry.kind == "side" else "inside"
-            return self._fail(t_hit, "blocked", self.passed + 1, state,
-                              f"hit the {where} of palm {j + 1} in flight")
+            why = f"hit the {where} of palm {j + 1} in flight"
+            return (self._stepped(t_hit, (xe, ye + 0.5 * self.h, vxe, vye, 0.0, 0.0), {},
+                                  state, why)
+                    or self._fail(t_hit, "blocked", self.passed + 1, state, why))
         return self._impact(t_hit, j, self.rest_angle[j], 0.0, xe, ye, vxe, vye,
                             log_as="landing", stage=stage, before=state, at_rest=True)
 

@@ -74,18 +74,30 @@ class SwingingPhases:
         for i, k in enumerate(tracked):
             self._free[k] = (te, float(z[base + 2 * i]), float(z[base + 2 * i + 1]))
 
-    def _met_swinging(self, t, kind, z, base, tracked, obj, state, stage, carrier=None):
+    def _met_swinging(self, t, kind, z, base, tracked, obj, state, stage, carrier=None,
+                      palm=None):
         """The object (x, y, vx, vy = obj) meets tracked palm j's face at t: on its top, an
         impact with the palm at its angle and speed (a handover when the object was carried on
-        palm `carrier`, else a landing); any other face is not followed."""
+        palm `carrier`, else a landing); any other face: time stepping (stepped.py), with palm
+        = (k, th, th') of a palm the phase moves."""
         face, j, _ = kind
         i = tracked.index(j)
         theta, omega = float(z[base + 2 * i]), float(z[base + 2 * i + 1])
         if face != "top":
-            return self._fail(t, "swinging_palm", j + 1, state,
-                              f"the object meets the side of palm {j + 1}, "
-                              f"{self._swing_origin(j)}, while it swings at th = {theta:.6g} "
-                              "rad (not followed)")
+            why = (f"the object meets the side of palm {j + 1}, {self._swing_origin(j)}, while "
+                   f"it swings at th = {theta:.6g} rad")
+            if carrier is not None:
+                stepped = self._stepped_carry(t, carrier[0], carrier[1:], z, base, tracked,
+                                              state, why)
+            else:
+                moving = {p: (float(z[base + 2 * i]), float(z[base + 2 * i + 1]))
+                          for i, p in enumerate(tracked)}
+                if palm is not None:
+                    moving[palm[0]] = tuple(palm[1:])
+                stepped = self._stepped(t, (obj[0], obj[1] + 0.5 * self.h, obj[2], obj[3], 0.0,
+                                            0.0), moving, state, why)
+            return stepped or self._fail(t, "swinging_palm", j + 1, state, why
+                                         + " (not followed)")
         self._unplan(j)
         w = self.ls[j] * omega
         if carrier is not None:  # (palm k, th, th', s, s') of the carry
@@ -144,7 +156,11 @@ class SwingingPhases:
             return self._met_swinging(te, kind, z, 4, tracked, obj, state, stage)
         face, j = kind
         if face != "top":
-            return self._fail(te, "blocked", self.passed + 1, state,
-                              f"hit the side of palm {j + 1} in flight")
+            why = f"hit the side of palm {j + 1} in flight"
+            moving = {k: (float(z[4 + 2 * i]), float(z[5 + 2 * i]))
+                      for i, k in enumerate(tracked)}
+            return (self._stepped(te, (obj[0], obj[1] + 0.5 * self.h, obj[2], obj[3], 0.0, 0.0),
+                                  moving, state, why)
+                    or self._fail(te, "blocked", self.passed + 1, state, why))
         return self._impact(te, j, self.rest_angle[j], 0.0, *obj, log_as="landing",
                             stage=stage, before=state, at_rest=True)

@@ -250,9 +250,20 @@ class TumblingPhases:
         down about it its base from then on: _turn_body), or not followed."""
         what, face, p, ax, ay = kind
         cx, cy, vx, vy, phi, phid = body
+        moving = {k: tuple(swing)} if swing else {}
+        if palm_state is not None:
+            moving[p] = palm_state
+        swinging = self._swinging_from_rest(t, p)
+        if swinging is not None:  # (it may meet that palm in the stepper's time)
+            stepped = self._stepped(t, body, moving, state,
+                                    f"the object reaches palm {p + 1} while palm {swinging}, "
+                                    f"{self._swing_origin(swinging - 1)}, still swings")
+            if stepped is not None:
+                return stepped
         if (what == "corner" and face != "top") or (what == "edge" and ay < 0.0):
-            return self._fail(t, "blocked", self.passed + 1, state,
-                              f"the tumbling object hits the side of palm {p + 1}")
+            why = f"the tumbling object hits the side of palm {p + 1}"
+            return (self._stepped(t, body, moving, state, why)
+                    or self._fail(t, "blocked", self.passed + 1, state, why))
         theta, omega = palm_state if palm_state is not None else (self.rest_angle[p], 0.0)
         top_x, top_y = self.row.palm_top(p, theta)
         if what == "corner":  # the object's corner (ax, ay) on the palm's top
@@ -271,9 +282,10 @@ class TumblingPhases:
             e, side = ax, math.copysign(1.0, ax)
         frame = landing_frame(phi, bx, by, self.row.body_width, self.h, side)
         if frame is None:
-            return self._fail(t, "tip", self.passed + 1, state,
-                              f"the tumbling object comes down on palm {p + 1} with no face "
-                              "turned to come down about the contact (not followed)")
+            why = (f"the tumbling object comes down on palm {p + 1} with no face turned to come "
+                   "down about the contact")
+            return (self._stepped(t, body, moving, state, why)
+                    or self._fail(t, "tip", self.passed + 1, state, why + " (not followed)"))
         turn, phi_b, d, side = frame
         state = dict(state, face=self.face)  # (phi as it was: in the frame of this face)
         self._turn_body(turn)
@@ -293,9 +305,10 @@ class TumblingPhases:
                                      planned, state)
         slid = self._tumble_slide_impact(body, p, theta, omega, phi_b, r, hold)
         if slid is None:
-            return self._fail(t, "tip", self.passed + 1, state,
-                              f"the tumbling object lands on palm {p + 1}: no consistent "
-                              "sliding impact (not followed)")
+            self._turn_body(-turn)  # (back to the frame body is in)
+            why = f"the tumbling object lands on palm {p + 1}: no consistent sliding impact"
+            return (self._stepped(t, body, moving, state, why)
+                    or self._fail(t, "tip", self.passed + 1, state, why + " (not followed)"))
         z, held, slip = slid
         return self._tumble_land(t, k, p, r, z, held, side, planned, state, slip)
 

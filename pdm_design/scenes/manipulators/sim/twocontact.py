@@ -150,10 +150,11 @@ class TwoContactPhases:
         hold_k = self._stop_hold(k, theta_k, omega_k)
         solved = self._solve_held(qd, jacs, (normal_j, normal_k), r2, k, (hold_j, hold_k))
         if solved is None:
-            return self._fail(t, "tip", k + 1, state,
-                              f"the rocking object comes down on palm {j + 1} still bearing on "
-                              f"palm {k + 1}: no consistent impact at both contacts (not "
-                              "followed)")
+            why = (f"the rocking object comes down on palm {j + 1} still bearing on palm "
+                   f"{k + 1}: no consistent impact at both contacts")
+            return (self._stepped(t, (*centre, *v, phi, phid), {k: (theta_k, omega_k)}, state,
+                                  why)
+                    or self._fail(t, "tip", k + 1, state, why + " (not followed)"))
         after, held_j, held_k, modes = solved
         return self._bridge_start(t, (k, j, r2, side), (centre, phi, theta_k), old, after,
                                   (held_j, held_k, modes), state)
