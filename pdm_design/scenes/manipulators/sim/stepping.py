@@ -165,13 +165,13 @@ def contacts(stepper: Stepper, q, reach) -> list[Contact]:
     cx, cy, phi = q[0], q[1], q[2]
     ex, ey = rotate(phi, 1.0, 0.0), rotate(phi, 0.0, 1.0)
     body = _outline(cx, cy, ex, ey, 0.5 * block.width, 0.5 * block.height)
-    size = max(block.width, block.height)
+    size = 0.5 * math.hypot(block.width, block.height) + reach  # (the object's half diagonal)
     for i, slab in enumerate(stepper.slabs):
         tx, ty = slab.top(q[3 + i])
-        if abs(tx - cx) > 0.5 * slab.width + size + reach or abs(ty - cy) > size + reach:
+        mid, half = ty - 0.5 * slab.thickness, 0.5 * slab.thickness
+        if abs(tx - cx) > 0.5 * slab.width + size or abs(mid - cy) > half + size:
             continue
-        palm = _outline(tx, ty - 0.5 * slab.thickness, (1.0, 0.0), (0.0, 1.0),
-                        0.5 * slab.width, 0.5 * slab.thickness)
+        palm = _outline(tx, mid, (1.0, 0.0), (0.0, 1.0), 0.5 * slab.width, half)
         sep_palm, face_palm = _separation(palm, body)
         sep_body, face_body = _separation(body, palm)
         if max(sep_palm, sep_body) > reach:
@@ -244,11 +244,11 @@ def step(stepper: Stepper, q, v, previous=()):
     dt = stepper.dt
     w = stepper.inverse_mass
     v_free = v + dt * w * forces(stepper, q, v)
-    reach = MARGIN + dt * float(np.max(np.abs(v_free[:2]))
-                                + abs(v_free[2]) * 0.5 * math.hypot(stepper.block.width,
-                                                                    stepper.block.height)
-                                + max((abs(v_free[3 + i]) * s.link
-                                       for i, s in enumerate(stepper.slabs)), default=0.0))
+    reach = MARGIN + dt * (math.hypot(v_free[0], v_free[1])
+                           + abs(v_free[2]) * 0.5 * math.hypot(stepper.block.width,
+                                                               stepper.block.height)
+                           + max((abs(v_free[3 + i]) * s.link
+                                  for i, s in enumerate(stepper.slabs)), default=0.0))
     found = contacts(stepper, q, reach)
     rows = _Rows([], [], [], [], [])
     for c in found:
