@@ -602,6 +602,11 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
             hc = self._push_contact(te, k, theta_e, s, entry.palm)
             if hc is not None:
                 return self._push(te, k, theta_e, omega_e, s, entry.palm, hc)
+            stepped = self._stepped_carry(te, k, (theta_e, omega_e, s, 0.0), (), 0, [], state,
+                                          f"the carried object hits the side of palm "
+                                          f"{entry.palm + 1}")
+            if stepped is not None:
+                return stepped
         if kind == "slip":
             self._log(te, "slip", k + 1, state, state,
                       f"|tan th| = {abs(math.tan(theta_e)):.6g} reaches mu = {self.mu:g}")

@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from . import phases as ph
-from .stepping import Block, Slab, Stepper, block_corners, rotate, step
+from .stepping import Block, Slab, Stepper, block_corners, contacts, rotate, step
 
 STEP = 2e-4  # s
 SETTLE = 50  # steps a state must last to end the stepping
@@ -34,6 +34,7 @@ MAX_TIME = 3.0  # s stepped at most in one go
 WHOLE_TIME = 60.0  # s: a whole run stepped (_step_whole)
 RECORD_EVERY = 25
 UP = 0.7  # a contact whose normal is this near the vertical bears the object up
+OVERLAP = 1e-3  # m: a palm this deep in the object where the stepping would start: not followed
 
 
 class SteppedPhases:
@@ -42,8 +43,9 @@ class SteppedPhases:
     def _stepped(self, t, body, moving, state, why):
         """Go on by time stepping from t: body = (centre x, y, its velocity, phi, phi') in the
         frame of the face the object lies on, moving = {palm: (th, th')} of the palms the
-        phase moves. None when the state of a palm within reach is unknown here (the caller
-        then ends the run as before)."""
+        phase moves. None when the state of a palm within reach is unknown here, or a palm is
+        already inside the object (a released palm swings unseen by the phases until it
+        stops): the caller then ends the run as before, not followed."""
         if self.eps != 0.0:
             return None
         palms = self._within_reach(body[0])
@@ -53,6 +55,8 @@ class SteppedPhases:
         stepper = self._stepper(palms)
         q = np.array([body[0], body[1], body[4]] + [s[0] for s in states], dtype=float)
         v = np.array([body[2], body[3], body[5]] + [s[1] for s in states], dtype=float)
+        if min((c.gap for c in contacts(stepper, q, 0.0)), default=0.0) < -OVERLAP:
+            return None  # (a palm the phases let swing unseen has passed into the object)
         for k in palms:  # their planned stops are the stepper's to find now
             self.palm_events = [e for e in self.palm_events
                                 if not (e.stage == k + 1 and e.time > t)]

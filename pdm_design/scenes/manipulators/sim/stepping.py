@@ -11,7 +11,7 @@ Trinkle / Moreau (docs/physics.md, section 2.2e):
 
 where every contact within MARGIN of touching is a row: its normal impulse lambda_n >= 0 keeps
 the gap from closing past zero in the step (g / dt + J_n v+ >= 0, complementary: a plastic
-contact, restitution 0), its tangential impulse |lambda_t| <= mu lambda_n opposes the slip (in
+contact, restitution 0; a penetration is given back by a displacement kept out of v), its tangential impulse |lambda_t| <= mu lambda_n opposes the slip (in
 the plane the friction cone is exactly these two bounds); a palm's stop is a row on th_k; a
 pivot's Coulomb torque a row with |lambda| <= torque dt. The impulses solve that complementarity
 problem by projected Gauss-Seidel on the Delassus matrix J M^-1 J^T.
@@ -31,7 +31,8 @@ import numpy as np
 
 MARGIN = 2e-3  # m: a contact closer than this (plus what the step may close) is a row
 PUSH_OUT = 0.2  # of a penetration removed per step (the gap's rows ask for it back)
-SWEEPS, TOLERANCE = 200, 1e-10  # projected Gauss-Seidel: sweeps, impulse change to stop (N s)
+SWEEPS, PUSH_SWEEPS = 200, 20  # sequential impulses: sweeps at most (the push-out's fewer:
+TOLERANCE = 1e-10  # it need not be exact), until no row changes a speed by TOLERANCE (m/s)
 
 
 @dataclass(frozen=True)
@@ -231,10 +232,10 @@ class _Rows:
         self.hi.append(hi), self.normal_of.append(normal_of)
 
 
-def _gap_target(gap, dt):
-    """A unilateral row's speed bound: close the gap in the step, not past zero; give a
-    penetration back at PUSH_OUT of it a step."""
-    return -gap / dt if gap > 0.0 else -PUSH_OUT * gap / dt
+def _gap_target(gap, dt, push=0.0):
+    """A unilateral row's speed bound: close the gap in the step, not past zero; a penetration
+    not deeper (push: given back at that fraction of it a step)."""
+    return -gap / dt if gap > 0.0 else -push * gap / dt
 
 
 def step(stepper: Stepper, q, v, previous=()):
@@ -265,26 +266,65 @@ def step(stepper: Stepper, q, v, previous=()):
     warm = {(c.slab, c.kind, c.corner): (pn, pt) for c, pn, pt in previous}
     start = [warm.get((c.slab, c.kind, c.corner), (0.0, 0.0)) for c in found]
     start = [pn for pn, _ in start] + [pt for _, pt in start]
-    lam, v_new = solve(rows, w.tolist(), v_free.tolist(), stepper.mu, start)
+    lam, v_new = solve(rows, w.tolist(), v_free.tolist(), stepper.mu, start, 2 * len(found))
     v_new = np.array(v_new)
     n = len(found)
-    return q + dt * v_new, v_new, [(c, lam[i], lam[n + i]) for i, c in enumerate(found)]
+    return (q + dt * (v_new + _push_out(stepper, q, found, rows, w)), v_new,
+            [(c, lam[i], lam[n + i]) for i, c in enumerate(found)])
 
 
-def solve(rows: _Rows, w, v, mu, start=()):
+def _push_out(stepper, q, found, rows, w):
+    """Where the object has sunk into a palm (or a palm past a stop), a displacement rate that
+    gives back PUSH_OUT of it in the step, kept out of the velocities (split impulses: a wedge
+    that cannot give back both sides asks no impossible speed of the contacts, and no energy
+    is added)."""
+    dt = stepper.dt
+    if all(c.gap >= 0.0 for c in found) and all(
+            s.low <= q[3 + i] <= s.high for i, s in enumerate(stepper.slabs)):
+        return 0.0
+    pseudo = _Rows([], [], [], [], [])
+    for i, c in enumerate(found):
+        pseudo.add(rows.jac[i], _gap_target(c.gap, dt, PUSH_OUT))
+    for i, s in enumerate(stepper.slabs):
+        for sign, gap in ((1.0, q[3 + i] - s.low), (-1.0, s.high - q[3 + i])):
+            if gap < 0.05:
+                pseudo.add([(3 + i, sign)], _gap_target(gap, dt, PUSH_OUT))
+    _, shift = solve(pseudo, w.tolist(), [0.0] * len(q), 0.0, sweeps=PUSH_SWEEPS)
+    return np.array(shift)
+
+
+def solve(rows: _Rows, w, v, mu, start=(), coupled=None, sweeps=SWEEPS):
     """Projected Gauss-Seidel (sequential impulses): row by row, the impulse that brings its
     speed to its target, clamped to its bounds (a friction row's to +-mu times its normal
-    row's), applied to v at once; until no impulse changes by TOLERANCE. start: the first
-    rows' impulses to begin from (the rest from 0). Returns (impulses, v+)."""
+    row's), applied to v at once; until no impulse changes by RELATIVE times the largest.
+    start: the first rows' impulses to begin from (the rest from 0). coupled: the number of
+    first rows (the contacts'); the rest (stops, pivot torques) of a palm no contact row moves
+    are solved on their own first, and only the others iterated with the contacts. Returns
+    (impulses, v+)."""
     scaled = [[(k, c, c * w[k]) for k, c in jac] for jac in rows.jac]
     diag = [sum(c * cw for _, c, cw in row) for row in scaled]
+    reach = [max(abs(cw) for _, _, cw in row) for row in scaled]
     lam = list(start) + [0.0] * (len(scaled) - len(start))
     for row, impulse in zip(scaled, start):
         for j, _, cw in row:
             v[j] += cw * impulse
-    for _ in range(SWEEPS):
+    coupled = len(scaled) if coupled is None else coupled
+    moved = {k for row in scaled[:coupled] for k, _, _ in row}
+    alone = [i for i in range(coupled, len(scaled)) if scaled[i][0][0] not in moved]
+    together = list(range(coupled)) + [i for i in range(coupled, len(scaled))
+                                        if scaled[i][0][0] in moved]
+    _sweep(alone, scaled, diag, reach, lam, v, rows, mu, sweeps)
+    _sweep(together, scaled, diag, reach, lam, v, rows, mu, sweeps)
+    return lam, v
+
+
+def _sweep(order, scaled, diag, reach, lam, v, rows, mu, sweeps):
+    """Sweeps of the rows in `order` until no row changes a speed by TOLERANCE (m/s, rad/s:
+    where contacts are redundant the impulses need not settle, the speeds do)."""
+    for _ in range(sweeps):
         change = 0.0
-        for i, row in enumerate(scaled):
+        for i in order:
+            row = scaled[i]
             speed = 0.0
             for k, c, _ in row:
                 speed += c * v[k]
@@ -300,7 +340,6 @@ def solve(rows: _Rows, w, v, mu, start=()):
                 for j, _, cw in row:
                     v[j] += cw * delta
                 lam[i] = new
-                change = max(change, abs(delta))
+                change = max(change, abs(delta) * reach[i])
         if change < TOLERANCE:
             break
-    return lam, v
