@@ -11,10 +11,11 @@ Trinkle / Moreau (docs/physics.md, section 2.2e):
 
 where every contact within MARGIN of touching is a row: its normal impulse lambda_n >= 0 keeps
 the gap from closing past zero in the step (g / dt + J_n v+ >= 0, complementary: a plastic
-contact, restitution 0; a penetration is given back by a displacement kept out of v), its tangential impulse |lambda_t| <= mu lambda_n opposes the slip (in
-the plane the friction cone is exactly these two bounds); a palm's stop is a row on th_k; a
-pivot's Coulomb torque a row with |lambda| <= torque dt. The impulses solve that complementarity
-problem by projected Gauss-Seidel on the Delassus matrix J M^-1 J^T.
+contact, restitution 0; a penetration is given back by a displacement kept out of v), its
+tangential impulse |lambda_t| <= mu lambda_n opposes the slip (in the plane the friction cone
+is exactly these two bounds); a palm's stop is a row on th_k; a pivot's Coulomb torque a row
+with |lambda| <= torque dt. The impulses solve that complementarity problem by projected
+Gauss-Seidel (sequential impulses).
 
 The contacts of the object with a palm's slab: by separating axes, the face of either rectangle
 that separates them most is the reference, and the other's edge most against it, clipped to
