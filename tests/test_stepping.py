@@ -135,3 +135,14 @@ def test_rocking_row_builds_stepped_past_a_contact_are_handed_back_and_complete(
             assert events[i + 1].time >= events[i].time
             assert events[i + 1].kind in {"stick", "slip", "handover", "catch", "rock",
                                           "front_stop", "complete", "lift_off", "push"}
+
+
+def test_an_edge_that_ends_on_the_face_span_is_clipped_without_error():
+    # the object's base corner exactly above the palm's end: the first clip keeps that one
+    # point (at distance 0 from the face's end), the second has one point to clip
+    st = stepper()
+    top_x, top_y = st.slabs[0].top(FRONT)
+    q = np.array([top_x + 0.8 + 0.5 * W, top_y + 0.5 * H + 1e-4, 0.0, FRONT])
+    (found,) = contacts(st, q, 0.01)  # the corner over the palm's end, 0.1 mm above its top
+    assert found.point == pytest.approx((top_x + 0.8, top_y + 1e-4), abs=1e-12)
+    assert found.gap == pytest.approx(1e-4) and found.normal == (0.0, 1.0)

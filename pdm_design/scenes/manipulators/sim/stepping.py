@@ -150,7 +150,7 @@ def _clipped(ref, face, inc):
         ds = [((px - v1x) * tx + (py - v1y) * ty) if lo_side
               else (span - (px - v1x) * tx - (py - v1y) * ty) for px, py in points]
         kept = [p for p, d in zip(points, ds) if d >= 0.0]
-        if len(kept) == 1 and ds[0] * ds[1] < 0.0:
+        if len(points) == 2 and len(kept) == 1 and ds[0] * ds[1] < 0.0:
             f = ds[0] / (ds[0] - ds[1])
             (ax, ay), (bx, by) = points
             kept.append((ax + f * (bx - ax), ay + f * (by - ay)))
