@@ -25,7 +25,7 @@ import numpy as np
 from . import phases as ph
 from .stepping import Block, Slab, Stepper, block_corners, contacts, rotate, step
 
-STEP = 2e-4  # s
+STEP = 4e-4  # s
 SETTLE = 50  # steps a state must last to end the stepping
 FLAT, SPIN = 1e-4, 1e-2  # rad, rad/s: lying flat on a palm
 STOPPED = 1e-4  # rad from a stop, with |th'| below STOPPED / STEP: the palm rests there

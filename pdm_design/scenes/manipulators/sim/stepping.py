@@ -322,25 +322,30 @@ def solve(rows: _Rows, w, v, mu, start=(), coupled=None, sweeps=SWEEPS):
 def _sweep(order, scaled, diag, reach, lam, v, rows, mu, sweeps):
     """Sweeps of the rows in `order` until no row changes a speed by TOLERANCE (m/s, rad/s:
     where contacts are redundant the impulses need not settle, the speeds do)."""
+    plan = [(i, scaled[i], rows.target[i], diag[i], reach[i], rows.normal_of[i], rows.lo[i],
+             rows.hi[i]) for i in order]
     for _ in range(sweeps):
         change = 0.0
-        for i in order:
-            row = scaled[i]
+        for i, row, target, d, r, k, lo, hi in plan:
             speed = 0.0
-            for k, c, _ in row:
-                speed += c * v[k]
-            new = lam[i] - (speed - rows.target[i]) / diag[i]
-            k = rows.normal_of[i]
+            for j, c, _ in row:
+                speed += c * v[j]
+            old = lam[i]
+            new = old - (speed - target) / d
             if k >= 0:
-                bound = mu * lam[k]
-                new = min(max(new, -bound), bound)
-            else:
-                new = min(max(new, rows.lo[i]), rows.hi[i])
-            delta = new - lam[i]
+                lo = -mu * lam[k]
+                hi = -lo
+            if new < lo:
+                new = lo
+            elif new > hi:
+                new = hi
+            delta = new - old
             if delta:
                 for j, _, cw in row:
                     v[j] += cw * delta
                 lam[i] = new
-                change = max(change, abs(delta) * reach[i])
+                moved = (delta if delta > 0.0 else -delta) * r
+                if moved > change:
+                    change = moved
         if change < TOLERANCE:
             break
