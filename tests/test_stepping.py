@@ -146,3 +146,31 @@ def test_an_edge_that_ends_on_the_face_span_is_clipped_without_error():
     (found,) = contacts(st, q, 0.01)  # the corner over the palm's end, 0.1 mm above its top
     assert found.point == pytest.approx((top_x + 0.8, top_y + 1e-4), abs=1e-12)
     assert found.gap == pytest.approx(1e-4) and found.normal == (0.0, 1.0)
+
+
+def test_builds_the_phases_complete_past_a_stepped_contact_complete_stepped_whole(
+        rocking_skips, monkeypatch):
+    # a second method for builds 111 and 224 (each met a contact no phase follows and was
+    # stepped there, then completed): the whole run time stepped from the feed, every palm
+    # in the stepper and nothing handed to the phases, completes too
+    from pdm_design.scenes.manipulators.sim.run import Run
+    from pdm_design.tolerances.yield_ import simulate_one
+
+    spec, design, tolerances = rocking_skips
+    flight = Run._flight
+
+    def stepped_from_the_feed(self, t0, x, y, vx, vy, stage):
+        if t0 == 0.0 and not self.events:
+            return self._step_whole(t0, x, y, vx, vy)
+        return flight(self, t0, x, y, vx, vy, stage)
+
+    for index in (111, 224):
+        phases = simulate_one(spec.scene, design, tolerances, 0, index, 8, allow_skips=True)
+        assert phases.outcome.completed
+        assert any(e.kind == "stepped" for e in phases.events)
+        with monkeypatch.context() as patch:
+            patch.setattr(Run, "_flight", stepped_from_the_feed)
+            whole = simulate_one(spec.scene, design, tolerances, 0, index, 8, allow_skips=True)
+        assert whole.outcome.completed
+        assert [e.kind for e in whole.events[-1:]] == ["complete"]
+        assert not any(e.kind in ("landing", "handover", "rock", "catch") for e in whole.events)

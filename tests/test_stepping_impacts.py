@@ -27,7 +27,7 @@ M, W, H = 2.0, 0.2, 0.1
 I_C = M * (W * W + H * H) / 12.0  # a uniform rectangle about its centre
 PHI = 0.3  # the object's tilt (clockwise): its front-bottom corner is the lowest
 V0 = np.array([0.4, -1.0, 2.0])  # x', y', phi' before the impact
-EXACT = 1e-8  # the projected Gauss-Seidel stops at impulse changes of 1e-10 N s
+EXACT = 1e-8  # the projected Gauss-Seidel stops once no row changes a speed by 1e-10 m/s
 SPREAD = 3e-4  # an impact spread over two steps of dt = 1e-5 (see the module's words)
 
 

@@ -216,13 +216,7 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
         """Contact boxes of palms at rest by time t (not the carrier), optionally only those
         within reach of an object carried by a palm whose pivot is at x = near (the object is
         within l + W/2 of that pivot, a palm's box within l + (W + w)/2 of its own pivot)."""
-        if near is None:
-            candidates = range(self.n)
-        else:
-            reach = self._reach
-            lo = bisect.bisect_left(self._pivot_x, near - reach)
-            hi = bisect.bisect_right(self._pivot_x, near + reach)
-            candidates = self._pivot_order[lo:hi]
+        candidates = range(self.n) if near is None else self._near(near)
         out = []
         cache, rest_since, rest_angle = self._boxes, self.rest_since, self.rest_angle
         for j in candidates:  # (inline: this runs every phase, at every palm within reach)
@@ -231,6 +225,12 @@ class Run(OdePhases, LiftOffPhases, RockingPhases, SwingingPhases, TumblingPhase
             box = cache.get((j, rest_angle[j]))
             out.append(self._rest_box(j) if box is None else box)
         return out
+
+    def _near(self, x):
+        """Palms whose pivot is within the run's reach of x (in pivot order along x)."""
+        lo = bisect.bisect_left(self._pivot_x, x - self._reach)
+        hi = bisect.bisect_right(self._pivot_x, x + self._reach)
+        return self._pivot_order[lo:hi]
 
     def _rest_box(self, j):
         """Contact box of palm j at its rest angle (a palm at rest keeps its box until it moves

@@ -17,13 +17,13 @@ the one it came onto last is the object coming onto it (Run._comes_onto).
 
 from __future__ import annotations
 
-import bisect
 import math
 
 import numpy as np
 
 from . import phases as ph
-from .stepping import Block, Slab, Stepper, block_corners, contacts, rotate, step
+from .rocking import rotate
+from .stepping import Block, Slab, Stepper, block_corners, contacts, step
 
 STEP = 4e-4  # s
 SETTLE = 50  # steps a state must last to end the stepping
@@ -48,7 +48,7 @@ class SteppedPhases:
         stops): the caller then ends the run as before, not followed."""
         if self.eps != 0.0:
             return None
-        palms = self._within_reach(body[0])
+        palms = sorted(self._near(body[0]))
         states = [moving.get(k) or self._palm_now(k, t) for k in palms]
         if any(s is None for s in states):
             return None
@@ -85,11 +85,6 @@ class SteppedPhases:
                 state["vy"] + spin * bx, phi, spin)
         return self._stepped(t, body, {k: (state["theta"], state["omega"])}, state, why)
 
-    def _within_reach(self, x):
-        lo = bisect.bisect_left(self._pivot_x, x - self._reach)
-        hi = bisect.bisect_right(self._pivot_x, x + self._reach)
-        return sorted(self._pivot_order[lo:hi])
-
     def _palm_now(self, k, t):
         """(th, th') of palm k at t from the run's bookkeeping: at rest, swinging from rest
         (swinging.py) or swinging alone since its release; None if unknown."""
@@ -101,13 +96,7 @@ class SteppedPhases:
         if launched is None or launched[0] > t:
             return None
         t0, theta, omega = launched
-        sw = self.swings_alone[k]
-        if t > t0:
-            _, z, _, _ = self._integrate(
-                lambda t_, y: [y[1], ph.swing_acceleration(y[0], y[1], sw)], t0,
-                [theta, omega], [], [], t_end=t)
-            theta, omega = float(z[0]), float(z[1])
-        return theta, omega
+        return self._swung_alone(k, t0, theta, omega, t) if t > t0 else (theta, omega)
 
     def _stepper(self, palms):
         w, h = self.row.body_width, self.h

@@ -30,6 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .rocking import rotate
+
 MARGIN = 2e-3  # m: a contact closer than this (plus what the step may close) is a row
 PUSH_OUT = 0.2  # of a penetration removed per step (the gap's rows ask for it back)
 SWEEPS, PUSH_SWEEPS = 200, 20  # sequential impulses: sweeps at most (the push-out's fewer:
@@ -101,20 +103,10 @@ class Contact:
     corner: int
 
 
-def rotate(phi, x, y):
-    """R(phi) (x, y): the clockwise rotation by phi."""
-    c, s = math.cos(phi), math.sin(phi)
-    return x * c + y * s, -x * s + y * c
-
-
 def block_corners(q, block):
     """World corners of the object (rear-bottom, front-bottom, front-top, rear-top)."""
-    hw, hh = 0.5 * block.width, 0.5 * block.height
-    out = []
-    for bx, by in ((-hw, -hh), (hw, -hh), (hw, hh), (-hw, hh)):
-        dx, dy = rotate(q[2], bx, by)
-        out.append((q[0] + dx, q[1] + dy))
-    return out
+    return _outline(q[0], q[1], rotate(q[2], 1.0, 0.0), rotate(q[2], 0.0, 1.0),
+                    0.5 * block.width, 0.5 * block.height)[0]
 
 
 def _outline(cx, cy, ex, ey, hx, hy):

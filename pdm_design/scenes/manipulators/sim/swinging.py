@@ -36,13 +36,18 @@ class SwingingPhases:
         if t < t0:  # (an earlier time than the last asked for: from the release again)
             t0, theta, omega = 0.0, -self.alphas[k], 0.0
         if t > t0:
-            sw = self.swings_alone[k]
-            _, z, _, _ = self._integrate(
-                lambda t_, y: [y[1], ph.swing_acceleration(y[0], y[1], sw, 1.0)],
-                t0, [theta, omega], [], [], t_end=t)
-            theta, omega = float(z[0]), float(z[1])
+            theta, omega = self._swung_alone(k, t0, theta, omega, t, 1.0)
             self._free[k] = (t, theta, omega)
         return theta, omega
+
+    def _swung_alone(self, k, t0, theta, omega, t, direction=None):
+        """(th, th') at t of palm k swinging alone from (th, th') at t0 (direction: the sign
+        the Coulomb torque opposes, default th''s)."""
+        sw = self.swings_alone[k]
+        _, z, _, _ = self._integrate(
+            lambda t_, y: [y[1], ph.swing_acceleration(y[0], y[1], sw, direction)],
+            t0, [theta, omega], [], [], t_end=t)
+        return float(z[0]), float(z[1])
 
     def _with_swinging(self, tracked, t0, z0, rhs, point):
         """Extend an integrated phase (state z0, vector field rhs, object's reference point
