@@ -148,11 +148,20 @@ def test_an_edge_that_ends_on_the_face_span_is_clipped_without_error():
     assert found.gap == pytest.approx(1e-4) and found.normal == (0.0, 1.0)
 
 
-def test_builds_the_phases_complete_past_a_stepped_contact_complete_stepped_whole(
-        rocking_skips, monkeypatch):
-    # a second method for builds 111 and 224 (each met a contact no phase follows and was
-    # stepped there, then completed): the whole run time stepped from the feed, every palm
-    # in the stepper and nothing handed to the phases, completes too
+@pytest.mark.parametrize("index, passage", [
+    (111, "followed by time stepping"),
+    (224, "followed by time stepping"),
+    # the tumbling object leaves palm 5, held by its stop, and comes back down on it (the
+    # flight once left that palm unguarded and the object fell through it)
+    (854, "the tumbling object comes down on palm 5"),
+    # across palms 3 and 2, the object turns until its base meets palm 3 away from its
+    # contact (the bridge once guarded only the contacts, and the object passed into palm 2)
+    (42, "meets palm 3 away from its contact"),
+])
+def test_builds_the_phases_complete_past_a_contact_complete_stepped_whole(
+        rocking_skips, monkeypatch, index, passage):
+    # a second method: the whole run time stepped from the feed, every palm in the stepper
+    # and nothing handed to the phases, completes too
     from pdm_design.scenes.manipulators.sim.run import Run
     from pdm_design.tolerances.yield_ import simulate_one
 
@@ -164,13 +173,12 @@ def test_builds_the_phases_complete_past_a_stepped_contact_complete_stepped_whol
             return self._step_whole(t0, x, y, vx, vy)
         return flight(self, t0, x, y, vx, vy, stage)
 
-    for index in (111, 224):
-        phases = simulate_one(spec.scene, design, tolerances, 0, index, 8, allow_skips=True)
-        assert phases.outcome.completed
-        assert any(e.kind == "stepped" for e in phases.events)
-        with monkeypatch.context() as patch:
-            patch.setattr(Run, "_flight", stepped_from_the_feed)
-            whole = simulate_one(spec.scene, design, tolerances, 0, index, 8, allow_skips=True)
-        assert whole.outcome.completed
-        assert [e.kind for e in whole.events[-1:]] == ["complete"]
-        assert not any(e.kind in ("landing", "handover", "rock", "catch") for e in whole.events)
+    phases = simulate_one(spec.scene, design, tolerances, 0, index, 8, allow_skips=True)
+    assert phases.outcome.completed
+    assert any(passage in e.detail for e in phases.events)
+    with monkeypatch.context() as patch:
+        patch.setattr(Run, "_flight", stepped_from_the_feed)
+        whole = simulate_one(spec.scene, design, tolerances, 0, index, 8, allow_skips=True)
+    assert whole.outcome.completed
+    assert [e.kind for e in whole.events[-1:]] == ["complete"]
+    assert not any(e.kind in ("landing", "handover", "rock", "catch") for e in whole.events)

@@ -68,6 +68,18 @@ def test_wilson_interval_matches_its_formula():
     assert (low, high) == pytest.approx((centre - half, centre + half), abs=1e-15)
 
 
+@pytest.mark.parametrize("n", [1, 7, 300, 1000, 10_000, 10**7])
+def test_wilson_interval_ends_exactly_at_0_and_1_for_all_or_none(n):
+    # p = 1: centre + half = (1 + z^2/2n + z^2/2n) / (1 + z^2/n) = 1 exactly; p = 0: the low
+    # end is 0 by symmetry. Rounding must not put the estimate outside its interval.
+    low, high = wilson(n, n)
+    assert high == 1.0 and low < 1.0
+    low, high = wilson(0, n)
+    assert low == 0.0 and high > 0.0
+    low, high = wilson(np.array([0, n]), n)
+    assert (low[0], high[1]) == (0.0, 1.0)
+
+
 # ---------------------------------------------------------------------------- exact yield
 
 def _feed_interval(scene, design, stages):
@@ -283,7 +295,7 @@ def test_yield_of_allocated_tolerances_asks_for_a_value(tmp_path):
 
 def test_yield_json_and_every_failing_build_reproduced(tmp_path):
     path = _spec(tmp_path, "[tolerances]\nbuilds = 300\nconfirm = 5\n"
-                 "pivot_x = { value = 0.15 }\npivot_y = { value = 0.15 }\n")
+                 "pivot_x = { value = 0.2 }\npivot_y = { value = 0.2 }\n")
     result = CliRunner().invoke(main, ["yield", path, "--format", "json", "--out",
                                        str(tmp_path / "out")])
     assert result.exit_code == 0, result.output

@@ -47,7 +47,10 @@ def wilson(passed, total, z: float = Z95):
     denom = 1.0 + z * z / total
     centre = (p + z * z / (2.0 * total)) / denom
     half = z * np.sqrt(p * (1.0 - p) / total + z * z / (4.0 * total * total)) / denom
-    return np.clip(centre - half, 0.0, 1.0), np.clip(centre + half, 0.0, 1.0)
+    # (at p = 0 and p = 1 an end is exactly 0 or 1, which rounding may miss)
+    low = np.where(passed == 0.0, 0.0, np.clip(centre - half, 0.0, 1.0))
+    high = np.where(passed == total, 1.0, np.clip(centre + half, 0.0, 1.0))
+    return low, high
 
 
 @dataclass(frozen=True)

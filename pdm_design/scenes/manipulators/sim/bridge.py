@@ -18,8 +18,9 @@ each with a Baumgarte term -(2 g' + g / tau) / tau against drift, tau = 0.01 sqr
 held by a stop drops its coordinate. Guards: a normal force through zero (it opens: the object
 rocks about the other contact, rocking.py, or rocks and slides on it, edgeslide.py), a stuck
 force leaving its cone (`slip`), a slip stopping (`stick`), a sliding contact running off the
-palm's or base's end (it opens), a held palm dragged off its stop; not followed: a free palm
-reaching a stop (`tip`), any other palm met (`blocked`). At rest across both: `stranded`.
+palm's or base's end (it opens), a held palm dragged off its stop; time stepped (stepped.py):
+any other palm met, or either palm met away from the two contacts; not followed: a free palm
+reaching a stop (`tip`). At rest across both: `stranded`.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .edgeslide import ROUNDING
+from .geometry import Box
 from .ode import SLIP_START_ATOLS
 from .rocking import rotate
 from .twocontact import contact_jacobian
@@ -174,7 +176,8 @@ class BridgePhases:
         physics = self._bridge_guards(br, geometry, solved, forces, y0)
         for p in br.palms:  # neither is an obstacle while it bears the object
             self.rest_since[p] = math.inf
-        faces = self._pinned_guards(t0, k, lambda y: (y[0], y[1], y[2]))
+        faces = (self._pinned_guards(t0, k, lambda y: (y[0], y[1], y[2]))
+                 + self._bridge_beyond_guards(br))
         te, y, kind, _ = self._integrate(rhs, t0, list(y0), physics, faces,
                                          max_step=0.05 * math.sqrt(self.h / self.g),
                                          t_end=t0 + math.sqrt(self.l / self.g))
@@ -233,6 +236,28 @@ class BridgePhases:
         start = SLIP_START_ATOLS * self.acc.atol  # (a slip from rest starts at zero)
         return out + [(lambda t, y: mode * local(y)[0] + start, ("stick", i)),
                       (lambda t, y: local(y)[1], ("open", i))]
+
+    def _bridge_beyond_guards(self, br):
+        """Guards of the two palms' slabs meeting the object anywhere but at its contacts (an
+        object's corner entering a slab, a slab's corner entering the object: the object's
+        base coming down on palm j, its side on palm k's edge); kind ("beyond", palm)."""
+        from .tumbling import CORNERS  # (tumbling imports the modules this one does)
+
+        W, T, w, h = (self.row.palm_width, self.row.palm_thickness, self.row.body_width,
+                      self.h)
+        faces = []
+        for i, p in enumerate(br.palms):
+            def slab(y, i=i, p=p):
+                x, top = self.row.palm_top(p, y[3 + i])
+                return Box(p, x, 0.5 * W, top - T, top)
+            if br.edge[i]:  # palm p's edge on the base
+                skip = {("edge", math.copysign(1.0, br.e[i]), True)}
+            else:  # the object's corner b on palm p's top
+                skip = {("corner", n) for n, (fx, fy) in enumerate(CORNERS)
+                        if math.dist((fx * w, (fy - 0.5) * h), br.b[i]) < 1e-9 * w}
+            faces += [(f, d, v, ("beyond", p)) for f, d, v, _ in
+                      self._contact_guards(p, slab, lambda y: (y[0], y[1], y[2]), skip)]
+        return faces
 
     def _bridge_guards(self, br, geometry, solved, forces, y0):
         """Physics guards (positive while the object rests across both): the contacts', each
@@ -316,7 +341,8 @@ class BridgePhases:
             return self._fail(t, "tip" if kind else "timeout", k + 1, state,
                               f"the object resting across palms {k + 1} and {j + 1}: "
                               f"{words[kind]} (not followed)")
-        why = f"the object resting across palms {k + 1} and {j + 1} meets palm {kind[1] + 1}"
+        why = (f"the object resting across palms {k + 1} and {j + 1} meets palm {kind[1] + 1}"
+               + (" away from its contact" if kind[0] == "beyond" else ""))
         return self._bridge_stepped(t, br, y, state, why) or self._fail(t, "blocked", k + 1,
                                                                          state, why)
 

@@ -141,7 +141,8 @@ class TumblingPhases:
         y_hi = cy + vy * rise - 0.5 * self.g * rise * rise + half
         y_lo = min(cy, cy + vy * horizon - 0.5 * self.g * horizon * horizon) - half
         slabs = [Box(b.palm, b.cx, 0.5 * W, b.y_high - T, b.y_high)
-                 for b in self._obstacles(t0, k) if abs(b.cx - 0.5 * (x_lo + x_hi))
+                 for b in self._obstacles(t0, k if moving else None)
+                 if abs(b.cx - 0.5 * (x_lo + x_hi))
                  < 0.5 * (W + x_hi - x_lo) and b.y_high - T < y_hi and b.y_high > y_lo]
         faces = []
         for slab in slabs:
@@ -153,21 +154,30 @@ class TumblingPhases:
             faces += self._contact_guards(k, swinging)
         return faces
 
-    def _contact_guards(self, p, slab):
+    def _contact_guards(self, p, slab, pose=None, skip=()):
         """Face guards of the object's corners entering palm p's slab (slab(z): its Box), and
-        of the slab's corners entering the object (in the object's own frame)."""
+        of the slab's corners entering the object (in the object's own frame). pose(z): the
+        object's centre and rotation (the flight's by default); skip: ("corner", i) of
+        CORNERS and ("edge", ex, top) of the slab's corners left unguarded (a contact there)."""
         w, h = self.row.body_width, self.h
+        pose = pose or (lambda z: (z[0], z[1], z[4]))
         body_box = Box(p, 0.0, 0.5 * w, 0.0, h)
         faces = []
-        for bx, by in CORNERS:
+        for i, (bx, by) in enumerate(CORNERS):
+            if ("corner", i) in skip:
+                continue
+
             def corner(z, bx=bx * w, by=by * h):
-                return body_to_world(z[0], z[1], z[4], bx, by, h)
+                return body_to_world(*pose(z), bx, by, h)
             faces += [(f, d, v, ("corner", face, p, bx * w, by * h))
                       for f, d, v, face in face_guards(slab, corner)]
         for ex, top in ((-1.0, True), (1.0, True), (1.0, False), (-1.0, False)):
+            if ("edge", ex, top) in skip:
+                continue
+
             def edge(z, ex=ex, top=top):
                 b = slab(z)
-                return world_to_body(z[0], z[1], z[4], b.cx + ex * b.half_width,
+                return world_to_body(*pose(z), b.cx + ex * b.half_width,
                                      b.y_high if top else b.y_low, h)
             faces += [(f, d, v, ("edge", face, p, ex * 0.5 * self.row.palm_width,
                                  0.0 if top else -self.row.palm_thickness))
