@@ -261,6 +261,9 @@ class OdePhases:
             return self._lift_off(te, k, theta, omega, s, 0.0,
                                   f"the normal force vanishes at th = {theta:.6g} rad")
         fx, fn = force(z)
+        if kind == "tip" and fn <= 0.0:  # (the force line's guard met with the force gone)
+            return self._lift_off(te, k, theta, omega, s, 0.0,
+                                  f"the contact force vanishes at th = {theta:.6g} rad")
         if kind == "tip" and self.eps == 0.0:  # the object turns about its edge (rocking.py)
             return self._rock_onset(te, k, theta, omega, s, -half_h * fx / fn, (lo, hi),
                                     state)
