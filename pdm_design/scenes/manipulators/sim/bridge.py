@@ -254,7 +254,7 @@ class BridgePhases:
                 skip = {("edge", math.copysign(1.0, br.e[i]), True)}
             else:  # the object's corner b on palm p's top
                 skip = {("corner", n) for n, (fx, fy) in enumerate(CORNERS)
-                        if math.dist((fx * w, (fy - 0.5) * h), br.b[i]) < 1e-9 * w}
+                        if math.dist((fx * w, (fy - 0.5) * h), br.b[i]) < 1e-6 * w}
             faces += [(f, d, v, ("beyond", p)) for f, d, v, _ in
                       self._contact_guards(p, slab, lambda y: (y[0], y[1], y[2]), skip)]
         return faces
