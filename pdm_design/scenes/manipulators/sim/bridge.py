@@ -31,7 +31,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .edgeslide import ROUNDING
-from .geometry import Box
 from .ode import SLIP_START_ATOLS
 from .rocking import rotate
 from .twocontact import contact_jacobian
@@ -243,13 +242,11 @@ class BridgePhases:
         base coming down on palm j, its side on palm k's edge); kind ("beyond", palm)."""
         from .tumbling import CORNERS  # (tumbling imports the modules this one does)
 
-        W, T, w, h = (self.row.palm_width, self.row.palm_thickness, self.row.body_width,
-                      self.h)
+        w, h = self.row.body_width, self.h
         faces = []
         for i, p in enumerate(br.palms):
             def slab(y, i=i, p=p):
-                x, top = self.row.palm_top(p, y[3 + i])
-                return Box(p, x, 0.5 * W, top - T, top)
+                return self.row.slab(p, y[3 + i])
             if br.edge[i]:  # palm p's edge on the base
                 skip = {("edge", math.copysign(1.0, br.e[i]), True)}
             else:  # the object's corner b on palm p's top

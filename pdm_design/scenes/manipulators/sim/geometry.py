@@ -68,6 +68,11 @@ class Row:
         return Box(k, cx, 0.5 * (self.body_width + self.palm_width),
                    cy - self.palm_thickness - self.body_height, cy)
 
+    def slab(self, k: int, theta: float) -> Box:
+        """Palm k's own slab at angle theta (its top face at palm_top, palm_thickness deep)."""
+        cx, cy = self.palm_top(k, theta)
+        return Box(k, cx, 0.5 * self.palm_width, cy - self.palm_thickness, cy)
+
     def support(self, offset: float) -> tuple[float, float]:
         """Part of the object's base (relative to its centre) resting on a palm when the object's
         centre is `offset` ahead of the palm's centre."""

@@ -289,7 +289,7 @@ def _push_out(stepper, q, found, rows, w):
 def solve(rows: _Rows, w, v, mu, start=(), coupled=None, sweeps=SWEEPS):
     """Projected Gauss-Seidel (sequential impulses): row by row, the impulse that brings its
     speed to its target, clamped to its bounds (a friction row's to +-mu times its normal
-    row's), applied to v at once; until no impulse changes by RELATIVE times the largest.
+    row's), applied to v at once; until no row changes a speed by TOLERANCE (_sweep).
     start: the first rows' impulses to begin from (the rest from 0). coupled: the number of
     first rows (the contacts'); the rest (stops, pivot torques) of a palm no contact row moves
     are solved on their own first, and only the others iterated with the contacts. Returns

@@ -148,10 +148,7 @@ class TumblingPhases:
         for slab in slabs:
             faces += self._contact_guards(slab.palm, lambda z, b=slab: b)
         if moving:
-            def swinging(z):
-                px, py = self.row.palm_top(k, z[6])
-                return Box(k, px, 0.5 * W, py - T, py)
-            faces += self._contact_guards(k, swinging)
+            faces += self._contact_guards(k, lambda z: self.row.slab(k, z[6]))
         return faces
 
     def _contact_guards(self, p, slab, pose=None, skip=()):
